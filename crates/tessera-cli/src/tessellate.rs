@@ -1,0 +1,261 @@
+//! `tessera tessellate` and `tessera info`.
+
+use std::path::Path;
+use std::time::Instant;
+
+use serde::Serialize;
+use tessera_core::bezier::search::{segments_for_triangles, threshold_for_triangles};
+use tessera_core::bezier::{
+    tessellate_adaptive, tessellate_uniform, AdaptiveParams, BezierModel, EdgeTest, PreparedBezier,
+};
+use tessera_core::io::export::{write_atomically, write_mesh, MeshFormat};
+use tessera_core::measure::{bezier_surface_samples, measure_error, ErrorStats};
+use tessera_core::Error;
+
+use crate::cli::{Backend, Cli, Command, Method, TessellateArgs};
+
+/// Default threshold as a fraction of the bounding-box diagonal.
+const DEFAULT_THRESHOLD_REL: f32 = 0.002;
+
+#[derive(Serialize, Default)]
+struct Timings {
+    load: f64,
+    prepare: f64,
+    tessellate: f64,
+    measure: f64,
+    write: f64,
+    total: f64,
+}
+
+#[derive(Serialize)]
+struct Stats {
+    input: String,
+    method: &'static str,
+    backend: &'static str,
+    threshold: Option<f32>,
+    max_depth: Option<u32>,
+    segments: Option<u32>,
+    target_triangles: Option<usize>,
+    triangles: usize,
+    vertices: usize,
+    patches: usize,
+    evaluations: u64,
+    upload_bytes: usize,
+    upload_bytes_per_patch: f64,
+    timings_ms: Timings,
+    #[serde(flatten)]
+    error: Option<ErrorStats>,
+    measure_samples: Option<usize>,
+}
+
+fn ms(t: Instant) -> f64 {
+    t.elapsed().as_secs_f64() * 1e3
+}
+
+pub fn run(cli: Cli) -> Result<(), Error> {
+    match cli.command {
+        Command::Tessellate(args) => tessellate(args),
+        Command::Info { input } => info(&input),
+    }
+}
+
+fn load(input: &Path) -> Result<BezierModel, Error> {
+    let ext = input
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase);
+    if matches!(ext.as_deref(), Some("obj" | "off" | "gltf" | "glb")) {
+        return Err(Error::Input {
+            file: input.to_path_buf(),
+            msg: "Catmull-Clark control meshes are not supported by this build yet; give a Newell teaset file".into(),
+        });
+    }
+    BezierModel::load(input)
+}
+
+fn info(input: &Path) -> Result<(), Error> {
+    let model = load(input)?;
+    let t = &model.topology;
+    let (lo, hi) = model.bounds();
+    println!(
+        "{}: Newell teaset, {} bicubic Bézier patches",
+        input.display(),
+        model.patches.len()
+    );
+    println!("  control points (welded): {}", model.points.len());
+    println!(
+        "  boundary curves: {} ({} shared, {} open, {} collapsed to a point)",
+        t.curves.len(),
+        t.curves.iter().filter(|c| c.users > 1).count(),
+        t.curves
+            .iter()
+            .filter(|c| c.users == 1 && !c.collapsed)
+            .count(),
+        t.curves.iter().filter(|c| c.collapsed).count()
+    );
+    println!(
+        "  patches flipped to orient consistently: {}",
+        t.flip.iter().filter(|&&f| f).count()
+    );
+    println!("  bounds: {lo} .. {hi} (diagonal {})", (hi - lo).length());
+    Ok(())
+}
+
+fn tessellate(args: TessellateArgs) -> Result<(), Error> {
+    let t_total = Instant::now();
+    let mut timings = Timings::default();
+    // Reject bad output paths before doing any work.
+    if let Some(o) = &args.output {
+        MeshFormat::from_path(o)?;
+    }
+    let method = args.method.unwrap_or(Method::Map4p);
+    let test = match method {
+        Method::Map2p => Some(EdgeTest::Map2p),
+        Method::Map4p => Some(EdgeTest::Map4p),
+        Method::Map8p => Some(EdgeTest::Map8p),
+        Method::Flat => Some(EdgeTest::Flat),
+        Method::Uniform => None,
+        Method::Adaptive => {
+            return Err(Error::Param(
+                "--method adaptive is the Catmull-Clark method; Bézier inputs take map2p, map4p, map8p, flat or uniform".into(),
+            ))
+        }
+    };
+    let Backend::Cpu = args.backend;
+
+    let t = Instant::now();
+    let model = load(&args.input)?;
+    timings.load = ms(t);
+    let t = Instant::now();
+    let prep = PreparedBezier::new(&model);
+    timings.prepare = ms(t);
+    let (lo, hi) = model.bounds();
+    let diag = (hi - lo).length();
+
+    let t = Instant::now();
+    let (out, threshold, segments) = match (test, args.target_triangles) {
+        (Some(test), target) => {
+            let base = AdaptiveParams {
+                test,
+                threshold: args.threshold.unwrap_or(DEFAULT_THRESHOLD_REL * diag),
+                max_depth: args.max_depth,
+            };
+            base.validate()?;
+            match target {
+                Some(n) => {
+                    let r = threshold_for_triangles(&prep, base, diag, n)?;
+                    if !r.within_tolerance {
+                        eprintln!(
+                            "warning: no threshold gives {n} triangles ±2%; closest: {} at threshold {}",
+                            r.tessellation.mesh.triangle_count(),
+                            r.threshold
+                        );
+                    }
+                    (r.tessellation, Some(r.threshold), None)
+                }
+                None => (
+                    tessellate_adaptive(&prep, &base)?,
+                    Some(base.threshold),
+                    None,
+                ),
+            }
+        }
+        (None, Some(n)) => {
+            let (segments, t) = segments_for_triangles(&model, &prep, n)?;
+            (t, None, Some(segments))
+        }
+        (None, None) => (
+            tessellate_uniform(&model, &prep, args.segments)?,
+            None,
+            Some(args.segments),
+        ),
+    };
+    timings.tessellate = ms(t);
+
+    let error = if args.measure {
+        let t = Instant::now();
+        let samples = bezier_surface_samples(&model, args.measure_samples.max(32));
+        let e = measure_error(&samples, &out.mesh);
+        timings.measure = ms(t);
+        Some(e)
+    } else {
+        None
+    };
+
+    let t = Instant::now();
+    if let Some(o) = &args.output {
+        write_mesh(o, &out.mesh)?;
+    }
+    timings.write = ms(t);
+    timings.total = ms(t_total);
+
+    let upload = match test {
+        Some(_) => prep.upload_bytes(),
+        // The uniform peer uploads control points and topology only.
+        None => {
+            prep.upload_bytes()
+                - prep.maps.len() * std::mem::size_of::<tessera_core::gpu_types::DisplacementMap>()
+        }
+    };
+    let stats = Stats {
+        input: args.input.display().to_string(),
+        method: test.map_or("uniform", EdgeTest::name),
+        backend: "cpu",
+        threshold,
+        max_depth: test.map(|_| args.max_depth),
+        segments,
+        target_triangles: args.target_triangles,
+        triangles: out.mesh.triangle_count(),
+        vertices: out.mesh.vertices.len(),
+        patches: model.patches.len(),
+        evaluations: out.evaluations,
+        upload_bytes: upload,
+        upload_bytes_per_patch: upload as f64 / model.patches.len() as f64,
+        timings_ms: timings,
+        error,
+        measure_samples: args.measure.then_some(args.measure_samples.max(32)),
+    };
+    print_summary(&stats);
+    if let Some(path) = &args.stats {
+        let json = serde_json::to_string_pretty(&stats).expect("stats serialize");
+        write_atomically(path, |w| writeln!(w, "{json}"))?;
+    }
+    Ok(())
+}
+
+fn print_summary(s: &Stats) {
+    let mut line = format!(
+        "{}: {} ({}) {} triangles, {} vertices, {} patches, {} evaluations, upload {} B ({:.0} B/patch), tessellate {:.2} ms",
+        s.input,
+        s.method,
+        s.backend,
+        s.triangles,
+        s.vertices,
+        s.patches,
+        s.evaluations,
+        s.upload_bytes,
+        s.upload_bytes_per_patch,
+        s.timings_ms.tessellate
+    );
+    if let Some(th) = s.threshold {
+        line += &format!(", threshold {th:.6}");
+    }
+    if let Some(n) = s.segments {
+        line += &format!(", segments {n}");
+    }
+    println!("{line}");
+    if let Some(e) = &s.error {
+        println!(
+            "error vs exact surface: max {:.6} ({:.3e} of diagonal {:.4}), mean {:.6}, p99 {:.6} over {} samples",
+            e.max_error, e.max_error_rel, e.bbox_diag, e.mean_error, e.p99_error, e.samples
+        );
+        if let Some(n) = s.measure_samples {
+            let (p, k) = (e.worst_sample / (n * n), e.worst_sample % (n * n));
+            let (u, v) = (
+                (k % n) as f64 / (n - 1) as f64,
+                (k / n) as f64 / (n - 1) as f64,
+            );
+            println!("largest error at patch {p}, (u, v) = ({u:.3}, {v:.3})");
+        }
+    }
+}

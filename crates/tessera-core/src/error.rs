@@ -1,0 +1,51 @@
+//! The one error type of `tessera-core`.
+
+use std::path::PathBuf;
+
+/// Everything that can go wrong in the core: bad input files, I/O, invalid parameters.
+///
+/// Every variant renders as a single line naming the file, the line (where there is one)
+/// and the problem, so that the CLI can print it as is.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum Error {
+    /// A syntax or content error in an input file, at a 1-based line.
+    #[error("{}:{line}: {msg}", file.display())]
+    Parse {
+        file: PathBuf,
+        line: usize,
+        msg: String,
+    },
+    /// A problem with an input file as a whole (empty, binary, inconsistent topology).
+    #[error("{}: {msg}", file.display())]
+    Input { file: PathBuf, msg: String },
+    /// Reading or writing a file failed.
+    #[error("{}: {source}", path.display())]
+    Io {
+        path: PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
+    /// A parameter out of its valid range (threshold, depth, segments, ...).
+    #[error("invalid parameter: {0}")]
+    Param(String),
+}
+
+impl Error {
+    pub(crate) fn parse(file: &std::path::Path, line: usize, msg: impl Into<String>) -> Self {
+        Error::Parse {
+            file: file.to_path_buf(),
+            line,
+            msg: msg.into(),
+        }
+    }
+
+    pub(crate) fn input(file: &std::path::Path, msg: impl Into<String>) -> Self {
+        Error::Input {
+            file: file.to_path_buf(),
+            msg: msg.into(),
+        }
+    }
+}
+
+pub type Result<T, E = Error> = std::result::Result<T, E>;

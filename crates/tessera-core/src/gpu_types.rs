@@ -1,0 +1,143 @@
+//! `#[repr(C)]` Pod structs shared with WGSL, and the buffer-size math around them.
+//!
+//! Each struct here has a twin of the same name in `shaders/shared/*.wgsl`; a test in the
+//! wgpu crate checks sizes and field offsets against naga's reflection of the shaders.
+//! All fields are 4-byte scalars or arrays of them, so WGSL lays them out exactly as
+//! `#[repr(C)]` does (no vec3 padding surprises).
+
+use bytemuck::{Pod, Zeroable};
+
+/// Displacement-map resolution per patch side (the paper's 16×16).
+pub const MAP_RES: usize = 16;
+
+/// Coarse grid: the patch is sampled at `u, v ∈ {0, 1/3, 2/3, 1}`.
+pub const COARSE_SEGMENTS: usize = 3;
+/// Coarse triangles per patch (3×3 quads, two triangles each).
+pub const COARSE_TRIANGLES_PER_PATCH: usize = 18;
+/// Coarse edges inside a patch (not on its sides): 6 horizontal, 6 vertical, 9 diagonal.
+pub const INTERIOR_EDGES_PER_PATCH: usize = 21;
+/// Coarse vertices strictly inside a patch.
+pub const INTERIOR_COARSE_VERTICES_PER_PATCH: usize = 4;
+/// Largest supported recursion depth of the edge tests (2^8 segments per coarse edge).
+pub const MAX_DEPTH_LIMIT: u32 = 8;
+/// Words of the per-edge bit set of inserted dyadic points at `MAX_DEPTH_LIMIT`.
+pub const EDGE_BIT_WORDS: usize = (1 << MAX_DEPTH_LIMIT) / 32;
+
+/// Control points of one bicubic patch, row-major, `x y z` per point.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
+pub struct GpuPatch {
+    pub cp: [f32; 48],
+}
+
+/// The 16×16 signed displacement map of one patch, `d[16 * j + i]` at
+/// `(u, v) = (i / 15, j / 15)`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
+pub struct DisplacementMap {
+    pub d: [f32; MAP_RES * MAP_RES],
+}
+
+/// Connectivity of one patch.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq, Eq)]
+pub struct GpuPatchTopo {
+    /// Global corner ids at (0,0), (1,0), (1,1), (0,1).
+    pub corners: [u32; 4],
+    /// Per side: `curve << 1 | reversed`.
+    pub sides: [u32; 4],
+    /// Bit 0: the patch's winding is flipped.
+    pub flags: u32,
+}
+
+impl GpuPatchTopo {
+    pub fn side_curve(&self, side: usize) -> u32 {
+        self.sides[side] >> 1
+    }
+    pub fn side_reversed(&self, side: usize) -> bool {
+        self.sides[side] & 1 != 0
+    }
+    pub fn flipped(&self) -> bool {
+        self.flags & 1 != 0
+    }
+}
+
+/// A boundary curve shared by patch sides.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq, Eq)]
+pub struct GpuCurve {
+    /// Patch that evaluates points on the curve.
+    pub owner: u32,
+    /// Bits 0..2: the owner's side; bit 2: collapsed to a point.
+    pub flags: u32,
+    /// Collapsed: the corner id of the point. Otherwise: the id of the first of its two
+    /// interior coarse vertices (at canonical fractions 1/3 and 2/3).
+    pub coarse_vertex: u32,
+    pub _pad: u32,
+}
+
+impl GpuCurve {
+    pub fn owner_side(&self) -> usize {
+        (self.flags & 3) as usize
+    }
+    pub fn collapsed(&self) -> bool {
+        self.flags & 4 != 0
+    }
+}
+
+/// Where a vertex is evaluated: the patch and its parameter. The vertex kernel turns
+/// one of these into one output vertex.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
+pub struct VertexRecord {
+    pub patch: u32,
+    pub u: f32,
+    pub v: f32,
+}
+
+/// One output vertex, 36 bytes (the layer-strip paper's figure too).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
+pub struct OutVertex {
+    pub position: [f32; 3],
+    pub normal: [f32; 3],
+    pub uv: [f32; 2],
+    pub patch: u32,
+}
+
+/// `wgpu`'s indexed indirect draw arguments, as the GPU writes them.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq, Eq, Default)]
+pub struct DrawIndexedIndirectArgs {
+    pub index_count: u32,
+    pub instance_count: u32,
+    pub first_index: u32,
+    pub base_vertex: i32,
+    pub first_instance: u32,
+}
+
+/// Bytes uploaded per patch and once per model for the map-based tessellator.
+pub fn bezier_upload_bytes(patches: usize, curves: usize, corners: usize) -> usize {
+    patches
+        * (std::mem::size_of::<GpuPatch>()
+            + std::mem::size_of::<DisplacementMap>()
+            + std::mem::size_of::<GpuPatchTopo>())
+        + curves * std::mem::size_of::<GpuCurve>()
+        + corners * std::mem::size_of::<VertexRecord>()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sizes_are_what_the_shaders_expect() {
+        assert_eq!(std::mem::size_of::<GpuPatch>(), 192);
+        assert_eq!(std::mem::size_of::<DisplacementMap>(), 1024);
+        assert_eq!(std::mem::size_of::<GpuPatchTopo>(), 36);
+        assert_eq!(std::mem::size_of::<GpuCurve>(), 16);
+        assert_eq!(std::mem::size_of::<VertexRecord>(), 12);
+        assert_eq!(std::mem::size_of::<OutVertex>(), 36);
+        assert_eq!(std::mem::size_of::<DrawIndexedIndirectArgs>(), 20);
+    }
+}

@@ -1,0 +1,4 @@
+//! Readers and writers of files.
+
+pub mod export;
+pub mod teaset;

@@ -1,0 +1,287 @@
+//! Loader for the Newell teaset text format:
+//!
+//! ```text
+//! <P>                    number of patches
+//! i1,i2,...,i16          P lines: 16 one-based vertex indices, row-major 4×4 net
+//! <M>                    number of vertices
+//! x,y,z                  M lines
+//! ```
+//!
+//! Every check happens before anything large is allocated: counts are compared with the
+//! number of lines actually present, so an absurd count is an error, not an allocation.
+
+use std::path::Path;
+
+use glam::Vec3;
+
+use crate::error::{Error, Result};
+
+/// The raw content of a teaset file: patches as 0-based indices into `vertices`.
+#[derive(Clone, Debug)]
+pub struct TeasetFile {
+    pub vertices: Vec<Vec3>,
+    pub patches: Vec<[u32; 16]>,
+}
+
+/// Reads and validates a teaset file from disk.
+pub fn load_teaset(path: &Path) -> Result<TeasetFile> {
+    let bytes = std::fs::read(path).map_err(|source| Error::Io {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    parse_teaset(path, &bytes)
+}
+
+/// Parses teaset text; `path` only names the file in errors.
+pub fn parse_teaset(path: &Path, bytes: &[u8]) -> Result<TeasetFile> {
+    let text = std::str::from_utf8(bytes).map_err(|e| {
+        Error::input(
+            path,
+            format!(
+                "not a text file (invalid UTF-8 at byte {})",
+                e.valid_up_to()
+            ),
+        )
+    })?;
+    // Non-blank lines with their 1-based line numbers.
+    let lines: Vec<(usize, &str)> = text
+        .lines()
+        .enumerate()
+        .map(|(i, l)| (i + 1, l.trim()))
+        .filter(|(_, l)| !l.is_empty())
+        .collect();
+    let last_line = text.lines().count().max(1);
+    let mut cursor = lines.iter().copied();
+    let mut next = |what: &str| {
+        cursor.next().ok_or_else(|| {
+            Error::parse(
+                path,
+                last_line,
+                format!("unexpected end of file: expected {what}"),
+            )
+        })
+    };
+
+    let (line, s) = next("the patch count")?;
+    let patch_count = parse_count(path, line, s, "patch count")?;
+    if patch_count == 0 {
+        return Err(Error::parse(path, line, "patch count is 0"));
+    }
+    // The patch lines, the vertex-count line and at least one vertex line must exist.
+    if patch_count + 2 > lines.len() - 1 {
+        return Err(Error::parse(
+            path,
+            line,
+            format!(
+                "patch count {patch_count} exceeds what the file holds ({} more non-blank lines)",
+                lines.len() - 1
+            ),
+        ));
+    }
+    let mut raw_patches = Vec::with_capacity(patch_count);
+    for _ in 0..patch_count {
+        let (line, s) = next("a patch line of 16 indices")?;
+        let mut idx = [0u64; 16];
+        let mut n = 0;
+        for field in s.split(',') {
+            if n == 16 {
+                return Err(Error::parse(
+                    path,
+                    line,
+                    "more than 16 indices on a patch line",
+                ));
+            }
+            let field = field.trim();
+            idx[n] = field.parse::<u64>().map_err(|_| {
+                Error::parse(
+                    path,
+                    line,
+                    format!("index {} is not a positive integer: {field:?}", n + 1),
+                )
+            })?;
+            if idx[n] == 0 {
+                return Err(Error::parse(
+                    path,
+                    line,
+                    format!("index {} is 0; indices are 1-based", n + 1),
+                ));
+            }
+            n += 1;
+        }
+        if n != 16 {
+            return Err(Error::parse(
+                path,
+                line,
+                format!("expected 16 indices on a patch line, found {n}"),
+            ));
+        }
+        raw_patches.push((line, idx));
+    }
+
+    let (line, s) = next("the vertex count")?;
+    let vertex_count = parse_count(path, line, s, "vertex count")?;
+    let remaining = lines.len() - patch_count - 2;
+    if vertex_count == 0 || vertex_count > remaining {
+        return Err(Error::parse(
+            path,
+            line,
+            format!("vertex count {vertex_count} does not match the {remaining} vertex lines that follow"),
+        ));
+    }
+    let mut vertices = Vec::with_capacity(vertex_count);
+    for _ in 0..vertex_count {
+        let (line, s) = next("a vertex line x,y,z")?;
+        let mut xyz = [0f32; 3];
+        let mut n = 0;
+        for field in s.split(',') {
+            if n == 3 {
+                return Err(Error::parse(
+                    path,
+                    line,
+                    "more than 3 coordinates on a vertex line",
+                ));
+            }
+            let field = field.trim();
+            let v: f32 = field.parse().map_err(|_| {
+                Error::parse(
+                    path,
+                    line,
+                    format!("coordinate {} is not a number: {field:?}", n + 1),
+                )
+            })?;
+            if !v.is_finite() {
+                return Err(Error::parse(
+                    path,
+                    line,
+                    format!("coordinate {} is not finite: {field}", n + 1),
+                ));
+            }
+            xyz[n] = v;
+            n += 1;
+        }
+        if n != 3 {
+            return Err(Error::parse(
+                path,
+                line,
+                format!("expected 3 coordinates x,y,z, found {n}"),
+            ));
+        }
+        vertices.push(Vec3::from_array(xyz));
+    }
+    if let Some((line, _)) = cursor.next() {
+        return Err(Error::parse(
+            path,
+            line,
+            "unexpected content after the last vertex",
+        ));
+    }
+
+    let mut patches = Vec::with_capacity(patch_count);
+    for (line, idx) in raw_patches {
+        let mut p = [0u32; 16];
+        for (k, &i) in idx.iter().enumerate() {
+            if i as usize > vertex_count {
+                return Err(Error::parse(
+                    path,
+                    line,
+                    format!(
+                        "index {} is {i}, beyond the vertex count {vertex_count}",
+                        k + 1
+                    ),
+                ));
+            }
+            p[k] = (i - 1) as u32;
+        }
+        patches.push(p);
+    }
+    Ok(TeasetFile { vertices, patches })
+}
+
+fn parse_count(path: &Path, line: usize, s: &str, what: &str) -> Result<usize> {
+    s.parse::<u64>()
+        .ok()
+        .and_then(|n| usize::try_from(n).ok())
+        .ok_or_else(|| {
+            Error::parse(
+                path,
+                line,
+                format!("{what} is not a non-negative integer: {s:?}"),
+            )
+        })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn one_patch() -> String {
+        let mut s = String::from("1\n");
+        s += &(1..=16)
+            .map(|i| i.to_string())
+            .collect::<Vec<_>>()
+            .join(",");
+        s += "\n16\n";
+        for r in 0..4 {
+            for c in 0..4 {
+                s += &format!("{c},{r},0\n");
+            }
+        }
+        s
+    }
+
+    fn err(text: &str) -> String {
+        parse_teaset(Path::new("t.txt"), text.as_bytes())
+            .unwrap_err()
+            .to_string()
+    }
+
+    #[test]
+    fn parses_a_valid_file() {
+        let f = parse_teaset(Path::new("t"), one_patch().as_bytes()).unwrap();
+        assert_eq!(f.patches.len(), 1);
+        assert_eq!(f.vertices.len(), 16);
+        assert_eq!(f.patches[0][15], 15);
+        assert_eq!(f.vertices[5], Vec3::new(1.0, 1.0, 0.0));
+    }
+
+    #[test]
+    fn errors_name_file_line_and_problem() {
+        assert_eq!(
+            err(""),
+            "t.txt:1: unexpected end of file: expected the patch count"
+        );
+        assert!(err("abc\n").starts_with("t.txt:1: patch count is not"));
+        assert!(err("99999999999\n1\n").contains("exceeds what the file holds"));
+        let bad_idx = one_patch().replacen("16\n16", "17\n16", 1);
+        assert_eq!(
+            err(&bad_idx),
+            "t.txt:2: index 16 is 17, beyond the vertex count 16"
+        );
+        let nan = one_patch().replacen("3,3,0", "3,nan,0", 1);
+        assert_eq!(err(&nan), "t.txt:19: coordinate 2 is not finite: nan");
+        let inf = one_patch().replacen("3,3,0", "inf,3,0", 1);
+        assert!(err(&inf).starts_with("t.txt:19: coordinate 1 is not finite"));
+        let short = one_patch().replacen("1,2,3,", "1,2,", 1);
+        assert_eq!(
+            err(&short),
+            "t.txt:2: expected 16 indices on a patch line, found 15"
+        );
+        let zero = one_patch().replacen("1,2,3,", "0,2,3,", 1);
+        assert!(err(&zero).contains("index 1 is 0"));
+        let truncated: String = one_patch()
+            .lines()
+            .take(10)
+            .map(|l| format!("{l}\n"))
+            .collect();
+        assert!(
+            err(&truncated).starts_with("t.txt:3: vertex count 16 does not match"),
+            "{}",
+            err(&truncated)
+        );
+        assert!(err("1\n1,2\n").contains("exceeds"));
+        let binary = parse_teaset(Path::new("b"), &[0xff, 0xfe, 0x00])
+            .unwrap_err()
+            .to_string();
+        assert!(binary.starts_with("b: not a text file"));
+    }
+}
