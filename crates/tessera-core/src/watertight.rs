@@ -13,7 +13,7 @@ use glam::{DVec3, IVec3};
 use crate::weld::weld_points;
 
 /// What the checks found. `is_watertight()` when every count but `boundary_edges` is 0.
-#[derive(Clone, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Debug, Default, PartialEq)]
 pub struct WatertightReport {
     /// Triangles with a repeated vertex or (near) zero area.
     pub degenerate_triangles: usize,
@@ -25,6 +25,8 @@ pub struct WatertightReport {
     pub cracks_by_position: usize,
     /// Vertices strictly inside a boundary edge.
     pub t_junctions: usize,
+    /// Where those vertices are.
+    pub t_junction_points: Vec<DVec3>,
     /// Distinct vertices at one position.
     pub duplicate_vertices: usize,
     /// Boundary edges that do lie on the surface's open boundary.
@@ -111,7 +113,9 @@ pub fn check_watertight(
             report.cracks_by_position += 1;
         }
     }
-    report.t_junctions = count_t_junctions(&pos, &used, &boundary, tol);
+    let found = find_t_junctions(&pos, &used, &boundary, tol);
+    report.t_junctions = found.len();
+    report.t_junction_points = found.iter().map(|&v| pos[v as usize]).collect();
     report
 }
 
@@ -140,14 +144,14 @@ fn segment_distance(p: DVec3, a: DVec3, b: DVec3) -> f64 {
 }
 
 /// Vertices lying strictly inside a boundary edge (farther than `tol` from its ends).
-fn count_t_junctions(
+fn find_t_junctions(
     pos: &[DVec3],
     used: &std::collections::HashSet<u32>,
     boundary: &[[u32; 2]],
     tol: f64,
-) -> usize {
+) -> Vec<u32> {
     if boundary.is_empty() {
-        return 0;
+        return Vec::new();
     }
     let avg_len = boundary
         .iter()
@@ -178,14 +182,16 @@ fn count_t_junctions(
                             && (p - pb).length() > tol
                             && segment_distance(p, pa, pb) <= tol
                         {
-                            found.insert((v, a, b));
+                            found.insert(v);
                         }
                     }
                 }
             }
         }
     }
-    found.len()
+    let mut found: Vec<u32> = found.into_iter().collect();
+    found.sort_unstable();
+    found
 }
 
 /// The open boundary curves of a Bézier model as polylines of `segments` pieces each.
