@@ -226,7 +226,7 @@ pub fn map_read(map: &DisplacementMap, u: f32, v: f32) -> f32 {
 pub fn coarse_triangle_grid(local: u32) -> [[u32; 2]; 3] {
     let cell = local / 2;
     let (i, j) = (cell % 3, cell / 3);
-    if local % 2 == 0 {
+    if local.is_multiple_of(2) {
         [[i, j], [i + 1, j], [i + 1, j + 1]]
     } else {
         [[i, j], [i + 1, j + 1], [i, j + 1]]

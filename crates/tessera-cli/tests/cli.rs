@@ -1,0 +1,176 @@
+//! The `tessera` binary: outputs, stats, and bad input (one line, non-zero exit, no
+//! output file, no panic).
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn tessera() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_tessera"))
+}
+
+fn teapot() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/teaset/teapot")
+}
+
+fn tmp(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("tessera-cli-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir.join(name)
+}
+
+#[test]
+fn writes_obj_ply_and_stats() {
+    let (obj, ply, stats) = (tmp("t.obj"), tmp("t.ply"), tmp("s.json"));
+    for out in [&obj, &ply] {
+        let st = tessera()
+            .args([
+                "tessellate",
+                teapot().to_str().unwrap(),
+                "--method",
+                "map4p",
+                "--measure",
+                "--stats",
+            ])
+            .arg(&stats)
+            .arg("-o")
+            .arg(out)
+            .output()
+            .unwrap();
+        assert!(
+            st.status.success(),
+            "{}",
+            String::from_utf8_lossy(&st.stderr)
+        );
+    }
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&stats).unwrap()).unwrap();
+    for key in [
+        "triangles",
+        "vertices",
+        "patches",
+        "evaluations",
+        "upload_bytes",
+        "timings_ms",
+        "max_error",
+        "mean_error",
+        "bbox_diag",
+    ] {
+        assert!(json.get(key).is_some(), "stats lack {key}: {json}");
+    }
+    let tris = json["triangles"].as_u64().unwrap();
+    let ply_text = std::fs::read_to_string(&ply).unwrap();
+    assert!(ply_text.contains(&format!("element face {tris}")));
+    assert!(ply_text.contains("property float nx") && ply_text.contains("property uint patch"));
+    let obj_text = std::fs::read_to_string(&obj).unwrap();
+    assert_eq!(
+        obj_text.lines().filter(|l| l.starts_with("f ")).count() as u64,
+        tris
+    );
+    assert!(
+        obj_text.lines().any(|l| l.starts_with("vt "))
+            && obj_text.lines().any(|l| l.starts_with("vn "))
+    );
+}
+
+#[test]
+fn target_triangles_lands_within_two_percent() {
+    let stats = tmp("target.json");
+    for method in ["map4p", "flat"] {
+        let st = tessera()
+            .args([
+                "tessellate",
+                teapot().to_str().unwrap(),
+                "--method",
+                method,
+                "--target-triangles",
+                "6000",
+                "--stats",
+            ])
+            .arg(&stats)
+            .output()
+            .unwrap();
+        assert!(st.status.success());
+        let json: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(&stats).unwrap()).unwrap();
+        let n = json["triangles"].as_f64().unwrap();
+        assert!((n - 6000.0).abs() <= 120.0, "{method}: {n}");
+    }
+}
+
+fn expect_failure(content: &[u8], expect: &str) {
+    let input = tmp("bad_input");
+    std::fs::write(&input, content).unwrap();
+    let out = tmp("bad.obj");
+    let _ = std::fs::remove_file(&out);
+    let r = tessera()
+        .arg("tessellate")
+        .arg(&input)
+        .arg("-o")
+        .arg(&out)
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&r.stderr);
+    assert!(!r.status.success(), "accepted bad input {expect}");
+    assert_eq!(stderr.trim().lines().count(), 1, "one line: {stderr}");
+    assert!(
+        stderr.contains(input.to_str().unwrap()) && stderr.contains(expect),
+        "{stderr}"
+    );
+    assert!(!stderr.contains("panicked"));
+    assert!(!out.exists(), "left an output file behind");
+}
+
+#[test]
+fn bad_input_is_one_line_naming_file_line_and_problem() {
+    let good = std::fs::read_to_string(teapot()).unwrap();
+    expect_failure(b"", ":1: unexpected end of file");
+    expect_failure(b"\x00\xff\xfe binary", "not a text file");
+    let truncated: String = good.lines().take(40).map(|l| format!("{l}\n")).collect();
+    expect_failure(truncated.as_bytes(), ":34: vertex count 306 does not match");
+    expect_failure(
+        good.replacen("1,2,3,4,", "1,2,3,999,", 1).as_bytes(),
+        ":2: index 4 is 999",
+    );
+    expect_failure(
+        format!("4000000000\n{good}").as_bytes(),
+        ":1: patch count 4000000000 exceeds",
+    );
+    expect_failure(
+        good.replacen("1.4,0.0,2.4", "1.4,NaN,2.4", 1).as_bytes(),
+        "not finite",
+    );
+    expect_failure(
+        good.replacen("1.4,0.0,2.4", "1.4,inf,2.4", 1).as_bytes(),
+        "not finite",
+    );
+    expect_failure(
+        good.replacen("1.4,0.0,2.4", "1.4,zero,2.4", 1).as_bytes(),
+        "is not a number",
+    );
+}
+
+#[test]
+fn bad_parameters_fail_cleanly() {
+    let r = tessera()
+        .args(["tessellate", teapot().to_str().unwrap(), "--threshold=-1"])
+        .output()
+        .unwrap();
+    assert!(!r.status.success());
+    assert!(String::from_utf8_lossy(&r.stderr).contains("threshold must be a positive number"));
+    let r = tessera()
+        .args([
+            "tessellate",
+            teapot().to_str().unwrap(),
+            "--max-depth",
+            "40",
+        ])
+        .output()
+        .unwrap();
+    assert!(!r.status.success());
+    let r = tessera()
+        .args(["tessellate", "/nonexistent/teapot"])
+        .output()
+        .unwrap();
+    assert!(!r.status.success());
+    assert!(String::from_utf8_lossy(&r.stderr).contains("/nonexistent/teapot"));
+}
