@@ -10,7 +10,9 @@ use tessera_core::bezier::search::threshold_for_triangles;
 use tessera_core::bezier::{
     tessellate_uniform, AdaptiveParams, BezierModel, EdgeTest, PreparedBezier, Tessellation,
 };
-use tessera_core::measure::{bezier_surface_samples, measure_error, DEFAULT_SAMPLES_PER_SIDE};
+use tessera_core::measure::{
+    bezier_surface_samples, measure_error, ErrorStats, DEFAULT_SAMPLES_PER_SIDE,
+};
 
 #[derive(Serialize, Clone)]
 struct Row {
@@ -32,6 +34,29 @@ struct Row {
     uniform_triangles_at_equal_error: Option<usize>,
     /// `triangles / uniform_triangles_at_equal_error`.
     ratio_to_uniform: Option<f64>,
+}
+
+impl Row {
+    /// A row for one measured tessellation; method parameters are filled in by the caller.
+    fn measured(model: &str, method: &str, t: &Tessellation, e: &ErrorStats, time_ms: f64) -> Row {
+        Row {
+            model: model.into(),
+            method: method.into(),
+            max_depth: None,
+            threshold: None,
+            segments: None,
+            target_triangles: None,
+            triangles: t.mesh.triangle_count(),
+            vertices: t.mesh.vertices.len(),
+            evaluations: t.evaluations,
+            max_error: e.max_error,
+            mean_error: e.mean_error,
+            p99_error: e.p99_error,
+            time_ms,
+            uniform_triangles_at_equal_error: None,
+            ratio_to_uniform: None,
+        }
+    }
 }
 
 fn median_time(repeats: usize, mut f: impl FnMut() -> Tessellation) -> (f64, Tessellation) {
@@ -78,21 +103,8 @@ fn main() {
             });
             let e = measure_error(&samples, &t.mesh);
             uniform.push(Row {
-                model: name.into(),
-                method: "uniform".into(),
-                max_depth: None,
-                threshold: None,
                 segments: Some(n),
-                target_triangles: None,
-                triangles: t.mesh.triangle_count(),
-                vertices: t.mesh.vertices.len(),
-                evaluations: t.evaluations,
-                max_error: e.max_error,
-                mean_error: e.mean_error,
-                p99_error: e.p99_error,
-                time_ms,
-                uniform_triangles_at_equal_error: None,
-                ratio_to_uniform: None,
+                ..Row::measured(name, "uniform", &t, &e, time_ms)
             });
         }
         let uniform_at = |err: f64| {
@@ -129,21 +141,12 @@ fn main() {
                     let e = measure_error(&samples, &t.mesh);
                     let u = uniform_at(e.max_error);
                     rows.push(Row {
-                        model: name.into(),
-                        method: test.name().into(),
                         max_depth: Some(depth),
                         threshold: Some(found.threshold),
-                        segments: None,
                         target_triangles: Some(target),
-                        triangles: t.mesh.triangle_count(),
-                        vertices: t.mesh.vertices.len(),
-                        evaluations: t.evaluations,
-                        max_error: e.max_error,
-                        mean_error: e.mean_error,
-                        p99_error: e.p99_error,
-                        time_ms,
                         uniform_triangles_at_equal_error: u,
                         ratio_to_uniform: u.map(|u| t.mesh.triangle_count() as f64 / u as f64),
+                        ..Row::measured(name, test.name(), &t, &e, time_ms)
                     });
                 }
             }

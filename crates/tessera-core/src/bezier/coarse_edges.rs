@@ -19,7 +19,6 @@ pub fn coarse_edge_of(prep: &PreparedBezier, p: u32, a: [u32; 2], b: [u32; 2]) -
         if j == 0 || j == n {
             let side = if j == 0 { 0 } else { 2 };
             return side_edge(
-                prep,
                 topo.side_curve(side),
                 topo.side_reversed(side),
                 lo[0],
@@ -34,7 +33,6 @@ pub fn coarse_edge_of(prep: &PreparedBezier, p: u32, a: [u32; 2], b: [u32; 2]) -
         if i == 0 || i == n {
             let side = if i == 0 { 3 } else { 1 };
             return side_edge(
-                prep,
                 topo.side_curve(side),
                 topo.side_reversed(side),
                 lo[1],
@@ -48,13 +46,7 @@ pub fn coarse_edge_of(prep: &PreparedBezier, p: u32, a: [u32; 2], b: [u32; 2]) -
 }
 
 /// Segment `seg` (in the side's own direction) of a side on `curve`.
-fn side_edge(
-    _prep: &PreparedBezier,
-    curve: u32,
-    reversed: bool,
-    seg: u32,
-    along_side: bool,
-) -> (u32, bool) {
+fn side_edge(curve: u32, reversed: bool, seg: u32, along_side: bool) -> (u32, bool) {
     let n = COARSE_SEGMENTS as u32;
     let canonical_seg = if reversed { n - 1 - seg } else { seg };
     (3 * curve + canonical_seg, along_side != reversed)

@@ -9,7 +9,7 @@ use glam::DVec3;
 
 use super::model::BezierModel;
 use super::patch::eval_frame_f64;
-use super::topology::side_uv;
+use super::topology::{grid_point, side_uv, GridPoint};
 use bytemuck::Zeroable;
 
 use crate::gpu_types::*;
@@ -138,41 +138,24 @@ impl PreparedBezier {
     pub fn coarse_vertex(&self, p: u32, i: u32, j: u32) -> u32 {
         let topo = &self.topo[p as usize];
         let n = COARSE_SEGMENTS as u32;
-        let on_u = i == 0 || i == n;
-        let on_v = j == 0 || j == n;
-        if on_u && on_v {
-            let slot = match (i == n, j == n) {
-                (false, false) => 0,
-                (true, false) => 1,
-                (true, true) => 2,
-                (false, true) => 3,
-            };
-            return topo.corners[slot];
-        }
-        if on_u || on_v {
-            // A side point: which side, and its position k ∈ {1, 2} along the side.
-            let (side, k) = if j == 0 {
-                (0, i)
-            } else if i == n {
-                (1, j)
-            } else if j == n {
-                (2, i)
-            } else {
-                (3, j)
-            };
-            let curve = &self.curves[topo.side_curve(side) as usize];
-            if curve.collapsed() {
-                return curve.coarse_vertex;
+        match grid_point(i, j, n) {
+            GridPoint::Corner(slot) => topo.corners[slot],
+            GridPoint::Side(side, k) => {
+                let curve = &self.curves[topo.side_curve(side) as usize];
+                if curve.collapsed() {
+                    return curve.coarse_vertex;
+                }
+                let kk = if topo.side_reversed(side) { n - k } else { k };
+                curve.coarse_vertex + kk - 1
             }
-            let kk = if topo.side_reversed(side) { n - k } else { k };
-            return curve.coarse_vertex + kk - 1;
+            GridPoint::Interior => {
+                self.layout.interior_vertex_base
+                    + INTERIOR_COARSE_VERTICES_PER_PATCH as u32 * p
+                    + (j - 1) * 2
+                    + (i - 1)
+            }
         }
-        self.layout.interior_vertex_base
-            + INTERIOR_COARSE_VERTICES_PER_PATCH as u32 * p
-            + (j - 1) * 2
-            + (i - 1)
     }
-
     /// Where every coarse vertex is evaluated, in id order. Mirrors the three emit
     /// loops of the coarse-vertex kernel: one per corner, per curve, per patch.
     pub fn coarse_vertex_records(&self) -> Vec<VertexRecord> {

@@ -33,6 +33,41 @@ pub const SIDE_CORNERS: [[usize; 2]; 4] = [[0, 1], [1, 2], [3, 2], [0, 3]];
 /// Control-net index of each corner slot.
 pub const CORNER_CONTROL: [usize; 4] = [0, 3, 15, 12];
 
+/// Where grid point `(i, j)` of an `n × n` grid over a patch lies.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum GridPoint {
+    /// Corner slot 0..4: (0,0), (1,0), (1,1), (0,1).
+    Corner(usize),
+    /// Side 0..4 and the position `k ∈ 1..n` along the side's own direction.
+    Side(usize, u32),
+    Interior,
+}
+
+/// Classifies grid point `(i, j)`, `i, j ∈ 0..=n`.
+pub fn grid_point(i: u32, j: u32, n: u32) -> GridPoint {
+    let on_u = i == 0 || i == n;
+    let on_v = j == 0 || j == n;
+    if on_u && on_v {
+        return GridPoint::Corner(match (i == n, j == n) {
+            (false, false) => 0,
+            (true, false) => 1,
+            (true, true) => 2,
+            (false, true) => 3,
+        });
+    }
+    if j == 0 {
+        GridPoint::Side(0, i)
+    } else if i == n {
+        GridPoint::Side(1, j)
+    } else if j == n {
+        GridPoint::Side(2, i)
+    } else if i == 0 {
+        GridPoint::Side(3, j)
+    } else {
+        GridPoint::Interior
+    }
+}
+
 /// A side of a patch, as a reference to a shared boundary curve.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct SideRef {

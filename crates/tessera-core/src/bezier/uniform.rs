@@ -8,6 +8,7 @@ use glam::Vec3;
 use super::model::BezierModel;
 use super::prepare::PreparedBezier;
 use super::tessellate::{vertex_eval, Tessellation};
+use super::topology::{grid_point, GridPoint, SIDE_CORNERS};
 use crate::error::{Error, Result};
 use crate::gpu_types::VertexRecord;
 use crate::mesh::Mesh;
@@ -73,37 +74,20 @@ pub fn tessellate_uniform(
     let mut grid = vec![0u32; ((n + 1) * (n + 1)) as usize];
     for p in 0..model.patches.len() {
         let id = |i: u32, j: u32| -> u32 {
-            let on_u = i == 0 || i == n;
-            let on_v = j == 0 || j == n;
-            if on_u && on_v {
-                let slot = match (i == n, j == n) {
-                    (false, false) => 0,
-                    (true, false) => 1,
-                    (true, true) => 2,
-                    (false, true) => 3,
-                };
-                return t.patch_corners[p][slot];
-            }
-            if on_u || on_v {
-                let (side, k) = if j == 0 {
-                    (0, i)
-                } else if i == n {
-                    (1, j)
-                } else if j == n {
-                    (2, i)
-                } else {
-                    (3, j)
-                };
-                let s = t.patch_sides[p][side];
-                let c = &t.curves[s.curve as usize];
-                if c.collapsed {
-                    let slot = super::topology::SIDE_CORNERS[side][0];
-                    return t.patch_corners[p][slot];
+            match grid_point(i, j, n) {
+                GridPoint::Corner(slot) => t.patch_corners[p][slot],
+                GridPoint::Side(side, k) => {
+                    let s = t.patch_sides[p][side];
+                    if t.curves[s.curve as usize].collapsed {
+                        return t.patch_corners[p][SIDE_CORNERS[side][0]];
+                    }
+                    let kk = if s.reversed { n - k } else { k };
+                    curve_base[s.curve as usize] + kk - 1
                 }
-                let kk = if s.reversed { n - k } else { k };
-                return curve_base[s.curve as usize] + kk - 1;
+                GridPoint::Interior => {
+                    interior_base + per_patch * p as u32 + (j - 1) * (n - 1) + (i - 1)
+                }
             }
-            interior_base + per_patch * p as u32 + (j - 1) * (n - 1) + (i - 1)
         };
         for j in 0..=n {
             for i in 0..=n {
