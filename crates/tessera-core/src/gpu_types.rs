@@ -73,10 +73,14 @@ pub struct GpuCurve {
     /// Collapsed: the corner id of the point. Otherwise: the id of the first of its two
     /// interior coarse vertices (at canonical fractions 1/3 and 2/3).
     pub coarse_vertex: u32,
-    pub _pad: u32,
+    /// The other patch side on the curve, `patch << 2 | side`, or [`GpuCurve::NO_SIDE`]
+    /// on an open boundary. (A curve shared by three or more sides lists one of them:
+    /// the others refine it from their own side only, see `bezier/refine.rs`.)
+    pub other: u32,
 }
 
 impl GpuCurve {
+    pub const NO_SIDE: u32 = u32::MAX;
     pub fn owner_side(&self) -> usize {
         (self.flags & 3) as usize
     }

@@ -4,7 +4,8 @@
 
 use super::prepare::PreparedBezier;
 use super::topology::side_uv;
-use crate::gpu_types::{COARSE_SEGMENTS, INTERIOR_EDGES_PER_PATCH};
+use super::prepare::coarse_triangle_grid;
+use crate::gpu_types::{COARSE_SEGMENTS, COARSE_TRIANGLES_PER_PATCH, INTERIOR_EDGES_PER_PATCH};
 
 /// The coarse edge joining neighbouring grid points `a → b` of patch `p`, and whether
 /// `a → b` runs along the edge's canonical direction.
@@ -86,4 +87,55 @@ pub fn edge_endpoints(prep: &PreparedBezier, e: u32) -> (u32, [f32; 2], [f32; 2]
 /// Whether edge `e` lies on a curve collapsed to a point (it is never split).
 pub fn edge_collapsed(prep: &PreparedBezier, e: u32) -> bool {
     e < 3 * prep.layout.curves && prep.curves[(e / 3) as usize].collapsed()
+}
+
+/// The coarse triangles on either side of edge `e`: `(triangle, side k of it, whether
+/// the side runs along the edge's canonical direction)`. One on an open boundary; on a
+/// curve shared by more than two patch sides, the owner's and one other (see
+/// [`GpuCurve::other`](crate::gpu_types::GpuCurve::other)).
+pub fn coarse_edge_sides(prep: &PreparedBezier, e: u32) -> Vec<(u32, usize, bool)> {
+    let n = COARSE_SEGMENTS as u32;
+    let curve_edges = 3 * prep.layout.curves;
+    // (patch, grid end points of the edge in it).
+    let mut users: Vec<(u32, [u32; 2], [u32; 2])> = Vec::with_capacity(2);
+    if e < curve_edges {
+        let c = &prep.curves[(e / 3) as usize];
+        let seg = e % 3;
+        let mut sides = vec![(c.owner, c.owner_side())];
+        if c.other != crate::gpu_types::GpuCurve::NO_SIDE {
+            sides.push((c.other >> 2, (c.other & 3) as usize));
+        }
+        for (q, side) in sides {
+            let s = if prep.topo[q as usize].side_reversed(side) {
+                n - 1 - seg
+            } else {
+                seg
+            };
+            let at = |t: u32| match side {
+                0 => [t, 0],
+                1 => [n, t],
+                2 => [t, n],
+                _ => [0, t],
+            };
+            users.push((q, at(s), at(s + 1)));
+        }
+    } else {
+        let (p, uv0, uv1) = edge_endpoints(prep, e);
+        let g = |uv: [f32; 2]| uv.map(|x| (x * n as f32).round() as u32);
+        users.push((p, g(uv0), g(uv1)));
+    }
+    let mut out = Vec::with_capacity(2);
+    for (q, a, b) in users {
+        for local in 0..COARSE_TRIANGLES_PER_PATCH as u32 {
+            let grid = coarse_triangle_grid(local);
+            for k in 0..3 {
+                let (x, y) = (grid[k], grid[(k + 1) % 3]);
+                if (x, y) == (a, b) || (x, y) == (b, a) {
+                    let (_, forward) = coarse_edge_of(prep, q, x, y);
+                    out.push((q * COARSE_TRIANGLES_PER_PATCH as u32 + local, k, forward));
+                }
+            }
+        }
+    }
+    out
 }

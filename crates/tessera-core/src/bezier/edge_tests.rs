@@ -79,7 +79,7 @@ pub fn lerp_uv(a: [f32; 2], b: [f32; 2], k: u32) -> [f32; 2] {
     [a[0] + (b[0] - a[0]) * f, a[1] + (b[1] - a[1]) * f]
 }
 
-/// The map test on the segment `uv1 → uv2` (Map2p, Map4p or Map8p).
+/// The map test on the segment `uv1 → uv2` (Map2p, Map4p or Map8p), reading `map`.
 pub fn map_test(
     test: EdgeTest,
     map: &DisplacementMap,
@@ -87,9 +87,23 @@ pub fn map_test(
     uv1: [f32; 2],
     uv2: [f32; 2],
 ) -> bool {
+    map_test_with(test, th, uv1, uv2, |u, v| Some(map_read(map, u, v)))
+}
+
+/// The map test with the displacement read through `d` (SPEC §1, paper Eq. 1–3); a
+/// point where `d` has no value (`None`) takes no part.
+pub fn map_test_with(
+    test: EdgeTest,
+    th: f32,
+    uv1: [f32; 2],
+    uv2: [f32; 2],
+    d: impl Fn(f32, f32) -> Option<f32>,
+) -> bool {
     let m = [(uv1[0] + uv2[0]) * 0.5, (uv1[1] + uv2[1]) * 0.5];
-    let d12 = map_read(map, m[0], m[1]);
-    let differs = |u: f32, v: f32| (map_read(map, u, v) - d12).abs() > th;
+    let Some(d12) = d(m[0], m[1]) else {
+        return false;
+    };
+    let differs = |u: f32, v: f32| d(u, v).is_some_and(|x| (x - d12).abs() > th);
     if differs(uv1[0], uv1[1]) || differs(uv2[0], uv2[1]) {
         return true;
     }
@@ -113,68 +127,71 @@ pub fn map_test(
     false
 }
 
-/// Recursive bisection of the segment `uv0 → uv1` in one patch. Returns the inserted
-/// points and the number of surface evaluations made (zero for the map tests).
-pub fn subdivide_segment(inp: &TestInputs, uv0: [f32; 2], uv1: [f32; 2]) -> (EdgeBits, u32) {
-    let mut bits = [0u32; EDGE_BIT_WORDS];
-    let evals = subdivide_interval(inp, uv0, uv1, 0, DYADIC_SCALE, inp.max_depth, &mut bits);
-    (bits, evals)
+/// Number of inserted points before position `k`.
+pub fn bit_rank(bits: &EdgeBits, k: u32) -> u32 {
+    let (w, b) = ((k / 32) as usize, k % 32);
+    let below: u32 = bits[..w].iter().map(|x| x.count_ones()).sum();
+    below + (bits[w] & ((1u32 << b) - 1)).count_ones()
 }
 
-/// Recursive bisection of the piece `[lo, hi]` (in 1/256ths) of the segment `uv0 → uv1`,
-/// at most `depth` levels and never below one unit. Sets the inserted points in `bits`;
-/// returns the surface evaluations made.
-pub fn subdivide_interval(
+/// Recursive bisection of the segment `uv0 → uv1` in one patch by its edge test alone.
+/// Returns the inserted points and the number of surface evaluations made (zero for the
+/// map tests).
+pub fn subdivide_segment(inp: &TestInputs, uv0: [f32; 2], uv1: [f32; 2]) -> (EdgeBits, u32) {
+    subdivide_segment_with(inp, uv0, uv1, u32::MAX, |_, _| (false, 0))
+}
+
+/// Recursive bisection of the segment `uv0 → uv1`: the piece `[lo, hi]` (in 1/256ths)
+/// at level `level` is split when its own edge test is positive (asked only while
+/// `level < own_test_levels`) or when `also(lo, hi)` asks for it, at most `max_depth`
+/// levels deep. Returns the inserted points and the surface evaluations.
+pub fn subdivide_segment_with(
     inp: &TestInputs,
     uv0: [f32; 2],
     uv1: [f32; 2],
-    lo: u32,
-    hi: u32,
-    depth: u32,
-    bits: &mut EdgeBits,
-) -> u32 {
+    own_test_levels: u32,
+    mut also: impl FnMut(u32, u32) -> (bool, u32),
+) -> (EdgeBits, u32) {
+    let mut bits = [0u32; EDGE_BIT_WORDS];
     let mut evals = 0;
-    let depth = depth.min(MAX_DEPTH_LIMIT);
-    let flat = inp.test == EdgeTest::Flat;
-    let eval = |k: u32, evals: &mut u32| {
-        *evals += 1;
-        let [u, v] = lerp_uv(uv0, uv1, k);
-        eval_frame_f32(inp.cp, u, v).pos
-    };
-    // Explicit stack (the shader has no recursion): a piece [lo, hi] at its level, and
-    // for the flat test the surface points at its ends.
-    let mut stack: Vec<(u32, u32, u32, Vec3, Vec3)> =
-        Vec::with_capacity(MAX_DEPTH_LIMIT as usize + 1);
-    if depth > 0 && hi - lo >= 2 {
-        let (p0, p1) = if flat {
-            (eval(lo, &mut evals), eval(hi, &mut evals))
-        } else {
-            (Vec3::ZERO, Vec3::ZERO)
-        };
-        stack.push((lo, hi, 0, p0, p1));
+    let depth = inp.max_depth.min(MAX_DEPTH_LIMIT);
+    // Explicit stack (the shader has no recursion): a piece [lo, hi] and its level.
+    let mut stack: Vec<(u32, u32, u32)> = Vec::with_capacity(MAX_DEPTH_LIMIT as usize + 1);
+    if depth > 0 {
+        stack.push((0, DYADIC_SCALE, 0));
     }
-    while let Some((lo, hi, level, p_lo, p_hi)) = stack.pop() {
+    while let Some((lo, hi, level)) = stack.pop() {
         let mid = (lo + hi) / 2;
-        let mut p_mid = Vec3::ZERO;
-        let split = if flat {
-            p_mid = eval(mid, &mut evals);
-            (p_mid - (p_lo + p_hi) * 0.5).length() > inp.threshold
+        let (mut split, e) = if level >= own_test_levels {
+            (false, 0)
         } else {
-            map_test(
-                inp.test,
-                inp.map,
-                inp.threshold,
-                lerp_uv(uv0, uv1, lo),
-                lerp_uv(uv0, uv1, hi),
-            )
+            segment_test(inp, lerp_uv(uv0, uv1, lo), lerp_uv(uv0, uv1, hi))
         };
+        evals += e;
+        if !split {
+            let (yes, e) = also(lo, hi);
+            evals += e;
+            split = yes;
+        }
         if split {
             bits[(mid / 32) as usize] |= 1 << (mid % 32);
-            if level + 1 < depth && mid - lo >= 2 {
-                stack.push((mid, hi, level + 1, p_mid, p_hi));
-                stack.push((lo, mid, level + 1, p_lo, p_mid));
+            if level + 1 < depth {
+                stack.push((mid, hi, level + 1));
+                stack.push((lo, mid, level + 1));
             }
         }
     }
-    evals
+    (bits, evals)
+}
+
+/// The edge test on the segment `uv1 → uv2` (SPEC §1): the map tests read the map; the
+/// flat test compares the surface midpoint with the chord midpoint (3 evaluations).
+pub fn segment_test(inp: &TestInputs, uv1: [f32; 2], uv2: [f32; 2]) -> (bool, u32) {
+    if inp.test == EdgeTest::Flat {
+        let s = |uv: [f32; 2]| eval_frame_f32(inp.cp, uv[0], uv[1]).pos;
+        let m = [(uv1[0] + uv2[0]) * 0.5, (uv1[1] + uv2[1]) * 0.5];
+        let chord: Vec3 = (s(uv1) + s(uv2)) * 0.5;
+        return ((s(m) - chord).length() > inp.threshold, 3);
+    }
+    (map_test(inp.test, inp.map, inp.threshold, uv1, uv2), 0)
 }

@@ -1,17 +1,18 @@
 //! The Bézier path (Espino et al. 2005): bicubic patches, their coarse tessellation and
-//! displacement maps, the map-based edge tests and layer-strip subdivision.
+//! displacement maps, the map-based edge tests and the refinement of each coarse triangle.
 //!
 //! Folders follow the pipeline: [`model`]/[`topology`] (what the surface is and how its
 //! patches connect), [`patch`] (evaluation), [`prepare`] (what is uploaded once), then
-//! the CPU twins of the kernels: [`edge_tests`], [`coarse_edges`], [`layer_strip`] and
+//! the CPU twins of the kernels: [`edge_tests`], [`coarse_edges`], [`lattice`]/[`refine`] and
 //! the stage script [`tessellate`]. [`uniform`] is the peer every result is compared to.
 
 pub mod coarse_edges;
 pub mod edge_tests;
-pub mod layer_strip;
+pub mod lattice;
 pub mod model;
 pub mod patch;
 pub mod prepare;
+pub mod refine;
 pub mod search;
 pub mod tessellate;
 pub mod topology;

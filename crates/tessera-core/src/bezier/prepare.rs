@@ -67,10 +67,20 @@ impl PreparedBezier {
                     owner: c.owner,
                     flags: c.owner_side as u32 | (c.collapsed as u32) << 2,
                     coarse_vertex,
-                    _pad: 0,
+                    other: GpuCurve::NO_SIDE,
                 }
             })
             .collect();
+        let mut curves = curves;
+        for (p, sides) in t.patch_sides.iter().enumerate() {
+            for (s, side) in sides.iter().enumerate() {
+                let c = &mut curves[side.curve as usize];
+                let is_owner = c.owner == p as u32 && c.owner_side() == s;
+                if !is_owner && c.other == GpuCurve::NO_SIDE {
+                    c.other = (p as u32) << 2 | s as u32;
+                }
+            }
+        }
         let patches = model.patches.len() as u32;
         let layout = CoarseLayout {
             patches,

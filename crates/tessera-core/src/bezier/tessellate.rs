@@ -5,17 +5,25 @@
 //! |---|---|---|
 //! | [`edge_decide`] | `bezier_edge_decide.wgsl` | coarse edge |
 //! | [`exclusive_scan`] | `scan.wgsl` | — |
+//! | [`tri_mark`] | `bezier_tri_mark.wgsl` | coarse triangle |
 //! | [`tri_count`] | `bezier_tri_count.wgsl` | coarse triangle |
 //! | [`coarse_vertex_records`](PreparedBezier::coarse_vertex_records), [`edge_emit`], [`tri_emit`] | `bezier_*_emit.wgsl` | vertex / edge / triangle |
 //! | [`vertex_eval`] | `bezier_vertex_eval.wgsl` | output vertex |
 
 use glam::Vec3;
 
-use super::coarse_edges::{edge_collapsed, edge_endpoints};
+use bytemuck::Zeroable;
+
+use super::coarse_edges::{coarse_edge_sides, edge_collapsed, edge_endpoints};
 use super::edge_tests::{
-    bit_count, bit_positions, lerp_uv, subdivide_segment, EdgeBits, EdgeTest, TestInputs,
+    bit_count, bit_positions, lerp_uv, subdivide_segment_with, EdgeBits, EdgeTest, TestInputs,
+    DYADIC_SCALE,
 };
-use super::layer_strip::{layer_strip, StripSink, VertexRef};
+use super::lattice::Lattice;
+use super::refine::{
+    inner_rank, interior_need, tri_mark, tri_triangles, word_prefix, TriContext, TriScratch,
+    TriangleSink, VertexRef,
+};
 use super::patch::{eval_frame_f32, frame_normal_f32};
 use super::prepare::PreparedBezier;
 use crate::error::{Error, Result};
@@ -76,8 +84,13 @@ pub fn test_inputs<'a>(
     }
 }
 
-/// Stage 1, one work item per coarse edge: recursive edge tests on the owner patch.
-/// Collapsed edges are never split.
+/// Stage 1, one work item per coarse edge: recursive bisection. The whole edge is split
+/// by its edge test on the owner patch's map (SPEC §1, as the paper states it: the map
+/// is the displacement from the coarse mesh, which the edge belongs to). Each piece is
+/// then split when the right triangle beside it, on either side, asks to be
+/// ([`interior_need`]: the same tests, on the displacement from that triangle, in each
+/// patch's own map). The flat test, which measures the chord itself, also tests every
+/// piece directly. Collapsed edges are never split.
 pub fn edge_decide(
     prep: &PreparedBezier,
     cps: &[[Vec3; 16]],
@@ -88,7 +101,35 @@ pub fn edge_decide(
         return ([0; EDGE_BIT_WORDS], 0);
     }
     let (p, uv0, uv1) = edge_endpoints(prep, e);
-    subdivide_segment(&test_inputs(prep, cps, params, p), uv0, uv1)
+    let sides = coarse_edge_sides(prep, e);
+    let lattices: Vec<(Lattice, usize, bool)> = sides
+        .iter()
+        .map(|&(t, k, fwd)| (Lattice::new(t, params.max_depth), k, fwd))
+        .collect();
+    let own_test_levels = if params.test == EdgeTest::Flat {
+        u32::MAX
+    } else {
+        1
+    };
+    let owner = test_inputs(prep, cps, params, p);
+    subdivide_segment_with(&owner, uv0, uv1, own_test_levels, |lo, hi| {
+        let mut evals = 0;
+        for (l, k, fwd) in &lattices {
+            let scale = DYADIC_SCALE / l.n;
+            let (f0, f1) = if *fwd {
+                (lo / scale, hi / scale)
+            } else {
+                ((DYADIC_SCALE - hi) / scale, (DYADIC_SCALE - lo) / scale)
+            };
+            let tri = l.triangle_on_side(*k, f0, f1);
+            let (yes, ev) = interior_need(&test_inputs(prep, cps, params, l.patch), l, tri);
+            evals += ev;
+            if yes {
+                return (true, evals);
+            }
+        }
+        (false, evals)
+    })
 }
 
 /// Exclusive prefix sum; returns the total. (On the GPU: `scan.wgsl`.)
@@ -102,75 +143,55 @@ pub fn exclusive_scan(values: &mut [u32]) -> u32 {
     sum
 }
 
-#[derive(Default)]
-struct CountSink {
-    inner_vertices: u32,
-    triangles: u32,
-    evaluations: u32,
-}
-
-impl StripSink for CountSink {
-    fn inner_vertex(&mut self, _local: u32, _record: VertexRecord) {
-        self.inner_vertices += 1;
-    }
-    fn triangle(&mut self, _tri: [VertexRef; 3]) {
-        self.triangles += 1;
-    }
-    fn evaluations(&mut self, n: u32) {
-        self.evaluations += n;
-    }
-}
-
-/// Stage 3, one work item per coarse triangle: inner vertices and triangles it makes.
-/// Returns `(inner vertices, triangles, evaluations)`.
-pub fn tri_count(
-    prep: &PreparedBezier,
-    cps: &[[Vec3; 16]],
-    bits: &[EdgeBits],
+/// What the triangle stages of coarse triangle `t` read.
+pub fn tri_context<'a>(
+    prep: &'a PreparedBezier,
+    cps: &'a [[Vec3; 16]],
+    bits: &'a [EdgeBits],
     params: &AdaptiveParams,
     t: u32,
-) -> (u32, u32, u32) {
-    let mut sink = CountSink::default();
+) -> TriContext<'a> {
     let p = t / crate::gpu_types::COARSE_TRIANGLES_PER_PATCH as u32;
-    layer_strip(prep, bits, &test_inputs(prep, cps, params, p), t, &mut sink);
-    (sink.inner_vertices, sink.triangles, sink.evaluations)
+    TriContext::new(prep, test_inputs(prep, cps, params, p), bits, t)
 }
 
-/// Where the vertices and indices of one coarse triangle go.
+struct CountSink(u32);
+
+impl TriangleSink for CountSink {
+    fn triangle(&mut self, _tri: [VertexRef; 3]) {
+        self.0 += 1;
+    }
+}
+
+/// Stage 3b, one work item per coarse triangle: how many triangles it makes.
+pub fn tri_count(ctx: &TriContext, scratch: &TriScratch) -> u32 {
+    let mut sink = CountSink(0);
+    // Any injective numbering of inner points will do for counting.
+    tri_triangles(ctx, scratch, &|i| i as u32, &mut sink);
+    sink.0
+}
+
+/// Where the indices of one coarse triangle go.
 struct EmitSink<'a> {
-    records: &'a mut [VertexRecord],
     indices: &'a mut [u32],
     edge_vertex_base: u32,
     edge_offsets: &'a [u32],
     inner_base: u32,
     next_index: usize,
-    evaluations: u32,
 }
 
-impl EmitSink<'_> {
-    fn index(&self, v: VertexRef) -> u32 {
-        match v {
-            VertexRef::Coarse(id) => id,
-            VertexRef::Edge { edge, rank } => {
-                self.edge_vertex_base + self.edge_offsets[edge as usize] + rank
-            }
-            VertexRef::Inner(n) => self.inner_base + n,
-        }
-    }
-}
-
-impl StripSink for EmitSink<'_> {
-    fn inner_vertex(&mut self, local: u32, record: VertexRecord) {
-        self.records[(self.inner_base + local) as usize] = record;
-    }
+impl TriangleSink for EmitSink<'_> {
     fn triangle(&mut self, tri: [VertexRef; 3]) {
         for v in tri {
-            self.indices[self.next_index] = self.index(v);
+            self.indices[self.next_index] = match v {
+                VertexRef::Coarse(id) => id,
+                VertexRef::Edge { edge, rank } => {
+                    self.edge_vertex_base + self.edge_offsets[edge as usize] + rank
+                }
+                VertexRef::Inner(n) => self.inner_base + n,
+            };
             self.next_index += 1;
         }
-    }
-    fn evaluations(&mut self, n: u32) {
-        self.evaluations += n;
     }
 }
 
@@ -189,34 +210,44 @@ pub fn edge_emit(
     }
 }
 
-/// Stage 5c, one work item per coarse triangle: inner vertex records and indices.
-/// Returns the evaluations its inner tests made.
+/// Stage 5c, one work item per coarse triangle: records of its inner points (in
+/// lattice order) and its indices.
 #[allow(clippy::too_many_arguments)]
 pub fn tri_emit(
-    prep: &PreparedBezier,
-    cps: &[[Vec3; 16]],
-    bits: &[EdgeBits],
-    params: &AdaptiveParams,
-    t: u32,
+    ctx: &TriContext,
+    scratch: &TriScratch,
     edge_vertex_base: u32,
     edge_offsets: &[u32],
     inner_base: u32,
     first_index: u32,
     records: &mut [VertexRecord],
     indices: &mut [u32],
-) -> u32 {
+) {
+    let points = &scratch.points;
+    let mut next = inner_base as usize;
+    for (w, &word) in points.iter().enumerate() {
+        let mut bits = word;
+        while bits != 0 {
+            let i = 32 * w + bits.trailing_zeros() as usize;
+            bits &= bits - 1;
+            let [u, v] = ctx.lattice.uv(ctx.lattice.point(i));
+            records[next] = VertexRecord {
+                patch: ctx.lattice.patch,
+                u,
+                v,
+            };
+            next += 1;
+        }
+    }
+    let prefix = word_prefix(points);
     let mut sink = EmitSink {
-        records,
         indices,
         edge_vertex_base,
         edge_offsets,
         inner_base,
         next_index: first_index as usize,
-        evaluations: 0,
     };
-    let p = t / crate::gpu_types::COARSE_TRIANGLES_PER_PATCH as u32;
-    layer_strip(prep, bits, &test_inputs(prep, cps, params, p), t, &mut sink);
-    sink.evaluations
+    tri_triangles(ctx, scratch, &|i| inner_rank(points, &prefix, i), &mut sink);
 }
 
 /// Stage 6, one work item per output vertex: position, normal (facing the patch's
@@ -252,14 +283,17 @@ pub fn tessellate_adaptive(prep: &PreparedBezier, params: &AdaptiveParams) -> Re
     // 2. Edge vertex offsets.
     let mut edge_offsets: Vec<u32> = bits.iter().map(bit_count).collect();
     let edge_vertices = exclusive_scan(&mut edge_offsets);
-    // 3. Per-triangle counts, 4. their offsets.
+    // 3. Per-triangle split trees and counts, 4. their offsets.
+    let mut scratch = Vec::with_capacity(l.coarse_triangles as usize);
     let mut inner_offsets = Vec::with_capacity(l.coarse_triangles as usize);
     let mut tri_offsets = Vec::with_capacity(l.coarse_triangles as usize);
     for t in 0..l.coarse_triangles {
-        let (nv, nt, ev) = tri_count(prep, &cps, &bits, params, t);
-        inner_offsets.push(nv);
-        tri_offsets.push(nt);
-        evaluations += ev as u64;
+        let ctx = tri_context(prep, &cps, &bits, params, t);
+        let mut s = TriScratch::new(params.max_depth);
+        evaluations += tri_mark(&ctx, &mut s) as u64;
+        inner_offsets.push(s.inner_count());
+        tri_offsets.push(tri_count(&ctx, &s));
+        scratch.push(s);
     }
     let inner_vertices = exclusive_scan(&mut inner_offsets);
     let triangles = exclusive_scan(&mut tri_offsets);
@@ -269,14 +303,7 @@ pub fn tessellate_adaptive(prep: &PreparedBezier, params: &AdaptiveParams) -> Re
 
     // 5. Emit vertex records and indices.
     let mut records = prep.coarse_vertex_records();
-    records.resize(
-        vertex_count as usize,
-        VertexRecord {
-            patch: 0,
-            u: 0.0,
-            v: 0.0,
-        },
-    );
+    records.resize(vertex_count as usize, VertexRecord::zeroed());
     for e in 0..l.coarse_edges {
         edge_emit(
             prep,
@@ -288,19 +315,17 @@ pub fn tessellate_adaptive(prep: &PreparedBezier, params: &AdaptiveParams) -> Re
     }
     let mut indices = vec![0u32; 3 * triangles as usize];
     for t in 0..l.coarse_triangles {
-        evaluations += tri_emit(
-            prep,
-            &cps,
-            &bits,
-            params,
-            t,
+        let ctx = tri_context(prep, &cps, &bits, params, t);
+        tri_emit(
+            &ctx,
+            &scratch[t as usize],
             edge_vertex_base,
             &edge_offsets,
             inner_vertex_base + inner_offsets[t as usize],
             3 * tri_offsets[t as usize],
             &mut records,
             &mut indices,
-        ) as u64;
+        );
     }
     // 6. Evaluate each vertex once.
     let vertices: Vec<OutVertex> = records.iter().map(|r| vertex_eval(prep, &cps, r)).collect();
