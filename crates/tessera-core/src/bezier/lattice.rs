@@ -244,3 +244,35 @@ mod tests {
         assert_eq!(c2, [[0, 2], [4, 0], [0, 4]]);
     }
 }
+
+#[cfg(test)]
+mod bisection_tests {
+    use super::*;
+
+    fn area2(l: &Lattice, t: [Lp; 3]) -> i64 {
+        let p = t.map(|p| l.patch_coords(p).map(|x| x as i64));
+        (p[1][0] - p[0][0]) * (p[2][1] - p[0][1]) - (p[1][1] - p[0][1]) * (p[2][0] - p[0][0])
+    }
+
+    #[test]
+    fn full_bisection_tiles_the_coarse_triangle() {
+        for tri in [0, 1, 6, 7] {
+            let l = Lattice::new(tri, 3);
+            let whole = area2(&l, l.corners());
+            assert!(whole > 0);
+            let mut stack = vec![(l.root(), 0)];
+            let (mut sum, mut leaves) = (0, 0);
+            while let Some((t, level)) = stack.pop() {
+                assert!(area2(&l, t) > 0, "tri {tri}: {t:?} not counter-clockwise");
+                if level < 2 * l.depth {
+                    stack.extend(bisect(t).map(|c| (c, level + 1)));
+                } else {
+                    sum += area2(&l, t);
+                    leaves += 1;
+                }
+            }
+            assert_eq!(sum, whole);
+            assert_eq!(leaves, 1 << (2 * l.depth));
+        }
+    }
+}

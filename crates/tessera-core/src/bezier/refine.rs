@@ -340,7 +340,9 @@ fn leaf_polygon(ctx: &TriContext, scratch: &TriScratch, t: [Lp; 3], out: &mut Ve
         let (a, b) = (t[k], t[(k + 1) % 3]);
         out.push(a);
         let d = [b[0] as i64 - a[0] as i64, b[1] as i64 - a[1] as i64];
-        let steps = d[0].abs().max(d[1].abs());
+        // Lattice points on the side: a (1, 0), (0, 1), (1, −1) or (2, −1) direction
+        // (axes and diagonals of (u, v) under the lattice's shear) times the gcd.
+        let steps = gcd(d[0].unsigned_abs(), d[1].unsigned_abs()) as i64;
         for s in 1..steps {
             let p = [
                 (a[0] as i64 + d[0] * s / steps) as u32,
@@ -351,6 +353,13 @@ fn leaf_polygon(ctx: &TriContext, scratch: &TriScratch, t: [Lp; 3], out: &mut Ve
             }
         }
     }
+}
+
+fn gcd(mut a: u64, mut b: u64) -> u64 {
+    while b != 0 {
+        (a, b) = (b, a % b);
+    }
+    a
 }
 
 fn collinear(a: Lp, b: Lp, c: Lp) -> bool {
