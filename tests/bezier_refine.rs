@@ -47,7 +47,11 @@ fn refinement_is_monotone_in_the_threshold() {
             let e = measure_error(&samples, &t.mesh);
             if let Some((tris, err)) = last {
                 assert!(t.mesh.triangle_count() > tris, "{test:?} th={th}");
-                assert!(e.max_error <= err * 1.05, "{test:?} th={th}: {} > {err}", e.max_error);
+                assert!(
+                    e.max_error <= err * 1.05,
+                    "{test:?} th={th}: {} > {err}",
+                    e.max_error
+                );
             }
             last = Some((t.mesh.triangle_count(), e.max_error));
         }

@@ -2,9 +2,9 @@
 //! three per boundary curve in its canonical direction, then 21 per patch.
 //! CPU twin of `shaders/shared/coarse_edges.wgsl`.
 
+use super::prepare::coarse_triangle_grid;
 use super::prepare::PreparedBezier;
 use super::topology::side_uv;
-use super::prepare::coarse_triangle_grid;
 use crate::gpu_types::{COARSE_SEGMENTS, COARSE_TRIANGLES_PER_PATCH, INTERIOR_EDGES_PER_PATCH};
 
 /// The coarse edge joining neighbouring grid points `a → b` of patch `p`, and whether

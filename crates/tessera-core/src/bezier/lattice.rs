@@ -59,7 +59,9 @@ impl Lattice {
         let n = self.n as i64;
         let g = self.grid.map(|g| g.map(|x| x as i64));
         let (i, j) = (p[0] as i64, p[1] as i64);
-        std::array::from_fn(|a| (g[0][a] * n + i * (g[1][a] - g[0][a]) + j * (g[2][a] - g[0][a])) as u32)
+        std::array::from_fn(|a| {
+            (g[0][a] * n + i * (g[1][a] - g[0][a]) + j * (g[2][a] - g[0][a])) as u32
+        })
     }
 
     /// Patch parameter `(u, v)` of a lattice point.

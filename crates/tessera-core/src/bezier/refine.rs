@@ -22,19 +22,19 @@
 //! falling as triangles were added. Here every side of every leaf was tested (or is at
 //! the depth limit), which bounds the error inside it.
 //!
-//! Consistency without communication: a lattice edge's test is a pure function of its
-//! end points (taken in a canonical order), so both triangles on an interior edge agree.
-//! A triangle whose hypotenuse lies on a coarse edge is cut only where the coarse edge
-//! has a point (the coarse-edge bits are the only truth shared with the neighbour), and
-//! the coarse-edge stage sets a bit wherever the edge test, or the need of the triangle
-//! on either side ([`interior_need`]), asks for it.
+//! Consistency without communication: inside a coarse triangle, neighbours need not
+//! agree (a point one side makes is a vertex on the other side's polygon). Across coarse
+//! edges the bit sets are the only shared truth: a triangle whose hypotenuse lies on a
+//! coarse edge is cut exactly where the edge has a point, and the coarse-edge stage sets
+//! a point wherever the triangle on either side asks for one ([`interior_need`], the same
+//! function of the same data in both stages).
 
 use super::coarse_edges::coarse_edge_of;
 use super::edge_tests::{
     bit_is_set, bit_rank, map_test_with, segment_test, EdgeBits, EdgeTest, TestInputs, DYADIC_SCALE,
 };
-use super::prepare::map_read;
 use super::lattice::{bisect, bit_get, bit_set, lattice_mid, Lattice, LatticePlace, Lp};
+use super::prepare::map_read;
 use super::prepare::PreparedBezier;
 
 /// A vertex as the triangle stages see it, before global numbering.
@@ -120,7 +120,10 @@ impl TrianglePlane {
     fn new(inp: &TestInputs, l: &Lattice, t: [Lp; 3]) -> Self {
         let [p0, p1, p2] = t.map(|p| l.uv(p));
         let [d0, d1, d2] = [p0, p1, p2].map(|p| map_read(inp.map, p[0], p[1]));
-        let (e1, e2) = ([p1[0] - p0[0], p1[1] - p0[1]], [p2[0] - p0[0], p2[1] - p0[1]]);
+        let (e1, e2) = (
+            [p1[0] - p0[0], p1[1] - p0[1]],
+            [p2[0] - p0[0], p2[1] - p0[1]],
+        );
         let det = e1[0] * e2[1] - e1[1] * e2[0];
         let (g1, g2) = (d1 - d0, d2 - d0);
         // Solve grad · e1 = g1, grad · e2 = g2.

@@ -20,12 +20,12 @@ use super::edge_tests::{
     DYADIC_SCALE,
 };
 use super::lattice::Lattice;
+use super::patch::{eval_frame_f32, frame_normal_f32};
+use super::prepare::PreparedBezier;
 use super::refine::{
     inner_rank, interior_need, tri_mark, tri_triangles, word_prefix, TriContext, TriScratch,
     TriangleSink, VertexRef,
 };
-use super::patch::{eval_frame_f32, frame_normal_f32};
-use super::prepare::PreparedBezier;
 use crate::error::{Error, Result};
 use crate::gpu_types::{OutVertex, VertexRecord, EDGE_BIT_WORDS, MAX_DEPTH_LIMIT};
 use crate::mesh::Mesh;
