@@ -67,7 +67,15 @@ pub fn edge_endpoints(prep: &PreparedBezier, e: u32) -> (u32, [f32; 2], [f32; 2]
             side_uv(c.owner_side(), (s + 1.0) / n),
         );
     }
-    let k = e - curve_edges;
+    let (p, a, b) = interior_edge_grid(prep, e);
+    let uv = |g: [u32; 2]| [g[0] as f32 / n, g[1] as f32 / n];
+    (p, uv(a), uv(b))
+}
+
+/// Patch and grid end points (canonical order) of an edge inside a patch
+/// (`e >= 3 * curves`).
+fn interior_edge_grid(prep: &PreparedBezier, e: u32) -> (u32, [u32; 2], [u32; 2]) {
+    let k = e - 3 * prep.layout.curves;
     let p = k / INTERIOR_EDGES_PER_PATCH as u32;
     let local = k % INTERIOR_EDGES_PER_PATCH as u32;
     let (a, b) = if local < 6 {
@@ -80,8 +88,7 @@ pub fn edge_endpoints(prep: &PreparedBezier, e: u32) -> (u32, [f32; 2], [f32; 2]
         let (i, j) = ((local - 12) % 3, (local - 12) / 3);
         ([i, j], [i + 1, j + 1])
     };
-    let uv = |g: [u32; 2]| [g[0] as f32 / n, g[1] as f32 / n];
-    (p, uv(a), uv(b))
+    (p, a, b)
 }
 
 /// Whether edge `e` lies on a curve collapsed to a point (it is never split).
@@ -120,9 +127,7 @@ pub fn coarse_edge_sides(prep: &PreparedBezier, e: u32) -> Vec<(u32, usize, bool
             users.push((q, at(s), at(s + 1)));
         }
     } else {
-        let (p, uv0, uv1) = edge_endpoints(prep, e);
-        let g = |uv: [f32; 2]| uv.map(|x| (x * n as f32).round() as u32);
-        users.push((p, g(uv0), g(uv1)));
+        users.push(interior_edge_grid(prep, e));
     }
     let mut out = Vec::with_capacity(2);
     for (q, a, b) in users {

@@ -50,7 +50,7 @@ impl PreparedBezier {
         let t = &model.topology;
         let corners = t.corner_owner.len() as u32;
         let mut next = corners;
-        let curves: Vec<GpuCurve> = t
+        let mut curves: Vec<GpuCurve> = t
             .curves
             .iter()
             .map(|c| {
@@ -71,7 +71,6 @@ impl PreparedBezier {
                 }
             })
             .collect();
-        let mut curves = curves;
         for (p, sides) in t.patch_sides.iter().enumerate() {
             for (s, side) in sides.iter().enumerate() {
                 let c = &mut curves[side.curve as usize];

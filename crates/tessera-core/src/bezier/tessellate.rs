@@ -102,9 +102,12 @@ pub fn edge_decide(
     }
     let (p, uv0, uv1) = edge_endpoints(prep, e);
     let sides = coarse_edge_sides(prep, e);
-    let lattices: Vec<(Lattice, usize, bool)> = sides
+    let lattices: Vec<(Lattice, TestInputs, usize, bool)> = sides
         .iter()
-        .map(|&(t, k, fwd)| (Lattice::new(t, params.max_depth), k, fwd))
+        .map(|&(t, k, fwd)| {
+            let l = Lattice::new(t, params.max_depth);
+            (l, test_inputs(prep, cps, params, l.patch), k, fwd)
+        })
         .collect();
     let own_test_levels = if params.test == EdgeTest::Flat {
         u32::MAX
@@ -114,7 +117,7 @@ pub fn edge_decide(
     let owner = test_inputs(prep, cps, params, p);
     subdivide_segment_with(&owner, uv0, uv1, own_test_levels, |lo, hi| {
         let mut evals = 0;
-        for (l, k, fwd) in &lattices {
+        for (l, inputs, k, fwd) in &lattices {
             let scale = DYADIC_SCALE / l.n;
             let (f0, f1) = if *fwd {
                 (lo / scale, hi / scale)
@@ -122,7 +125,7 @@ pub fn edge_decide(
                 ((DYADIC_SCALE - hi) / scale, (DYADIC_SCALE - lo) / scale)
             };
             let tri = l.triangle_on_side(*k, f0, f1);
-            let (yes, ev) = interior_need(&test_inputs(prep, cps, params, l.patch), l, tri);
+            let (yes, ev) = interior_need(inputs, l, tri);
             evals += ev;
             if yes {
                 return (true, evals);
