@@ -1,0 +1,27 @@
+//! The one error type of `tessera-wgpu`.
+
+/// What can go wrong in the GPU stage.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum Error {
+    /// No GPU adapter (not even a CPU one such as lavapipe) could be found.
+    #[error("no GPU adapter: {0}")]
+    NoAdapter(String),
+    /// The adapter refused the device (limits or features).
+    #[error("requesting a device failed: {0}")]
+    RequestDevice(String),
+    /// wgpu reported a validation or out-of-memory error.
+    #[error("wgpu error: {0}")]
+    Wgpu(String),
+    /// Waiting for the GPU or mapping a buffer failed.
+    #[error("GPU readback failed: {0}")]
+    Readback(String),
+    /// The input or a parameter was rejected by the core.
+    #[error(transparent)]
+    Core(#[from] tessera_core::Error),
+    /// Writing an image failed.
+    #[error("{path}: {msg}")]
+    Image { path: String, msg: String },
+}
+
+pub type Result<T, E = Error> = std::result::Result<T, E>;

@@ -1,0 +1,29 @@
+//! # tessera-wgpu
+//!
+//! The embeddable wgpu stage of tessera. Surfaces go up to the GPU once; WGSL compute
+//! kernels decide where detail is needed and write a vertex buffer, an index buffer and
+//! indexed indirect draw arguments that any render pass can draw.
+//!
+//! The stage borrows the caller's `Device` and `Queue`, records its passes into the
+//! caller's `CommandEncoder`, and never submits on its own.
+//!
+//! | module | what |
+//! |---|---|
+//! | [`bezier`] | the Bézier (displacement-map) tessellation stage |
+//! | [`output`] | [`MeshBuffers`]: the vertex, index and indirect-draw buffers a stage leaves |
+//! | [`render`] | a lit (optionally wireframe) renderer for the stage's output |
+//! | [`headless`] | device creation without a window, readback, PNG output |
+//! | [`shaders`] | the WGSL sources with their shared includes resolved |
+
+pub use tessera_core;
+pub use wgpu;
+
+pub mod bezier;
+pub mod error;
+pub mod headless;
+pub mod output;
+pub mod render;
+pub mod shaders;
+
+pub use error::{Error, Result};
+pub use output::MeshBuffers;

@@ -1,0 +1,69 @@
+//! The WGSL sources, embedded at build time, with `#include "shared/NAME.wgsl"` lines
+//! replaced by the named shared file (each file included at most once per module).
+
+/// Every shader file under `shaders/`, by its path relative to that folder.
+pub const SOURCES: &[(&str, &str)] = &[
+    ("shared/types.wgsl", include_str!("../../../shaders/shared/types.wgsl")),
+    ("shared/patch.wgsl", include_str!("../../../shaders/shared/patch.wgsl")),
+    ("shared/map.wgsl", include_str!("../../../shaders/shared/map.wgsl")),
+    ("shared/lattice.wgsl", include_str!("../../../shaders/shared/lattice.wgsl")),
+    ("shared/coarse.wgsl", include_str!("../../../shaders/shared/coarse.wgsl")),
+    ("shared/refine.wgsl", include_str!("../../../shaders/shared/refine.wgsl")),
+    ("scan.wgsl", include_str!("../../../shaders/scan.wgsl")),
+    ("bezier_edge_decide.wgsl", include_str!("../../../shaders/bezier_edge_decide.wgsl")),
+    ("bezier_tri_mark.wgsl", include_str!("../../../shaders/bezier_tri_mark.wgsl")),
+    ("bezier_tri_emit.wgsl", include_str!("../../../shaders/bezier_tri_emit.wgsl")),
+    ("bezier_edge_emit.wgsl", include_str!("../../../shaders/bezier_edge_emit.wgsl")),
+    ("bezier_vertex_eval.wgsl", include_str!("../../../shaders/bezier_vertex_eval.wgsl")),
+    ("bezier_finish.wgsl", include_str!("../../../shaders/bezier_finish.wgsl")),
+    ("render_mesh.wgsl", include_str!("../../../shaders/render_mesh.wgsl")),
+];
+
+/// The kernels and render shaders (files that are not shared includes).
+pub fn entry_files() -> impl Iterator<Item = &'static str> {
+    SOURCES
+        .iter()
+        .map(|(name, _)| *name)
+        .filter(|n| !n.starts_with("shared/"))
+}
+
+fn raw(name: &str) -> Option<&'static str> {
+    SOURCES.iter().find(|(n, _)| *n == name).map(|(_, s)| *s)
+}
+
+/// The source of `name` with its includes resolved.
+///
+/// # Panics
+/// If `name` or an include is not in [`SOURCES`]: a build-time inconsistency, caught
+/// by the shader validation test.
+pub fn source(name: &str) -> String {
+    let mut out = String::new();
+    let mut seen = Vec::new();
+    expand(name, &mut out, &mut seen);
+    out
+}
+
+fn expand(name: &str, out: &mut String, seen: &mut Vec<String>) {
+    if seen.iter().any(|s| s == name) {
+        return;
+    }
+    seen.push(name.to_string());
+    let text = raw(name).unwrap_or_else(|| panic!("shader {name} is not embedded"));
+    for line in text.lines() {
+        match line.trim().strip_prefix("#include") {
+            Some(rest) => expand(rest.trim().trim_matches('"'), out, seen),
+            None => {
+                out.push_str(line);
+                out.push('\n');
+            }
+        }
+    }
+}
+
+/// A shader module for `name`.
+pub fn module(device: &wgpu::Device, name: &str) -> wgpu::ShaderModule {
+    device.create_shader_module(wgpu::ShaderModuleDescriptor {
+        label: Some(name),
+        source: wgpu::ShaderSource::Wgsl(source(name).into()),
+    })
+}
