@@ -1,1 +1,40 @@
-// placeholder
+// Stage 5b, one invocation per coarse edge: where its inserted points are evaluated.
+// Twin of `tessera_core::bezier::tessellate::edge_emit`.
+
+#include "shared/types.wgsl"
+#include "shared/lattice.wgsl"
+#include "shared/coarse.wgsl"
+
+@group(0) @binding(3) var<storage, read> topo: array<GpuPatchTopo>;
+@group(0) @binding(4) var<storage, read> curves: array<GpuCurve>;
+@group(0) @binding(6) var<storage, read> edge_bits: array<u32>;
+@group(0) @binding(7) var<storage, read> counts: array<u32>;
+@group(0) @binding(9) var<storage, read_write> records: array<VertexRecord>;
+@group(0) @binding(13) var<storage, read> status: BezierStatus;
+
+fn lerp_uv(a: vec2f, b: vec2f, k: u32) -> vec2f {
+    let f = f32(k) * (1.0 / f32(DYADIC_SCALE));
+    return vec2f(a.x + (b.x - a.x) * f, a.y + (b.y - a.y) * f);
+}
+
+@compute @workgroup_size(64)
+fn main(@builtin(global_invocation_id) gid: vec3u, @builtin(num_workgroups) groups: vec3u) {
+    let e = gid.x + gid.y * groups.x * 64u;
+    if e >= params.coarse_edges || status.overflow != 0u {
+        return;
+    }
+    let ends = edge_endpoints(e);
+    var next = params.coarse_vertices + counts[e];
+    for (var w = 0u; w < EDGE_BIT_WORDS; w++) {
+        var bits = edge_bits[e * EDGE_BIT_WORDS + w];
+        while bits != 0u {
+            let k = 32u * w + firstTrailingBit(bits);
+            bits &= bits - 1u;
+            let uv = lerp_uv(ends.uv0, ends.uv1, k);
+            if next < arrayLength(&records) {
+                records[next] = VertexRecord(ends.patch_id, uv.x, uv.y);
+            }
+            next += 1u;
+        }
+    }
+}

@@ -1,1 +1,43 @@
-// placeholder
+// After the scan, one invocation: totals, the capacity check, the indirect draw
+// arguments and the vertex kernel's indirect dispatch. Nothing is read back to draw.
+// Twin of the totals in `tessera_core::bezier::tessellate_adaptive`.
+
+#include "shared/types.wgsl"
+
+@group(0) @binding(7) var<storage, read> counts: array<u32>;
+@group(0) @binding(12) var<storage, read_write> draw_args: DrawIndexedIndirectArgs;
+@group(0) @binding(13) var<storage, read_write> status: BezierStatus;
+
+const VERTEX_WORKGROUP: u32 = 64u;
+const MAX_GROUPS_X: u32 = 32768u;
+
+@compute @workgroup_size(1)
+fn main() {
+    let e = params.coarse_edges;
+    let t = params.coarse_triangles;
+    // Exclusive scan of [edge vertices | inner vertices | triangles | 0].
+    let edge_vertices = counts[e];
+    let vertices = params.coarse_vertices + counts[e + t];
+    let triangles = counts[e + 2u * t] - counts[e + t];
+    let indices = 3u * triangles;
+    var overflow = 0u;
+    if vertices > params.vertex_capacity {
+        overflow |= 1u;
+    }
+    if indices > params.index_capacity {
+        overflow |= 2u;
+    }
+    status.vertices = vertices;
+    status.indices = indices;
+    status.overflow = overflow;
+    status.edge_vertices = edge_vertices;
+    let groups = select((vertices + VERTEX_WORKGROUP - 1u) / VERTEX_WORKGROUP, 0u, overflow != 0u);
+    status.dispatch_x = min(groups, MAX_GROUPS_X);
+    status.dispatch_y = (groups + MAX_GROUPS_X - 1u) / MAX_GROUPS_X;
+    status.dispatch_z = 1u;
+    draw_args.index_count = select(indices, 0u, overflow != 0u);
+    draw_args.instance_count = 1u;
+    draw_args.first_index = 0u;
+    draw_args.base_vertex = 0;
+    draw_args.first_instance = 0u;
+}

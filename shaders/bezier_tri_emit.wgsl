@@ -1,1 +1,81 @@
-// placeholder
+// Stage 5c, one invocation per coarse triangle: where its inner points are evaluated (in
+// lattice order) and its indices. Twin of `tessera_core::bezier::tessellate::tri_emit`.
+
+#include "shared/types.wgsl"
+#include "shared/patch.wgsl"
+#include "shared/map.wgsl"
+#include "shared/lattice.wgsl"
+#include "shared/coarse.wgsl"
+#include "shared/need.wgsl"
+#include "shared/refine.wgsl"
+
+@group(0) @binding(1) var<storage, read> patches: array<GpuPatch>;
+@group(0) @binding(2) var<storage, read> maps: array<DisplacementMap>;
+@group(0) @binding(3) var<storage, read> topo: array<GpuPatchTopo>;
+@group(0) @binding(4) var<storage, read> curves: array<GpuCurve>;
+@group(0) @binding(6) var<storage, read> edge_bits: array<u32>;
+@group(0) @binding(7) var<storage, read> counts: array<u32>;
+@group(0) @binding(8) var<storage, read> scratch: array<u32>;
+@group(0) @binding(9) var<storage, read_write> records: array<VertexRecord>;
+@group(0) @binding(11) var<storage, read_write> out_indices: array<u32>;
+@group(0) @binding(13) var<storage, read> status: BezierStatus;
+
+// The writing sink.
+var<private> next_index: u32;
+var<private> inner_base: u32;
+
+fn inner_rank(c: TriCtx, i: u32) -> u32 {
+    var below = 0u;
+    for (var w = 0u; w < i / 32u; w++) {
+        below += countOneBits(scratch[c.points_base + w]);
+    }
+    let mask = (1u << (i % 32u)) - 1u;
+    return below + countOneBits(scratch[c.points_base + i / 32u] & mask);
+}
+
+fn global_index(v: VRef) -> u32 {
+    if v.kind == VREF_COARSE {
+        return v.a;
+    }
+    if v.kind == VREF_EDGE {
+        return params.coarse_vertices + counts[v.a] + v.b;
+    }
+    return inner_base + v.a;
+}
+
+fn sink_triangle(a: VRef, b: VRef, c: VRef) {
+    let ids = array<u32, 3>(global_index(a), global_index(b), global_index(c));
+    for (var k = 0u; k < 3u; k++) {
+        if next_index < arrayLength(&out_indices) {
+            out_indices[next_index] = ids[k];
+        }
+        next_index += 1u;
+    }
+}
+
+@compute @workgroup_size(64)
+fn main(@builtin(global_invocation_id) gid: vec3u, @builtin(num_workgroups) groups: vec3u) {
+    let t = gid.x + gid.y * groups.x * 64u;
+    if t >= params.coarse_triangles || status.overflow != 0u {
+        return;
+    }
+    let c = tri_ctx(t);
+    let e = params.coarse_edges;
+    let tris = params.coarse_triangles;
+    inner_base = params.coarse_vertices + counts[e + t];
+    var next = inner_base;
+    for (var w = 0u; w < params.points_words; w++) {
+        var bits = scratch[c.points_base + w];
+        while bits != 0u {
+            let i = 32u * w + firstTrailingBit(bits);
+            bits &= bits - 1u;
+            let uv = lattice_uv(c.l, lattice_point(c.l, i));
+            if next < arrayLength(&records) {
+                records[next] = VertexRecord(c.l.patch_id, uv.x, uv.y);
+            }
+            next += 1u;
+        }
+    }
+    next_index = 3u * (counts[e + tris + t] - counts[e + tris]);
+    tri_triangles(c);
+}

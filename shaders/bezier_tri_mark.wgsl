@@ -1,1 +1,73 @@
-// placeholder
+// Stages 3a and 3b, one invocation per coarse triangle: mark the bisection tree as the
+// lattice points it makes, then count the inner vertices and the triangles the replay
+// makes. Twin of `tri_mark`, `TriScratch::inner_count` and `tri_count` in
+// `tessera_core::bezier`.
+
+#include "shared/types.wgsl"
+#include "shared/patch.wgsl"
+#include "shared/map.wgsl"
+#include "shared/lattice.wgsl"
+#include "shared/coarse.wgsl"
+#include "shared/need.wgsl"
+#include "shared/refine.wgsl"
+
+@group(0) @binding(1) var<storage, read> patches: array<GpuPatch>;
+@group(0) @binding(2) var<storage, read> maps: array<DisplacementMap>;
+@group(0) @binding(3) var<storage, read> topo: array<GpuPatchTopo>;
+@group(0) @binding(4) var<storage, read> curves: array<GpuCurve>;
+@group(0) @binding(6) var<storage, read> edge_bits: array<u32>;
+@group(0) @binding(7) var<storage, read_write> counts: array<u32>;
+@group(0) @binding(8) var<storage, read_write> scratch: array<u32>;
+
+// The counting sink: any injective numbering of inner points will do.
+var<private> triangles: u32;
+
+fn sink_triangle(a: VRef, b: VRef, c: VRef) {
+    triangles += 1u;
+}
+
+fn inner_rank(c: TriCtx, i: u32) -> u32 {
+    return i;
+}
+
+// Stage "mark": the bisection tree as the points it makes (twin of `tri_mark`).
+// The triangle's scratch words must be zero.
+fn tri_mark(c: TriCtx) {
+    var stack: array<TriLevel, STACK_MAX>;
+    var top = 1u;
+    stack[0] = TriLevel(lattice_root(c.l), 0u);
+    while top > 0u {
+        top -= 1u;
+        let item = stack[top];
+        if !splits(c, item.t, item.level) {
+            continue;
+        }
+        let pl = place(c.l, lattice_mid(item.t.a, item.t.b));
+        if pl.kind == PLACE_INSIDE {
+            scratch[c.points_base + pl.f / 32u] |= 1u << (pl.f % 32u);
+        } else if pl.kind == PLACE_SIDE && c.side_collapsed[pl.k] {
+            let i = pole_index(c.l, pl.k, pl.f);
+            scratch[c.pole_base + i / 32u] |= 1u << (i % 32u);
+        }
+        stack[top] = TriLevel(bisect_first(item.t), item.level + 1u);
+        stack[top + 1u] = TriLevel(bisect_second(item.t), item.level + 1u);
+        top += 2u;
+    }
+}
+
+@compute @workgroup_size(64)
+fn main(@builtin(global_invocation_id) gid: vec3u, @builtin(num_workgroups) groups: vec3u) {
+    let t = gid.x + gid.y * groups.x * 64u;
+    if t >= params.coarse_triangles {
+        return;
+    }
+    let c = tri_ctx(t);
+    for (var w = 0u; w < params.points_words + params.pole_words; w++) {
+        scratch[c.points_base + w] = 0u;
+    }
+    tri_mark(c);
+    triangles = 0u;
+    tri_triangles(c);
+    counts[params.coarse_edges + t] = inner_count(c);
+    counts[params.coarse_edges + params.coarse_triangles + t] = triangles;
+}

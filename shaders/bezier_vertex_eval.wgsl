@@ -1,1 +1,32 @@
-// placeholder
+// Stage 6, one invocation per output vertex (dispatched indirectly by `bezier_finish`):
+// position, normal facing the patch's front, parameter and patch.
+// Twin of `tessera_core::bezier::tessellate::vertex_eval`.
+
+#include "shared/types.wgsl"
+#include "shared/patch.wgsl"
+
+@group(0) @binding(1) var<storage, read> patches: array<GpuPatch>;
+@group(0) @binding(3) var<storage, read> topo: array<GpuPatchTopo>;
+@group(0) @binding(9) var<storage, read> records: array<VertexRecord>;
+@group(0) @binding(10) var<storage, read_write> out_vertices: array<OutVertex>;
+@group(0) @binding(13) var<storage, read> status: BezierStatus;
+
+@compute @workgroup_size(64)
+fn main(@builtin(global_invocation_id) gid: vec3u, @builtin(num_workgroups) groups: vec3u) {
+    let v = gid.x + gid.y * groups.x * 64u;
+    if v >= status.vertices || v >= arrayLength(&out_vertices) || v >= arrayLength(&records) {
+        return;
+    }
+    let r = records[v];
+    let f = eval_frame(r.patch_id, r.u, r.v);
+    var n = frame_normal(f, r.u, r.v);
+    if (topo[r.patch_id].flags & 1u) != 0u {
+        n = -n;
+    }
+    out_vertices[v] = OutVertex(
+        array<f32, 3>(f.pos.x, f.pos.y, f.pos.z),
+        array<f32, 3>(n.x, n.y, n.z),
+        array<f32, 2>(r.u, r.v),
+        r.patch_id,
+    );
+}

@@ -1,1 +1,78 @@
-// placeholder
+// Exclusive prefix sum of u32, in place, one level of a multi-level scan (the host
+// records the levels). `scan_blocks`: each workgroup scans its block of
+// 2 × WORKGROUP values and writes the block's total to `sums`; `add_offsets` adds the
+// scanned block totals back. Twin of `tessera_core::bezier::tessellate::exclusive_scan`.
+
+const WORKGROUP: u32 = 256u;
+const BLOCK: u32 = 2u * WORKGROUP;
+
+struct ScanParams {
+    n: u32,
+}
+
+@group(0) @binding(0) var<uniform> scan: ScanParams;
+@group(0) @binding(1) var<storage, read_write> data: array<u32>;
+@group(0) @binding(2) var<storage, read_write> sums: array<u32>;
+
+var<workgroup> partial: array<u32, WORKGROUP>;
+
+fn block_index(wg: vec3u, groups: vec3u) -> u32 {
+    return wg.x + wg.y * groups.x;
+}
+
+@compute @workgroup_size(256)
+fn scan_blocks(
+    @builtin(workgroup_id) wg: vec3u,
+    @builtin(num_workgroups) groups: vec3u,
+    @builtin(local_invocation_index) lid: u32,
+) {
+    let block = block_index(wg, groups);
+    let i0 = block * BLOCK + 2u * lid;
+    var a = 0u;
+    var b = 0u;
+    if i0 < scan.n {
+        a = data[i0];
+    }
+    if i0 + 1u < scan.n {
+        b = data[i0 + 1u];
+    }
+    // Inclusive Hillis–Steele scan of the pair sums across the workgroup.
+    partial[lid] = a + b;
+    workgroupBarrier();
+    for (var offset = 1u; offset < WORKGROUP; offset *= 2u) {
+        var x = 0u;
+        if lid >= offset {
+            x = partial[lid - offset];
+        }
+        workgroupBarrier();
+        partial[lid] += x;
+        workgroupBarrier();
+    }
+    let before = partial[lid] - (a + b);
+    if i0 < scan.n {
+        data[i0] = before;
+    }
+    if i0 + 1u < scan.n {
+        data[i0 + 1u] = before + a;
+    }
+    if lid == WORKGROUP - 1u {
+        sums[block] = partial[lid];
+    }
+}
+
+@compute @workgroup_size(256)
+fn add_offsets(
+    @builtin(workgroup_id) wg: vec3u,
+    @builtin(num_workgroups) groups: vec3u,
+    @builtin(local_invocation_index) lid: u32,
+) {
+    let block = block_index(wg, groups);
+    let i0 = block * BLOCK + 2u * lid;
+    let add = sums[block];
+    if i0 < scan.n {
+        data[i0] += add;
+    }
+    if i0 + 1u < scan.n {
+        data[i0 + 1u] += add;
+    }
+}

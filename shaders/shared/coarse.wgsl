@@ -1,1 +1,213 @@
-// placeholder
+// Numbering of coarse vertices and edges, computed from the patch topology (no tables).
+// Twin of `tessera_core::bezier::coarse_edges` and `PreparedBezier::coarse_vertex`.
+// Reads `topo: array<GpuPatchTopo>` and `curves: array<GpuCurve>`.
+
+fn side_curve(p: u32, side: u32) -> u32 {
+    return topo[p].sides[side] >> 1u;
+}
+
+fn side_reversed(p: u32, side: u32) -> bool {
+    return (topo[p].sides[side] & 1u) != 0u;
+}
+
+fn curve_owner_side(c: u32) -> u32 {
+    return curves[c].flags & 3u;
+}
+
+fn curve_collapsed(c: u32) -> bool {
+    return (curves[c].flags & 4u) != 0u;
+}
+
+fn patch_flipped(p: u32) -> bool {
+    return (topo[p].flags & 1u) != 0u;
+}
+
+fn side_uv(side: u32, t: f32) -> vec2f {
+    switch side {
+        case 0u: { return vec2f(t, 0.0); }
+        case 1u: { return vec2f(1.0, t); }
+        case 2u: { return vec2f(t, 1.0); }
+        default: { return vec2f(0.0, t); }
+    }
+}
+
+// An edge id and whether a → b runs along its canonical direction.
+struct EdgeRef {
+    edge: u32,
+    forward: bool,
+}
+
+fn side_edge(curve: u32, reversed: bool, seg: u32, along_side: bool) -> EdgeRef {
+    let canonical_seg = select(seg, COARSE_SEGMENTS - 1u - seg, reversed);
+    return EdgeRef(3u * curve + canonical_seg, along_side != reversed);
+}
+
+fn coarse_edge_of(p: u32, a: vec2u, b: vec2u) -> EdgeRef {
+    let n = COARSE_SEGMENTS;
+    let interior = 3u * params.curves + INTERIOR_EDGES_PER_PATCH * p;
+    let lo = min(a, b);
+    if a.y == b.y {
+        let j = a.y;
+        if j == 0u || j == n {
+            let side = select(2u, 0u, j == 0u);
+            return side_edge(side_curve(p, side), side_reversed(p, side), lo.x, b.x > a.x);
+        }
+        return EdgeRef(interior + (j - 1u) * 3u + lo.x, b.x > a.x);
+    }
+    if a.x == b.x {
+        let i = a.x;
+        if i == 0u || i == n {
+            let side = select(1u, 3u, i == 0u);
+            return side_edge(side_curve(p, side), side_reversed(p, side), lo.y, b.y > a.y);
+        }
+        return EdgeRef(interior + 6u + (i - 1u) * 3u + lo.y, b.y > a.y);
+    }
+    return EdgeRef(interior + 12u + lo.y * 3u + lo.x, b.x > a.x);
+}
+
+// Patch and grid end points (canonical order) of an edge inside a patch.
+struct GridEdge {
+    patch_id: u32,
+    a: vec2u,
+    b: vec2u,
+}
+
+fn interior_edge_grid(e: u32) -> GridEdge {
+    let k = e - 3u * params.curves;
+    let p = k / INTERIOR_EDGES_PER_PATCH;
+    let local = k % INTERIOR_EDGES_PER_PATCH;
+    if local < 6u {
+        let i = local % 3u;
+        let j = local / 3u + 1u;
+        return GridEdge(p, vec2u(i, j), vec2u(i + 1u, j));
+    }
+    if local < 12u {
+        let i = (local - 6u) / 3u + 1u;
+        let j = (local - 6u) % 3u;
+        return GridEdge(p, vec2u(i, j), vec2u(i, j + 1u));
+    }
+    let i = (local - 12u) % 3u;
+    let j = (local - 12u) / 3u;
+    return GridEdge(p, vec2u(i, j), vec2u(i + 1u, j + 1u));
+}
+
+// The evaluating patch and the end points of edge e in its (u, v), canonical order.
+struct EdgeEnds {
+    patch_id: u32,
+    uv0: vec2f,
+    uv1: vec2f,
+}
+
+// k/3 for k in 0..=3 as the CPU's correctly rounded division gives it: round(1/3) times
+// 2 or 3 rounds to round(2/3) and exactly 1.
+const THIRD: f32 = 1.0 / 3.0;
+
+fn edge_endpoints(e: u32) -> EdgeEnds {
+    if e < 3u * params.curves {
+        let c = e / 3u;
+        let s = f32(e % 3u);
+        let side = curve_owner_side(c);
+        return EdgeEnds(curves[c].owner, side_uv(side, s * THIRD), side_uv(side, (s + 1.0) * THIRD));
+    }
+    let g = interior_edge_grid(e);
+    return EdgeEnds(g.patch_id, vec2f(g.a) * THIRD, vec2f(g.b) * THIRD);
+}
+
+fn edge_collapsed(e: u32) -> bool {
+    return e < 3u * params.curves && curve_collapsed(e / 3u);
+}
+
+// Up to two coarse triangles beside an edge: (triangle, its side k, forward).
+struct EdgeSide {
+    tri: u32,
+    k: u32,
+    forward: bool,
+}
+
+struct EdgeSides {
+    count: u32,
+    s: array<EdgeSide, 2>,
+}
+
+fn grid_on_side(side: u32, t: u32) -> vec2u {
+    let n = COARSE_SEGMENTS;
+    switch side {
+        case 0u: { return vec2u(t, 0u); }
+        case 1u: { return vec2u(n, t); }
+        case 2u: { return vec2u(t, n); }
+        default: { return vec2u(0u, t); }
+    }
+}
+
+fn add_sides_in_patch(out: ptr<function, EdgeSides>, q: u32, a: vec2u, b: vec2u) {
+    for (var local = 0u; local < COARSE_TRIANGLES_PER_PATCH; local++) {
+        let grid = coarse_triangle_grid(local);
+        for (var k = 0u; k < 3u; k++) {
+            let x = grid[k];
+            let y = grid[(k + 1u) % 3u];
+            if (all(x == a) && all(y == b)) || (all(x == b) && all(y == a)) {
+                if (*out).count < 2u {
+                    let r = coarse_edge_of(q, x, y);
+                    (*out).s[(*out).count] = EdgeSide(q * COARSE_TRIANGLES_PER_PATCH + local, k, r.forward);
+                    (*out).count += 1u;
+                }
+            }
+        }
+    }
+}
+
+fn coarse_edge_sides(e: u32) -> EdgeSides {
+    let n = COARSE_SEGMENTS;
+    var out: EdgeSides;
+    out.count = 0u;
+    if e < 3u * params.curves {
+        let c = e / 3u;
+        let seg = e % 3u;
+        var qs = array<vec2u, 2>(vec2u(curves[c].owner, curve_owner_side(c)), vec2u(0u));
+        var users = 1u;
+        if curves[c].other != NO_SIDE {
+            qs[1] = vec2u(curves[c].other >> 2u, curves[c].other & 3u);
+            users = 2u;
+        }
+        for (var u = 0u; u < users; u++) {
+            let q = qs[u].x;
+            let side = qs[u].y;
+            let s = select(seg, n - 1u - seg, side_reversed(q, side));
+            add_sides_in_patch(&out, q, grid_on_side(side, s), grid_on_side(side, s + 1u));
+        }
+    } else {
+        let g = interior_edge_grid(e);
+        add_sides_in_patch(&out, g.patch_id, g.a, g.b);
+    }
+    return out;
+}
+
+// Global id of coarse grid point (i, j) of patch p (twin of `PreparedBezier::coarse_vertex`).
+fn coarse_vertex(p: u32, g: vec2u) -> u32 {
+    let n = COARSE_SEGMENTS;
+    let on_u = g.x == 0u || g.x == n;
+    let on_v = g.y == 0u || g.y == n;
+    if on_u && on_v {
+        var slot = 0u;
+        if g.x == n && g.y != n { slot = 1u; }
+        if g.x == n && g.y == n { slot = 2u; }
+        if g.x != n && g.y == n { slot = 3u; }
+        return topo[p].corners[slot];
+    }
+    var side = 4u;
+    var k = 0u;
+    if g.y == 0u { side = 0u; k = g.x; }
+    else if g.x == n { side = 1u; k = g.y; }
+    else if g.y == n { side = 2u; k = g.x; }
+    else if g.x == 0u { side = 3u; k = g.y; }
+    if side < 4u {
+        let c = side_curve(p, side);
+        if curve_collapsed(c) {
+            return curves[c].coarse_vertex;
+        }
+        let kk = select(k, n - k, side_reversed(p, side));
+        return curves[c].coarse_vertex + kk - 1u;
+    }
+    let interior_base = params.coarse_vertices - INTERIOR_COARSE_VERTICES_PER_PATCH * params.patches;
+    return interior_base + INTERIOR_COARSE_VERTICES_PER_PATCH * p + (g.y - 1u) * 2u + (g.x - 1u);
+}

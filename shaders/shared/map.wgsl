@@ -1,1 +1,138 @@
-// placeholder
+// Displacement-map reads and the map edge tests (SPEC §1, paper Eq. 1–3).
+// Twin of `tessera_core::bezier::{prepare::map_read, edge_tests}`.
+// Reads `maps: array<DisplacementMap>` (declared by the kernel).
+
+fn map_read(p: u32, u: f32, v: f32) -> f32 {
+    let last = f32(MAP_RES - 1u);
+    let x = clamp(u, 0.0, 1.0) * last;
+    let y = clamp(v, 0.0, 1.0) * last;
+    let i0 = min(floor(x), last - 1.0);
+    let j0 = min(floor(y), last - 1.0);
+    let fx = x - i0;
+    let fy = y - j0;
+    let i = u32(i0);
+    let j = u32(j0);
+    let a = maps[p].d[MAP_RES * j + i];
+    let b = maps[p].d[MAP_RES * j + i + 1u];
+    let c = maps[p].d[MAP_RES * (j + 1u) + i];
+    let d = maps[p].d[MAP_RES * (j + 1u) + i + 1u];
+    let top = a + (b - a) * fx;
+    let bottom = c + (d - c) * fx;
+    return top + (bottom - top) * fy;
+}
+
+// The affine function through the map values at a triangle's corners; the map tests
+// inside a coarse triangle read the displacement from it (see `refine.rs`).
+struct TrianglePlane {
+    patch_id: u32,
+    origin: vec2f,
+    d0: f32,
+    grad: vec2f,
+    e1: vec2f,
+    e2: vec2f,
+    det: f32,
+}
+
+fn triangle_plane(p: u32, p0: vec2f, p1: vec2f, p2: vec2f) -> TrianglePlane {
+    let d0 = map_read(p, p0.x, p0.y);
+    let d1 = map_read(p, p1.x, p1.y);
+    let d2 = map_read(p, p2.x, p2.y);
+    let e1 = p1 - p0;
+    let e2 = p2 - p0;
+    let det = e1.x * e2.y - e1.y * e2.x;
+    let g1 = d1 - d0;
+    let g2 = d2 - d0;
+    let grad = vec2f((g1 * e2.y - g2 * e1.y) / det, (e1.x * g2 - e2.x * g1) / det);
+    return TrianglePlane(p, p0, d0, grad, e1, e2, det);
+}
+
+// Displacement from the plane at `uv`; `valid` false outside the triangle.
+struct MaybeF32 {
+    valid: bool,
+    value: f32,
+}
+
+fn plane_displacement(pl: TrianglePlane, uv: vec2f) -> MaybeF32 {
+    let du = uv.x - pl.origin.x;
+    let dv = uv.y - pl.origin.y;
+    let s = (du * pl.e2.y - dv * pl.e2.x) / pl.det;
+    let t = (pl.e1.x * dv - pl.e1.y * du) / pl.det;
+    let slack = 1e-4;
+    if s < -slack || t < -slack || s + t > 1.0 + slack {
+        return MaybeF32(false, 0.0);
+    }
+    let value = map_read(pl.patch_id, uv.x, uv.y) - (pl.d0 + pl.grad.x * du + pl.grad.y * dv);
+    return MaybeF32(true, value);
+}
+
+// One read of the displacement: the raw map (`use_plane` false) or from the plane.
+fn displacement(pl: TrianglePlane, use_plane: bool, uv: vec2f) -> MaybeF32 {
+    if use_plane {
+        return plane_displacement(pl, uv);
+    }
+    return MaybeF32(true, map_read(pl.patch_id, uv.x, uv.y));
+}
+
+fn differs(pl: TrianglePlane, use_plane: bool, uv: vec2f, d12: f32, th: f32) -> bool {
+    let d = displacement(pl, use_plane, uv);
+    return d.valid && abs(d.value - d12) > th;
+}
+
+// Map2p / Map4p / Map8p on the segment uv1 → uv2 (twin of `map_test_with`).
+fn map_test_with(test: u32, th: f32, uv1: vec2f, uv2: vec2f, pl: TrianglePlane, use_plane: bool) -> bool {
+    let m = vec2f((uv1.x + uv2.x) * 0.5, (uv1.y + uv2.y) * 0.5);
+    let mid = displacement(pl, use_plane, m);
+    if !mid.valid {
+        return false;
+    }
+    let d12 = mid.value;
+    if differs(pl, use_plane, uv1, d12, th) || differs(pl, use_plane, uv2, d12, th) {
+        return true;
+    }
+    if test == TEST_MAP2P {
+        return false;
+    }
+    let ue = uv1.x - m.x;
+    let ve = uv1.y - m.y;
+    if differs(pl, use_plane, vec2f(m.x - ve, m.y + ue), d12, th)
+        || differs(pl, use_plane, vec2f(m.x + ve, m.y - ue), d12, th) {
+        return true;
+    }
+    if test == TEST_MAP4P {
+        return false;
+    }
+    let signs = array<vec2f, 4>(vec2f(1.0, 1.0), vec2f(1.0, -1.0), vec2f(-1.0, 1.0), vec2f(-1.0, -1.0));
+    for (var k = 0u; k < 4u; k++) {
+        let a = signs[k].x;
+        let b = signs[k].y;
+        let du = 0.5 * (a * ue - b * ve);
+        let dv = 0.5 * (a * ve + b * ue);
+        if differs(pl, use_plane, vec2f(m.x + du, m.y + dv), d12, th) {
+            return true;
+        }
+    }
+    return false;
+}
+
+// The raw-map test of patch `p` (the coarse-edge stage's own test).
+fn map_test(test: u32, p: u32, th: f32, uv1: vec2f, uv2: vec2f) -> bool {
+    let unused = TrianglePlane(p, vec2f(0.0), 0.0, vec2f(0.0), vec2f(0.0), vec2f(0.0), 1.0);
+    return map_test_with(test, th, uv1, uv2, unused, false);
+}
+
+// The edge test on uv1 → uv2 (twin of `segment_test`): map tests read the map; the
+// flat test compares the surface midpoint with the chord midpoint.
+fn segment_test(test: u32, p: u32, th: f32, uv1: vec2f, uv2: vec2f) -> bool {
+    if test == TEST_FLAT {
+        let m = vec2f((uv1.x + uv2.x) * 0.5, (uv1.y + uv2.y) * 0.5);
+        let chord = (eval_frame(p, uv1.x, uv1.y).pos + eval_frame(p, uv2.x, uv2.y).pos) * 0.5;
+        return length(eval_frame(p, m.x, m.y).pos - chord) > th;
+    }
+    return map_test(test, p, th, uv1, uv2);
+}
+
+// Point at fraction k / 256 of a → b (1/256 is exact, so CPU and GPU agree).
+fn lerp_uv(a: vec2f, b: vec2f, k: u32) -> vec2f {
+    let f = f32(k) * (1.0 / f32(DYADIC_SCALE));
+    return vec2f(a.x + (b.x - a.x) * f, a.y + (b.y - a.y) * f);
+}

@@ -1,1 +1,292 @@
-// placeholder
+// Refinement of one coarse triangle by right-triangle bisection on its lattice.
+// Twin of `tessera_core::bezier::refine` (read that file for the why).
+// Reads `edge_bits` (array<u32>, EDGE_BIT_WORDS per coarse edge) and `scratch`
+// (array<u32>, points then pole words per coarse triangle). Kernels that include this
+// file define the sink: `fn sink_triangle(a: VRef, b: VRef, c: VRef)` and
+// `fn inner_rank(ctx: TriCtx, i: u32) -> u32`.
+
+fn edge_bit(e: u32, k: u32) -> bool {
+    return ((edge_bits[e * EDGE_BIT_WORDS + k / 32u] >> (k % 32u)) & 1u) != 0u;
+}
+
+// Inserted points of edge e before position k.
+fn edge_bit_rank(e: u32, k: u32) -> u32 {
+    let w = k / 32u;
+    var below = 0u;
+    for (var i = 0u; i < w; i++) {
+        below += countOneBits(edge_bits[e * EDGE_BIT_WORDS + i]);
+    }
+    let mask = (1u << (k % 32u)) - 1u;
+    return below + countOneBits(edge_bits[e * EDGE_BIT_WORDS + w] & mask);
+}
+
+// What the triangle stages of one coarse triangle read (twin of `TriContext`).
+struct TriCtx {
+    tri: u32,
+    l: Lattice,
+    side_edge: array<u32, 3>,
+    side_forward: array<bool, 3>,
+    side_collapsed: array<bool, 3>,
+    corner_ids: array<u32, 3>,
+    flipped: bool,
+    // Offsets of this triangle's lattice points and pole points in `scratch`.
+    points_base: u32,
+    pole_base: u32,
+}
+
+fn tri_ctx(t: u32) -> TriCtx {
+    var c: TriCtx;
+    c.tri = t;
+    c.l = lattice_new(t, params.max_depth);
+    let p = c.l.patch_id;
+    let g = array<vec2u, 3>(c.l.g0, c.l.g1, c.l.g2);
+    for (var k = 0u; k < 3u; k++) {
+        let r = coarse_edge_of(p, g[k], g[(k + 1u) % 3u]);
+        c.side_edge[k] = r.edge;
+        c.side_forward[k] = r.forward;
+        c.side_collapsed[k] = edge_collapsed(r.edge);
+        c.corner_ids[k] = coarse_vertex(p, g[k]);
+    }
+    c.flipped = patch_flipped(p);
+    c.points_base = t * (params.points_words + params.pole_words);
+    c.pole_base = c.points_base + params.points_words;
+    return c;
+}
+
+// Canonical position (in 1/256ths) of the point f lattice steps along side k.
+fn side_canonical(c: TriCtx, k: u32, f: u32) -> u32 {
+    let q = f * (DYADIC_SCALE / c.l.n);
+    return select(DYADIC_SCALE - q, q, c.side_forward[k]);
+}
+
+fn side_point(c: TriCtx, k: u32, f: u32) -> bool {
+    return edge_bit(c.side_edge[k], side_canonical(c, k, f));
+}
+
+fn pole_index(l: Lattice, k: u32, f: u32) -> u32 {
+    return k * (l.n + 1u) + f;
+}
+
+fn scratch_bit(base: u32, i: u32) -> bool {
+    return ((scratch[base + i / 32u] >> (i % 32u)) & 1u) != 0u;
+}
+
+// Whether lattice point p is a vertex, given the points marked so far.
+fn exists(c: TriCtx, p: vec2u) -> bool {
+    let pl = place(c.l, p);
+    if pl.kind == PLACE_CORNER {
+        return true;
+    }
+    if pl.kind == PLACE_SIDE {
+        if c.side_collapsed[pl.k] {
+            return scratch_bit(c.pole_base, pole_index(c.l, pl.k, pl.f));
+        }
+        return side_point(c, pl.k, pl.f);
+    }
+    return scratch_bit(c.points_base, pl.f);
+}
+
+// A vertex before global numbering: coarse id, (edge, rank) or inner rank.
+const VREF_COARSE: u32 = 0u;
+const VREF_EDGE: u32 = 1u;
+const VREF_INNER: u32 = 2u;
+
+struct VRef {
+    kind: u32,
+    a: u32,
+    b: u32,
+}
+
+fn vref_eq(x: VRef, y: VRef) -> bool {
+    return x.kind == y.kind && x.a == y.a && x.b == y.b;
+}
+
+fn vertex_ref(c: TriCtx, p: vec2u) -> VRef {
+    let pl = place(c.l, p);
+    if pl.kind == PLACE_CORNER {
+        return VRef(VREF_COARSE, c.corner_ids[pl.k], 0u);
+    }
+    if pl.kind == PLACE_SIDE {
+        if c.side_collapsed[pl.k] {
+            return VRef(VREF_COARSE, c.corner_ids[pl.k], 0u);
+        }
+        let e = c.side_edge[pl.k];
+        return VRef(VREF_EDGE, e, edge_bit_rank(e, side_canonical(c, pl.k, pl.f)));
+    }
+    return VRef(VREF_INNER, inner_rank(c, pl.f), 0u);
+}
+
+// The bisection decision of right triangle t at `level` (twin of `splits`).
+fn splits(c: TriCtx, t: Tri, level: u32) -> bool {
+    if level >= 2u * c.l.depth {
+        return false;
+    }
+    let side = common_side(c.l, t.a, t.b);
+    if side < 3u && !c.side_collapsed[side] {
+        let pl = place(c.l, lattice_mid(t.a, t.b));
+        return side_point(c, side, pl.f);
+    }
+    return interior_need(c.l, t);
+}
+
+struct TriLevel {
+    t: Tri,
+    level: u32,
+}
+
+// Deepest stack of a depth-first bisection: one entry per level plus one.
+const STACK_MAX: u32 = 2u * MAX_DEPTH_LIMIT + 2u;
+
+fn inner_count(c: TriCtx) -> u32 {
+    var n = 0u;
+    for (var w = 0u; w < params.points_words; w++) {
+        n += countOneBits(scratch[c.points_base + w]);
+    }
+    return n;
+}
+
+// A leaf polygon: lattice points packed as i | j << 16. At most the corners plus every
+// lattice point on the sides of the coarse triangle.
+const POLY_MAX: u32 = 3u * (1u << MAX_DEPTH_LIMIT) + 3u;
+
+fn pack_lp(p: vec2u) -> u32 {
+    return p.x | (p.y << 16u);
+}
+
+fn unpack_lp(x: u32) -> vec2u {
+    return vec2u(x & 0xffffu, x >> 16u);
+}
+
+fn gcd(a0: u32, b0: u32) -> u32 {
+    var a = a0;
+    var b = b0;
+    while b != 0u {
+        let r = a % b;
+        a = b;
+        b = r;
+    }
+    return a;
+}
+
+fn collinear(a: vec2u, b: vec2u, c: vec2u) -> bool {
+    let ax = i32(b.x) - i32(a.x);
+    let ay = i32(b.y) - i32(a.y);
+    let bx = i32(c.x) - i32(a.x);
+    let by = i32(c.y) - i32(a.y);
+    return ax * by - ay * bx == 0;
+}
+
+var<private> poly: array<u32, POLY_MAX>;
+var<private> poly_len: u32;
+
+fn poly_at(k: u32) -> vec2u {
+    return unpack_lp(poly[k % poly_len]);
+}
+
+// Corners of leaf t and every existing point on its sides, counter-clockwise.
+fn leaf_polygon(c: TriCtx, t: Tri) {
+    poly_len = 0u;
+    let corners = array<vec2u, 3>(t.r, t.a, t.b);
+    for (var k = 0u; k < 3u; k++) {
+        let a = corners[k];
+        let b = corners[(k + 1u) % 3u];
+        poly[poly_len] = pack_lp(a);
+        poly_len += 1u;
+        let d = vec2i(i32(b.x) - i32(a.x), i32(b.y) - i32(a.y));
+        let steps = i32(gcd(u32(abs(d.x)), u32(abs(d.y))));
+        for (var s = 1; s < steps; s++) {
+            let p = vec2u(u32(i32(a.x) + d.x * s / steps), u32(i32(a.y) + d.y * s / steps));
+            if exists(c, p) && poly_len < POLY_MAX {
+                poly[poly_len] = pack_lp(p);
+                poly_len += 1u;
+            }
+        }
+    }
+}
+
+fn is_corner(k: u32) -> bool {
+    let n = poly_len;
+    return !collinear(poly_at(k + n - 1u), poly_at(k), poly_at(k + 1u));
+}
+
+fn emit_leaf_triangle(c: TriCtx, p0: vec2u, p1: vec2u, p2: vec2u) {
+    let a = vertex_ref(c, p0);
+    let b = vertex_ref(c, p1);
+    let d = vertex_ref(c, p2);
+    if vref_eq(a, b) || vref_eq(b, d) || vref_eq(a, d) {
+        return;
+    }
+    if c.flipped {
+        sink_triangle(a, d, b);
+    } else {
+        sink_triangle(a, b, d);
+    }
+}
+
+// Ear clipping without new vertices (twin of `clip_ears`).
+fn clip_ears(c: TriCtx) {
+    while poly_len > 3u {
+        let n = poly_len;
+        var corners = 0u;
+        for (var k = 0u; k < n; k++) {
+            corners += u32(is_corner(k));
+        }
+        var best_d2 = 0xffffffffu;
+        var best_k = 0u;
+        var found = false;
+        for (var k = 0u; k < n; k++) {
+            if !is_corner(k) {
+                continue;
+            }
+            let u = k + n - 1u;
+            let w = k + 1u;
+            let u_after = !collinear(poly_at(u + n - 1u), poly_at(u), poly_at(w));
+            let w_after = !collinear(poly_at(u), poly_at(w), poly_at(w + 1u));
+            let after = corners - 1u - u32(is_corner(u)) - u32(is_corner(w)) + u32(u_after) + u32(w_after);
+            if after < 3u {
+                continue;
+            }
+            let pu = patch_coords(c.l, poly_at(u));
+            let pw = patch_coords(c.l, poly_at(w));
+            let dx = pu.x - pw.x;
+            let dy = pu.y - pw.y;
+            let d2 = u32(dx * dx + dy * dy);
+            if !found || d2 < best_d2 {
+                best_d2 = d2;
+                best_k = k;
+                found = true;
+            }
+        }
+        let k = best_k;
+        emit_leaf_triangle(c, poly_at(k + n - 1u), poly_at(k), poly_at(k + 1u));
+        for (var i = k; i + 1u < n; i++) {
+            poly[i] = poly[i + 1u];
+        }
+        poly_len = n - 1u;
+    }
+    if poly_len == 3u {
+        emit_leaf_triangle(c, unpack_lp(poly[0]), unpack_lp(poly[1]), unpack_lp(poly[2]));
+    }
+}
+
+// Stage "count" / "emit": the triangles of every leaf in depth-first order (twin of
+// `tri_triangles`), handed to the kernel's `sink_triangle`.
+fn tri_triangles(c: TriCtx) {
+    let max_level = 2u * c.l.depth;
+    var stack: array<TriLevel, STACK_MAX>;
+    var top = 1u;
+    stack[0] = TriLevel(lattice_root(c.l), 0u);
+    while top > 0u {
+        top -= 1u;
+        let item = stack[top];
+        if item.level < max_level && exists(c, lattice_mid(item.t.a, item.t.b)) {
+            // Reversed push: the first child is visited first.
+            stack[top] = TriLevel(bisect_second(item.t), item.level + 1u);
+            stack[top + 1u] = TriLevel(bisect_first(item.t), item.level + 1u);
+            top += 2u;
+        } else {
+            leaf_polygon(c, item.t);
+            clip_ears(c);
+        }
+    }
+}

@@ -1,1 +1,99 @@
-// placeholder
+// Structs shared with Rust (`tessera_core::gpu_types`), the stage's parameters, and the
+// bindings every Bézier kernel names by the same number. A test checks the struct
+// layouts against the Rust `#[repr(C)]` twins through naga's reflection.
+
+const MAP_RES: u32 = 16u;
+const COARSE_SEGMENTS: u32 = 3u;
+const COARSE_TRIANGLES_PER_PATCH: u32 = 18u;
+const INTERIOR_EDGES_PER_PATCH: u32 = 21u;
+const INTERIOR_COARSE_VERTICES_PER_PATCH: u32 = 4u;
+const MAX_DEPTH_LIMIT: u32 = 8u;
+const EDGE_BIT_WORDS: u32 = 8u;
+const DYADIC_SCALE: u32 = 256u;
+const NO_SIDE: u32 = 0xffffffffu;
+
+const TEST_MAP2P: u32 = 0u;
+const TEST_MAP4P: u32 = 1u;
+const TEST_MAP8P: u32 = 2u;
+const TEST_FLAT: u32 = 3u;
+
+struct GpuPatch {
+    cp: array<f32, 48>,
+}
+
+struct DisplacementMap {
+    d: array<f32, 256>,
+}
+
+struct GpuPatchTopo {
+    corners: array<u32, 4>,
+    sides: array<u32, 4>,
+    flags: u32,
+}
+
+struct GpuCurve {
+    owner: u32,
+    flags: u32,
+    coarse_vertex: u32,
+    other: u32,
+}
+
+struct VertexRecord {
+    patch_id: u32,
+    u: f32,
+    v: f32,
+}
+
+struct OutVertex {
+    position: array<f32, 3>,
+    normal: array<f32, 3>,
+    uv: array<f32, 2>,
+    patch_id: u32,
+}
+
+struct DrawIndexedIndirectArgs {
+    index_count: u32,
+    instance_count: u32,
+    first_index: u32,
+    base_vertex: i32,
+    first_instance: u32,
+}
+
+// Twin of `tessera_wgpu::bezier::BezierParams`.
+struct BezierParams {
+    test: u32,
+    threshold: f32,
+    max_depth: u32,
+    patches: u32,
+    curves: u32,
+    coarse_vertices: u32,
+    coarse_edges: u32,
+    coarse_triangles: u32,
+    // Words per coarse triangle in `scratch`: lattice points, then collapsed-side points.
+    points_words: u32,
+    pole_words: u32,
+    // 1 / (3 · 2^max_depth), rounded once on the CPU: lattice coordinates are scaled by
+    // it (a multiplication is correctly rounded in WGSL, a division need not be).
+    inv_lattice: f32,
+    vertex_capacity: u32,
+    index_capacity: u32,
+    _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
+}
+
+// What the run needed and whether it fit; read back only when the caller asks.
+struct BezierStatus {
+    vertices: u32,
+    indices: u32,
+    // Bit 0: vertices did not fit; bit 1: indices did not fit.
+    overflow: u32,
+    edge_vertices: u32,
+    // Indirect dispatch of the vertex kernel (x, y, z workgroups).
+    dispatch_x: u32,
+    dispatch_y: u32,
+    dispatch_z: u32,
+    _pad: u32,
+}
+
+@group(0) @binding(0) var<uniform> params: BezierParams;

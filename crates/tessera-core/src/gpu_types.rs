@@ -120,6 +120,68 @@ pub struct DrawIndexedIndirectArgs {
     pub first_instance: u32,
 }
 
+/// Parameters of the Bézier kernels (`BezierParams` in `shaders/shared/types.wgsl`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
+pub struct BezierParams {
+    /// [`EdgeTest`](crate::bezier::EdgeTest) index.
+    pub test: u32,
+    pub threshold: f32,
+    pub max_depth: u32,
+    pub patches: u32,
+    pub curves: u32,
+    pub coarse_vertices: u32,
+    pub coarse_edges: u32,
+    pub coarse_triangles: u32,
+    /// Words of lattice points per coarse triangle in the scratch buffer.
+    pub points_words: u32,
+    /// Words of collapsed-side points per coarse triangle in the scratch buffer.
+    pub pole_words: u32,
+    /// `1 / (3 · 2^max_depth)` (see `lattice::inv_lattice`).
+    pub inv_lattice: f32,
+    pub vertex_capacity: u32,
+    pub index_capacity: u32,
+    pub _pad: [u32; 3],
+}
+
+impl BezierParams {
+    /// Member names in WGSL order (the layout test compares them with the shader).
+    pub const FIELD_NAMES: [&'static str; 16] = [
+        "test",
+        "threshold",
+        "max_depth",
+        "patches",
+        "curves",
+        "coarse_vertices",
+        "coarse_edges",
+        "coarse_triangles",
+        "points_words",
+        "pole_words",
+        "inv_lattice",
+        "vertex_capacity",
+        "index_capacity",
+        "_pad0",
+        "_pad1",
+        "_pad2",
+    ];
+}
+
+/// What a GPU run needed and whether it fit (`BezierStatus` in WGSL), followed by the
+/// vertex kernel's indirect dispatch.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq, Eq, Default)]
+pub struct BezierStatus {
+    /// Output vertices the run made (or needed).
+    pub vertices: u32,
+    /// Output indices the run made (or needed).
+    pub indices: u32,
+    /// Bit 0: the vertices did not fit; bit 1: the indices did not fit.
+    pub overflow: u32,
+    pub edge_vertices: u32,
+    pub dispatch: [u32; 3],
+    pub _pad: u32,
+}
+
 /// Bytes uploaded per patch and once per model for the map-based tessellator.
 pub fn bezier_upload_bytes(patches: usize, curves: usize, corners: usize) -> usize {
     patches

@@ -1,12 +1,715 @@
-//! The Bézier (displacement-map) tessellation stage. (Being written.)
+//! The Bézier (displacement-map) tessellation stage: the GPU twin of
+//! [`tessera_core::bezier::tessellate_adaptive`].
+//!
+//! [`BezierStage::prepare`] records one straight-line script into the caller's encoder:
+//!
+//! | # | kernel | per | writes |
+//! |---|---|---|---|
+//! | 1 | `bezier_edge_decide` | coarse edge | edge bit sets, edge vertex counts |
+//! | 2 | `bezier_tri_mark` | coarse triangle | lattice points, inner vertex and triangle counts |
+//! | 3 | `scan` (multi-level) | — | offsets of all three counts in one exclusive scan |
+//! | 4 | `bezier_finish` | 1 | totals, overflow flags, draw arguments, vertex dispatch |
+//! | 5 | copy + `bezier_edge_emit` + `bezier_tri_emit` | edge / triangle | vertex records, indices |
+//! | 6 | `bezier_vertex_eval` (indirect) | output vertex | vertices |
+//!
+//! Output sizes are not known in advance. The finish kernel compares what the run needs
+//! with the capacities; on overflow no emit kernel writes anything, the draw has zero
+//! indices, and [`BezierStage::read_status`] reports the sizes needed. [`BezierStage::grow`]
+//! then reallocates, and the next run fits ([`BezierStage::run_blocking`] does both).
+//!
+//! ```no_run
+//! use tessera_core::bezier::{AdaptiveParams, BezierModel, EdgeTest, PreparedBezier};
+//! use tessera_wgpu::{bezier::BezierStage, headless::Gpu};
+//! # fn main() -> Result<(), Box<dyn std::error::Error>> {
+//! let gpu = Gpu::new()?;
+//! let model = BezierModel::load(std::path::Path::new("assets/teaset/teapot"))?;
+//! let prepared = PreparedBezier::new(&model);
+//! let params = AdaptiveParams { test: EdgeTest::Map4p, threshold: 0.01, max_depth: 6 };
+//! let mut stage = BezierStage::new(&gpu.device, &prepared, &params)?;
+//! // Each frame (or when the threshold changes): record, then submit with your own work.
+//! let mut encoder = gpu.device.create_command_encoder(&Default::default());
+//! stage.prepare(&gpu.device, &gpu.queue, &mut encoder);
+//! gpu.queue.submit([encoder.finish()]);
+//! // Once after loading: make sure the buffers were large enough (grow and rerun if not).
+//! let status = stage.run_blocking(&gpu.device, &gpu.queue)?;
+//! println!("{} triangles", status.indices / 3);
+//! // Draw `stage.output()` with `draw_indexed_indirect`, e.g. through `render::MeshRenderer`.
+//! # Ok(()) }
+//! ```
 
-/// Limits the stage needs, within what `adapter` offers.
+use tessera_core::bezier::lattice::{inv_lattice, Lattice};
+use tessera_core::bezier::{AdaptiveParams, PreparedBezier};
+use tessera_core::gpu_types::{
+    BezierParams, BezierStatus, OutVertex, VertexRecord, EDGE_BIT_WORDS,
+};
+use tessera_core::Mesh;
+use wgpu::util::DeviceExt;
+
+use crate::error::{Error, Result};
+use crate::output::MeshBuffers;
+use crate::shaders;
+
+/// Limits the stage needs, within what `adapter` offers: large storage buffers for big
+/// models; no more than 8 storage buffers per kernel, so WebGPU's defaults suffice there.
 pub fn required_limits(adapter: &wgpu::Limits) -> wgpu::Limits {
     wgpu::Limits {
-        max_storage_buffers_per_shader_stage: adapter.max_storage_buffers_per_shader_stage.min(16),
         max_storage_buffer_binding_size: adapter.max_storage_buffer_binding_size,
         max_buffer_size: adapter.max_buffer_size,
-        max_compute_workgroups_per_dimension: adapter.max_compute_workgroups_per_dimension,
         ..wgpu::Limits::default()
+    }
+}
+
+const WORKGROUP: u32 = 64;
+const SCAN_BLOCK: u32 = 512;
+const MAX_GROUPS_X: u32 = 32768;
+
+/// Workgroups for `items` invocations, as (x, y) within the per-dimension limit; the
+/// kernels fold `y` back in.
+fn groups_2d(items: u32, per_group: u32) -> (u32, u32) {
+    let g = items.div_ceil(per_group);
+    (g.min(MAX_GROUPS_X), g.div_ceil(MAX_GROUPS_X).max(1))
+}
+
+/// Binding numbers shared by every Bézier kernel (see `shaders/shared/types.wgsl`).
+mod slot {
+    pub const PARAMS: u32 = 0;
+    pub const PATCHES: u32 = 1;
+    pub const MAPS: u32 = 2;
+    pub const TOPO: u32 = 3;
+    pub const CURVES: u32 = 4;
+    pub const EDGE_BITS: u32 = 6;
+    pub const COUNTS: u32 = 7;
+    pub const SCRATCH: u32 = 8;
+    pub const RECORDS: u32 = 9;
+    pub const VERTICES: u32 = 10;
+    pub const INDICES: u32 = 11;
+    pub const DRAW_ARGS: u32 = 12;
+    pub const STATUS: u32 = 13;
+}
+
+struct Pipelines {
+    edge_decide: wgpu::ComputePipeline,
+    tri_mark: wgpu::ComputePipeline,
+    scan_blocks: wgpu::ComputePipeline,
+    add_offsets: wgpu::ComputePipeline,
+    finish: wgpu::ComputePipeline,
+    edge_emit: wgpu::ComputePipeline,
+    tri_emit: wgpu::ComputePipeline,
+    vertex_eval: wgpu::ComputePipeline,
+}
+
+impl Pipelines {
+    fn new(device: &wgpu::Device) -> Self {
+        let make = |file: &str, entry: &str| {
+            let module = shaders::module(device, file);
+            device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                label: Some(file),
+                layout: None,
+                module: &module,
+                entry_point: Some(entry),
+                compilation_options: Default::default(),
+                cache: None,
+            })
+        };
+        Pipelines {
+            edge_decide: make("bezier_edge_decide.wgsl", "main"),
+            tri_mark: make("bezier_tri_mark.wgsl", "main"),
+            scan_blocks: make("scan.wgsl", "scan_blocks"),
+            add_offsets: make("scan.wgsl", "add_offsets"),
+            finish: make("bezier_finish.wgsl", "main"),
+            edge_emit: make("bezier_edge_emit.wgsl", "main"),
+            tri_emit: make("bezier_tri_emit.wgsl", "main"),
+            vertex_eval: make("bezier_vertex_eval.wgsl", "main"),
+        }
+    }
+}
+
+/// One level of the multi-level scan: `data` is scanned per block, block totals go to
+/// `sums` (the next level's data).
+struct ScanLevel {
+    n: u32,
+    uniform: wgpu::Buffer,
+    sums: wgpu::Buffer,
+}
+
+struct BindGroups {
+    edge_decide: wgpu::BindGroup,
+    tri_mark: wgpu::BindGroup,
+    scan: Vec<(wgpu::BindGroup, wgpu::BindGroup)>,
+    finish: wgpu::BindGroup,
+    edge_emit: wgpu::BindGroup,
+    tri_emit: wgpu::BindGroup,
+    vertex_eval: wgpu::BindGroup,
+}
+
+/// The embeddable Bézier stage: uploads a prepared model once, records its kernels into
+/// the caller's encoder, and leaves [`MeshBuffers`] on the GPU.
+pub struct BezierStage {
+    prepared_layout: tessera_core::bezier::prepare::CoarseLayout,
+    params: AdaptiveParams,
+    uniform: wgpu::Buffer,
+    patches: wgpu::Buffer,
+    maps: wgpu::Buffer,
+    topo: wgpu::Buffer,
+    curves: wgpu::Buffer,
+    coarse_records: wgpu::Buffer,
+    edge_bits: wgpu::Buffer,
+    counts: wgpu::Buffer,
+    scan_levels: Vec<ScanLevel>,
+    scratch: wgpu::Buffer,
+    records: wgpu::Buffer,
+    status: wgpu::Buffer,
+    status_readback: wgpu::Buffer,
+    output: MeshBuffers,
+    pipelines: Pipelines,
+    bind_groups: BindGroups,
+}
+
+fn storage(device: &wgpu::Device, label: &str, size: u64) -> wgpu::Buffer {
+    device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some(label),
+        size: size.max(4),
+        usage: wgpu::BufferUsages::STORAGE
+            | wgpu::BufferUsages::COPY_SRC
+            | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    })
+}
+
+fn upload(device: &wgpu::Device, label: &str, bytes: &[u8]) -> wgpu::Buffer {
+    let padded;
+    let contents = if bytes.is_empty() {
+        padded = [0u8; 4];
+        &padded[..]
+    } else {
+        bytes
+    };
+    device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+        label: Some(label),
+        contents,
+        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+    })
+}
+
+fn bind(
+    device: &wgpu::Device,
+    pipeline: &wgpu::ComputePipeline,
+    entries: &[(u32, &wgpu::Buffer)],
+) -> wgpu::BindGroup {
+    let entries: Vec<wgpu::BindGroupEntry> = entries
+        .iter()
+        .map(|(binding, buffer)| wgpu::BindGroupEntry {
+            binding: *binding,
+            resource: buffer.as_entire_binding(),
+        })
+        .collect();
+    device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: None,
+        layout: &pipeline.get_bind_group_layout(0),
+        entries: &entries,
+    })
+}
+
+impl BezierStage {
+    /// Uploads `prepared` and compiles the kernels, with output capacity estimated from
+    /// the model (grown on demand).
+    pub fn new(
+        device: &wgpu::Device,
+        prepared: &PreparedBezier,
+        params: &AdaptiveParams,
+    ) -> Result<Self> {
+        let l = prepared.layout;
+        Self::with_capacity(
+            device,
+            prepared,
+            params,
+            4 * l.coarse_vertices,
+            3 * 8 * l.coarse_triangles,
+        )
+    }
+
+    /// As [`BezierStage::new`] with explicit initial capacities (vertices, indices).
+    pub fn with_capacity(
+        device: &wgpu::Device,
+        prepared: &PreparedBezier,
+        params: &AdaptiveParams,
+        vertex_capacity: u32,
+        index_capacity: u32,
+    ) -> Result<Self> {
+        params.validate()?;
+        let l = prepared.layout;
+        let counts_len = l.coarse_edges + 2 * l.coarse_triangles + 1;
+        let mut scan_levels = Vec::new();
+        let mut n = counts_len;
+        loop {
+            let blocks = n.div_ceil(SCAN_BLOCK);
+            scan_levels.push(ScanLevel {
+                n,
+                uniform: device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                    label: Some("tessera scan params"),
+                    contents: bytemuck::bytes_of(&[n, 0, 0, 0]),
+                    usage: wgpu::BufferUsages::UNIFORM,
+                }),
+                sums: storage(device, "tessera scan sums", 4 * blocks as u64),
+            });
+            if blocks == 1 {
+                break;
+            }
+            n = blocks;
+        }
+        let pipelines = Pipelines::new(device);
+        let uniform = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("tessera bezier params"),
+            size: std::mem::size_of::<BezierParams>() as u64,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let vertex_capacity = vertex_capacity.max(l.coarse_vertices);
+        let output = MeshBuffers::with_capacity(device, vertex_capacity, index_capacity);
+        let status = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("tessera bezier status"),
+            size: std::mem::size_of::<BezierStatus>() as u64,
+            usage: wgpu::BufferUsages::STORAGE
+                | wgpu::BufferUsages::INDIRECT
+                | wgpu::BufferUsages::COPY_SRC,
+            mapped_at_creation: false,
+        });
+        let status_readback = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("tessera bezier status readback"),
+            size: std::mem::size_of::<BezierStatus>() as u64,
+            usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+            mapped_at_creation: false,
+        });
+        let mut stage = BezierStage {
+            prepared_layout: l,
+            params: *params,
+            uniform,
+            patches: upload(device, "tessera patches", bytemuck::cast_slice(&prepared.patches)),
+            maps: upload(device, "tessera maps", bytemuck::cast_slice(&prepared.maps)),
+            topo: upload(device, "tessera topology", bytemuck::cast_slice(&prepared.topo)),
+            curves: upload(device, "tessera curves", bytemuck::cast_slice(&prepared.curves)),
+            coarse_records: upload(
+                device,
+                "tessera coarse vertices",
+                bytemuck::cast_slice(&prepared.coarse_vertex_records()),
+            ),
+            edge_bits: storage(
+                device,
+                "tessera edge bits",
+                4 * (EDGE_BIT_WORDS as u64) * l.coarse_edges as u64,
+            ),
+            counts: storage(device, "tessera counts", 4 * counts_len as u64),
+            scan_levels,
+            scratch: storage(device, "tessera triangle scratch", 4),
+            records: storage(
+                device,
+                "tessera vertex records",
+                vertex_capacity as u64 * std::mem::size_of::<VertexRecord>() as u64,
+            ),
+            status,
+            status_readback,
+            output,
+            // Rebuilt just below, once every buffer exists.
+            bind_groups: placeholder_bind_groups(device, &pipelines),
+            pipelines,
+        };
+        stage.resize_scratch(device);
+        Ok(stage)
+    }
+
+    /// Changes the test, threshold or depth; takes effect at the next [`prepare`](Self::prepare).
+    pub fn set_params(&mut self, device: &wgpu::Device, params: &AdaptiveParams) -> Result<()> {
+        params.validate()?;
+        let depth_changed = params.max_depth != self.params.max_depth;
+        self.params = *params;
+        if depth_changed {
+            self.resize_scratch(device);
+        }
+        Ok(())
+    }
+
+    pub fn params(&self) -> &AdaptiveParams {
+        &self.params
+    }
+
+    /// The buffers to draw: valid after the recorded work has run.
+    pub fn output(&self) -> &MeshBuffers {
+        &self.output
+    }
+
+    fn words_per_triangle(&self) -> (u32, u32) {
+        let depth = self.params.max_depth;
+        let points = Lattice::points_words(depth) as u32;
+        let pole = (3 * ((1u32 << depth) + 1)).div_ceil(32);
+        (points, pole)
+    }
+
+    fn resize_scratch(&mut self, device: &wgpu::Device) {
+        let (points, pole) = self.words_per_triangle();
+        let words = (points + pole) as u64 * self.prepared_layout.coarse_triangles as u64;
+        self.scratch = storage(device, "tessera triangle scratch", 4 * words);
+        self.rebind(device);
+    }
+
+    fn rebind(&mut self, device: &wgpu::Device) {
+        use slot::*;
+        let p = &self.pipelines;
+        let model: [(u32, &wgpu::Buffer); 5] = [
+            (PARAMS, &self.uniform),
+            (PATCHES, &self.patches),
+            (MAPS, &self.maps),
+            (TOPO, &self.topo),
+            (CURVES, &self.curves),
+        ];
+        let all_model = [PARAMS, PATCHES, MAPS, TOPO, CURVES];
+        let mut scan = Vec::new();
+        for (k, level) in self.scan_levels.iter().enumerate() {
+            let data = if k == 0 {
+                &self.counts
+            } else {
+                &self.scan_levels[k - 1].sums
+            };
+            let entries = [(0, &level.uniform), (1, data), (2, &level.sums)];
+            scan.push((
+                bind(device, &p.scan_blocks, &entries),
+                bind(device, &p.add_offsets, &entries),
+            ));
+        }
+        self.bind_groups = BindGroups {
+            edge_decide: bind(
+                device,
+                &p.edge_decide,
+                &with(&model, &all_model, &[(EDGE_BITS, &self.edge_bits), (COUNTS, &self.counts)]),
+            ),
+            tri_mark: bind(
+                device,
+                &p.tri_mark,
+                &with(
+                    &model,
+                    &all_model,
+                    &[
+                        (EDGE_BITS, &self.edge_bits),
+                        (COUNTS, &self.counts),
+                        (SCRATCH, &self.scratch),
+                    ],
+                ),
+            ),
+            scan,
+            finish: bind(
+                device,
+                &p.finish,
+                &with(
+                    &model,
+                    &[PARAMS],
+                    &[
+                        (COUNTS, &self.counts),
+                        (DRAW_ARGS, &self.output.indirect),
+                        (STATUS, &self.status),
+                    ],
+                ),
+            ),
+            edge_emit: bind(
+                device,
+                &p.edge_emit,
+                &with(
+                    &model,
+                    &[PARAMS, TOPO, CURVES],
+                    &[
+                        (EDGE_BITS, &self.edge_bits),
+                        (COUNTS, &self.counts),
+                        (RECORDS, &self.records),
+                        (STATUS, &self.status),
+                    ],
+                ),
+            ),
+            tri_emit: bind(
+                device,
+                &p.tri_emit,
+                &with(
+                    &model,
+                    &all_model,
+                    &[
+                        (EDGE_BITS, &self.edge_bits),
+                        (COUNTS, &self.counts),
+                        (SCRATCH, &self.scratch),
+                        (RECORDS, &self.records),
+                        (INDICES, &self.output.indices),
+                        (STATUS, &self.status),
+                    ],
+                ),
+            ),
+            vertex_eval: bind(
+                device,
+                &p.vertex_eval,
+                &with(
+                    &model,
+                    &[PATCHES, TOPO],
+                    &[
+                        (RECORDS, &self.records),
+                        (VERTICES, &self.output.vertices),
+                        (STATUS, &self.status),
+                    ],
+                ),
+            ),
+        };
+    }
+
+    fn gpu_params(&self) -> BezierParams {
+        let l = self.prepared_layout;
+        let (points_words, pole_words) = self.words_per_triangle();
+        BezierParams {
+            test: self.params.test.index(),
+            threshold: self.params.threshold,
+            max_depth: self.params.max_depth,
+            patches: l.patches,
+            curves: l.curves,
+            coarse_vertices: l.coarse_vertices,
+            coarse_edges: l.coarse_edges,
+            coarse_triangles: l.coarse_triangles,
+            points_words,
+            pole_words,
+            inv_lattice: inv_lattice(self.params.max_depth),
+            vertex_capacity: self.output.vertex_capacity,
+            index_capacity: self.output.index_capacity,
+            _pad: [0; 3],
+        }
+    }
+
+    /// Records the whole tessellation into `encoder`: the straight-line script of the
+    /// module docs. Nothing is submitted; the output is valid once the caller's
+    /// submission has run.
+    pub fn prepare(
+        &mut self,
+        _device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        encoder: &mut wgpu::CommandEncoder,
+    ) {
+        let l = self.prepared_layout;
+        queue.write_buffer(&self.uniform, 0, bytemuck::bytes_of(&self.gpu_params()));
+        let counts_len = l.coarse_edges + 2 * l.coarse_triangles + 1;
+        // The scan's trailing slot collects the grand total: zero it each run.
+        encoder.clear_buffer(&self.counts, 4 * (counts_len as u64 - 1), Some(4));
+        let bg = &self.bind_groups;
+        let p = &self.pipelines;
+        {
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("tessera bezier decide"),
+                timestamp_writes: None,
+            });
+            dispatch(&mut pass, &p.edge_decide, &bg.edge_decide, l.coarse_edges, WORKGROUP);
+            dispatch(&mut pass, &p.tri_mark, &bg.tri_mark, l.coarse_triangles, WORKGROUP);
+            for (level, (blocks, _)) in self.scan_levels.iter().zip(&bg.scan) {
+                dispatch(&mut pass, &p.scan_blocks, blocks, level.n, SCAN_BLOCK);
+            }
+            for (level, (_, add)) in self.scan_levels.iter().zip(&bg.scan).rev().skip(1) {
+                dispatch(&mut pass, &p.add_offsets, add, level.n, SCAN_BLOCK);
+            }
+            dispatch(&mut pass, &p.finish, &bg.finish, 1, 1);
+        }
+        encoder.copy_buffer_to_buffer(
+            &self.coarse_records,
+            0,
+            &self.records,
+            0,
+            l.coarse_vertices as u64 * std::mem::size_of::<VertexRecord>() as u64,
+        );
+        {
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("tessera bezier emit"),
+                timestamp_writes: None,
+            });
+            dispatch(&mut pass, &p.edge_emit, &bg.edge_emit, l.coarse_edges, WORKGROUP);
+            dispatch(&mut pass, &p.tri_emit, &bg.tri_emit, l.coarse_triangles, WORKGROUP);
+            pass.set_pipeline(&p.vertex_eval);
+            pass.set_bind_group(0, &bg.vertex_eval, &[]);
+            pass.dispatch_workgroups_indirect(&self.status, 16);
+        }
+        encoder.copy_buffer_to_buffer(
+            &self.status,
+            0,
+            &self.status_readback,
+            0,
+            std::mem::size_of::<BezierStatus>() as u64,
+        );
+    }
+
+    /// Reads what the last submitted run needed (waits for the GPU).
+    pub fn read_status(&self, device: &wgpu::Device) -> Result<BezierStatus> {
+        let bytes = map_read(device, &self.status_readback)?;
+        Ok(*bytemuck::from_bytes(&bytes))
+    }
+
+    /// Grows the output buffers to what `status` says the run needed (with headroom).
+    /// Returns whether anything was reallocated.
+    pub fn grow(&mut self, device: &wgpu::Device, status: &BezierStatus) -> bool {
+        if status.overflow == 0 {
+            return false;
+        }
+        let grow = |need: u32, have: u32| {
+            if need > have {
+                need.saturating_add(need / 4)
+            } else {
+                have
+            }
+        };
+        let vertices = grow(status.vertices, self.output.vertex_capacity);
+        let indices = grow(status.indices, self.output.index_capacity);
+        self.output = MeshBuffers::with_capacity(device, vertices, indices);
+        self.records = storage(
+            device,
+            "tessera vertex records",
+            self.output.vertex_capacity as u64 * std::mem::size_of::<VertexRecord>() as u64,
+        );
+        self.rebind(device);
+        true
+    }
+
+    /// Runs the stage to completion on its own submission, growing and rerunning until
+    /// the output fits. For loading, tools and tests; a renderer records
+    /// [`prepare`](Self::prepare) into its own frame instead.
+    pub fn run_blocking(&mut self, device: &wgpu::Device, queue: &wgpu::Queue) -> Result<BezierStatus> {
+        for _ in 0..4 {
+            let mut encoder = device.create_command_encoder(&Default::default());
+            self.prepare(device, queue, &mut encoder);
+            queue.submit([encoder.finish()]);
+            let status = self.read_status(device)?;
+            if !self.grow(device, &status) {
+                return Ok(status);
+            }
+        }
+        Err(Error::Wgpu("output still overflows after growing 4 times".into()))
+    }
+
+    /// Copies the output mesh back to the CPU (for files and tests). `status` is what
+    /// the run reported.
+    pub fn read_mesh(&self, device: &wgpu::Device, queue: &wgpu::Queue, status: &BezierStatus) -> Result<Mesh> {
+        if status.overflow != 0 {
+            return Err(Error::Wgpu("the last run overflowed its buffers; grow and rerun".into()));
+        }
+        let vsize = status.vertices as u64 * std::mem::size_of::<OutVertex>() as u64;
+        let isize = status.indices as u64 * 4;
+        let vertices = read_buffer(device, queue, &self.output.vertices, vsize)?;
+        let indices = read_buffer(device, queue, &self.output.indices, isize)?;
+        Ok(Mesh {
+            vertices: bytemuck::pod_collect_to_vec(&vertices),
+            indices: bytemuck::pod_collect_to_vec(&indices),
+        })
+    }
+
+    /// The intermediate buffers, for comparison with the CPU twins in tests: edge bit
+    /// sets, the scanned counts, and each coarse triangle's scratch words.
+    pub fn read_intermediates(&self, device: &wgpu::Device, queue: &wgpu::Queue) -> Result<Intermediates> {
+        let words = |b: &wgpu::Buffer| -> Result<Vec<u32>> {
+            Ok(bytemuck::pod_collect_to_vec(&read_buffer(device, queue, b, b.size())?))
+        };
+        let (points_words, pole_words) = self.words_per_triangle();
+        Ok(Intermediates {
+            edge_bits: words(&self.edge_bits)?,
+            counts: words(&self.counts)?,
+            scratch: words(&self.scratch)?,
+            points_words,
+            pole_words,
+        })
+    }
+}
+
+/// What the decision kernels wrote (see [`BezierStage::read_intermediates`]).
+pub struct Intermediates {
+    /// `EDGE_BIT_WORDS` words per coarse edge.
+    pub edge_bits: Vec<u32>,
+    /// The exclusive scan of `[edge vertices | inner vertices | triangles | 0]`.
+    pub counts: Vec<u32>,
+    /// Per coarse triangle: `points_words` words of lattice points, then `pole_words`.
+    pub scratch: Vec<u32>,
+    pub points_words: u32,
+    pub pole_words: u32,
+}
+
+/// The model bindings listed in `keep`, then `extra`.
+fn with<'a>(
+    model: &[(u32, &'a wgpu::Buffer)],
+    keep: &[u32],
+    extra: &[(u32, &'a wgpu::Buffer)],
+) -> Vec<(u32, &'a wgpu::Buffer)> {
+    model
+        .iter()
+        .filter(|(b, _)| keep.contains(b))
+        .chain(extra)
+        .copied()
+        .collect()
+}
+
+fn dispatch(
+    pass: &mut wgpu::ComputePass,
+    pipeline: &wgpu::ComputePipeline,
+    bind_group: &wgpu::BindGroup,
+    items: u32,
+    per_group: u32,
+) {
+    if items == 0 {
+        return;
+    }
+    let (x, y) = groups_2d(items, per_group);
+    pass.set_pipeline(pipeline);
+    pass.set_bind_group(0, bind_group, &[]);
+    pass.dispatch_workgroups(x, y, 1);
+}
+
+fn map_read(device: &wgpu::Device, buffer: &wgpu::Buffer) -> Result<Vec<u8>> {
+    let (tx, rx) = std::sync::mpsc::channel();
+    buffer.map_async(wgpu::MapMode::Read, .., move |r| {
+        let _ = tx.send(r);
+    });
+    device
+        .poll(wgpu::PollType::wait_indefinitely())
+        .map_err(|e| Error::Readback(e.to_string()))?;
+    rx.recv()
+        .map_err(|e| Error::Readback(e.to_string()))?
+        .map_err(|e| Error::Readback(e.to_string()))?;
+    let bytes = buffer
+        .get_mapped_range(..)
+        .map_err(|e| Error::Readback(e.to_string()))?
+        .to_vec();
+    buffer.unmap();
+    Ok(bytes)
+}
+
+fn read_buffer(device: &wgpu::Device, queue: &wgpu::Queue, buffer: &wgpu::Buffer, size: u64) -> Result<Vec<u8>> {
+    if size == 0 {
+        return Ok(Vec::new());
+    }
+    let staging = device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("tessera readback"),
+        size,
+        usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+        mapped_at_creation: false,
+    });
+    let mut encoder = device.create_command_encoder(&Default::default());
+    encoder.copy_buffer_to_buffer(buffer, 0, &staging, 0, size);
+    queue.submit([encoder.finish()]);
+    map_read(device, &staging)
+}
+
+/// Bind groups before the buffers exist: never dispatched, replaced by `rebind`.
+fn placeholder_bind_groups(device: &wgpu::Device, _p: &Pipelines) -> BindGroups {
+    let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        label: None,
+        entries: &[],
+    });
+    let empty = || {
+        device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: None,
+            layout: &layout,
+            entries: &[],
+        })
+    };
+    BindGroups {
+        edge_decide: empty(),
+        tri_mark: empty(),
+        scan: Vec::new(),
+        finish: empty(),
+        edge_emit: empty(),
+        tri_emit: empty(),
+        vertex_eval: empty(),
     }
 }

@@ -8,6 +8,7 @@ pub const SOURCES: &[(&str, &str)] = &[
     ("shared/map.wgsl", include_str!("../../../shaders/shared/map.wgsl")),
     ("shared/lattice.wgsl", include_str!("../../../shaders/shared/lattice.wgsl")),
     ("shared/coarse.wgsl", include_str!("../../../shaders/shared/coarse.wgsl")),
+    ("shared/need.wgsl", include_str!("../../../shaders/shared/need.wgsl")),
     ("shared/refine.wgsl", include_str!("../../../shaders/shared/refine.wgsl")),
     ("scan.wgsl", include_str!("../../../shaders/scan.wgsl")),
     ("bezier_edge_decide.wgsl", include_str!("../../../shaders/bezier_edge_decide.wgsl")),

@@ -67,8 +67,8 @@ impl Lattice {
     /// Patch parameter `(u, v)` of a lattice point.
     pub fn uv(&self, p: Lp) -> [f32; 2] {
         let c = self.patch_coords(p);
-        let s = (COARSE_SEGMENTS as u32 * self.n) as f32;
-        [c[0] as f32 / s, c[1] as f32 / s]
+        let inv = inv_lattice(self.depth);
+        [c[0] as f32 * inv, c[1] as f32 * inv]
     }
 
     pub fn place(&self, p: Lp) -> LatticePlace {
@@ -172,6 +172,12 @@ impl Lattice {
         ];
         [self.from_patch_coords(r), a, b]
     }
+}
+
+/// `1 / (3 · 2^depth)`, rounded once: lattice coordinates are scaled by it, on the GPU
+/// too (where a multiplication is correctly rounded and a division need not be).
+pub fn inv_lattice(depth: u32) -> f32 {
+    1.0 / (COARSE_SEGMENTS as u32 * (1u32 << depth)) as f32
 }
 
 /// Midpoint of two lattice points an even number of steps apart.

@@ -1,0 +1,154 @@
+//! Every shader parses and validates with naga, and every struct shared with Rust has
+//! the layout of its `#[repr(C)]` twin.
+
+use std::mem::{offset_of, size_of};
+
+use tessera_core::gpu_types::*;
+use tessera_wgpu::shaders;
+
+fn parse(name: &str) -> (naga::Module, naga::valid::ModuleInfo) {
+    let src = shaders::source(name);
+    let module = naga::front::wgsl::parse_str(&src)
+        .unwrap_or_else(|e| panic!("{name}: {}", e.emit_to_string(&src)));
+    let info = naga::valid::Validator::new(
+        naga::valid::ValidationFlags::all(),
+        naga::valid::Capabilities::default(),
+    )
+    .validate(&module)
+    .unwrap_or_else(|e| panic!("{name}: {}", e.emit_to_string(&src)));
+    (module, info)
+}
+
+#[test]
+fn every_shader_parses_and_validates() {
+    let mut n = 0;
+    for name in shaders::entry_files() {
+        let (module, _) = parse(name);
+        assert!(!module.entry_points.is_empty(), "{name} has no entry point");
+        n += 1;
+    }
+    assert!(n >= 8, "only {n} shader files");
+}
+
+#[test]
+fn an_invalid_shader_is_rejected() {
+    // The validator is not a formality: a type error must fail.
+    let bad = "@compute @workgroup_size(1) fn main() { let x: u32 = 1.5; }";
+    assert!(naga::front::wgsl::parse_str(bad).is_err());
+}
+
+/// (name, size, [(member, offset)]) of a struct in a module.
+fn layout(module: &naga::Module, name: &str) -> (u32, Vec<(String, u32)>) {
+    let mut layouter = naga::proc::Layouter::default();
+    layouter.update(module.to_ctx()).expect("layout");
+    for (handle, ty) in module.types.iter() {
+        if ty.name.as_deref() != Some(name) {
+            continue;
+        }
+        let naga::TypeInner::Struct { members, span } = &ty.inner else {
+            panic!("{name} is not a struct");
+        };
+        assert_eq!(layouter[handle].size, *span);
+        return (
+            *span,
+            members
+                .iter()
+                .map(|m| (m.name.clone().unwrap_or_default(), m.offset))
+                .collect(),
+        );
+    }
+    panic!("struct {name} not found");
+}
+
+#[test]
+fn shared_structs_match_their_rust_twins() {
+    let (module, _) = parse("bezier_tri_emit.wgsl");
+    let (finish, _) = parse("bezier_finish.wgsl");
+    let (vertex, _) = parse("bezier_vertex_eval.wgsl");
+    let check = |m: &naga::Module, name: &str, size: usize, offsets: &[(&str, usize)]| {
+        let (wgsl_size, members) = layout(m, name);
+        assert_eq!(wgsl_size as usize, size, "size of {name}");
+        assert_eq!(members.len(), offsets.len(), "members of {name}");
+        for ((wname, woff), (rname, roff)) in members.iter().zip(offsets) {
+            // `patch` is a reserved word in WGSL.
+            let rname = if *rname == "patch" { "patch_id" } else { rname };
+            assert_eq!(wname, rname, "{name}: member order");
+            assert_eq!(*woff as usize, *roff, "{name}.{wname} offset");
+        }
+    };
+    check(&module, "GpuPatch", size_of::<GpuPatch>(), &[("cp", offset_of!(GpuPatch, cp))]);
+    check(
+        &module,
+        "DisplacementMap",
+        size_of::<DisplacementMap>(),
+        &[("d", offset_of!(DisplacementMap, d))],
+    );
+    check(
+        &module,
+        "GpuPatchTopo",
+        size_of::<GpuPatchTopo>(),
+        &[
+            ("corners", offset_of!(GpuPatchTopo, corners)),
+            ("sides", offset_of!(GpuPatchTopo, sides)),
+            ("flags", offset_of!(GpuPatchTopo, flags)),
+        ],
+    );
+    check(
+        &module,
+        "GpuCurve",
+        size_of::<GpuCurve>(),
+        &[
+            ("owner", offset_of!(GpuCurve, owner)),
+            ("flags", offset_of!(GpuCurve, flags)),
+            ("coarse_vertex", offset_of!(GpuCurve, coarse_vertex)),
+            ("other", offset_of!(GpuCurve, other)),
+        ],
+    );
+    check(
+        &module,
+        "VertexRecord",
+        size_of::<VertexRecord>(),
+        &[
+            ("patch", offset_of!(VertexRecord, patch)),
+            ("u", offset_of!(VertexRecord, u)),
+            ("v", offset_of!(VertexRecord, v)),
+        ],
+    );
+    check(
+        &vertex,
+        "OutVertex",
+        size_of::<OutVertex>(),
+        &[
+            ("position", offset_of!(OutVertex, position)),
+            ("normal", offset_of!(OutVertex, normal)),
+            ("uv", offset_of!(OutVertex, uv)),
+            ("patch", offset_of!(OutVertex, patch)),
+        ],
+    );
+    check(
+        &finish,
+        "DrawIndexedIndirectArgs",
+        size_of::<DrawIndexedIndirectArgs>(),
+        &[
+            ("index_count", offset_of!(DrawIndexedIndirectArgs, index_count)),
+            ("instance_count", offset_of!(DrawIndexedIndirectArgs, instance_count)),
+            ("first_index", offset_of!(DrawIndexedIndirectArgs, first_index)),
+            ("base_vertex", offset_of!(DrawIndexedIndirectArgs, base_vertex)),
+            ("first_instance", offset_of!(DrawIndexedIndirectArgs, first_instance)),
+        ],
+    );
+    let (wgsl_size, members) = layout(&finish, "BezierParams");
+    assert_eq!(wgsl_size as usize, size_of::<BezierParams>());
+    let names: Vec<&str> = members.iter().map(|(n, _)| n.as_str()).collect();
+    assert_eq!(names, BezierParams::FIELD_NAMES);
+    for (k, (_, off)) in members.iter().enumerate() {
+        assert_eq!(*off as usize, 4 * k, "BezierParams fields are consecutive u32/f32");
+    }
+    let (wgsl_size, members) = layout(&finish, "BezierStatus");
+    assert_eq!(wgsl_size as usize, size_of::<BezierStatus>());
+    let dispatch = members.iter().find(|(n, _)| n == "dispatch_x").expect("dispatch_x");
+    assert_eq!(dispatch.1 as usize, offset_of!(BezierStatus, dispatch));
+    let overflow = members.iter().find(|(n, _)| n == "overflow").expect("overflow");
+    assert_eq!(overflow.1 as usize, offset_of!(BezierStatus, overflow));
+}
+
