@@ -87,29 +87,49 @@ mod slot {
     pub const STATUS: u32 = 13;
 }
 
+/// A compute pipeline and the bindings its entry point uses.
+struct Kernel {
+    pipeline: wgpu::ComputePipeline,
+    bindings: Vec<u32>,
+}
+
+/// The compiled Bézier kernels of one device. Compiling them is the slow part of
+/// creating a stage (seconds on a CPU driver), so stages can share one set.
+#[derive(Clone)]
+pub struct BezierKernels(std::sync::Arc<Pipelines>);
+
+impl BezierKernels {
+    pub fn new(device: &wgpu::Device) -> Self {
+        BezierKernels(std::sync::Arc::new(Pipelines::new(device)))
+    }
+}
+
 struct Pipelines {
-    edge_decide: wgpu::ComputePipeline,
-    tri_mark: wgpu::ComputePipeline,
-    scan_blocks: wgpu::ComputePipeline,
-    add_offsets: wgpu::ComputePipeline,
-    finish: wgpu::ComputePipeline,
-    edge_emit: wgpu::ComputePipeline,
-    tri_emit: wgpu::ComputePipeline,
-    vertex_eval: wgpu::ComputePipeline,
+    edge_decide: Kernel,
+    tri_mark: Kernel,
+    scan_blocks: Kernel,
+    add_offsets: Kernel,
+    finish: Kernel,
+    edge_emit: Kernel,
+    tri_emit: Kernel,
+    vertex_eval: Kernel,
 }
 
 impl Pipelines {
     fn new(device: &wgpu::Device) -> Self {
         let make = |file: &str, entry: &str| {
             let module = shaders::module(device, file);
-            device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                label: Some(file),
-                layout: None,
-                module: &module,
-                entry_point: Some(entry),
-                compilation_options: Default::default(),
-                cache: None,
-            })
+            Kernel {
+                pipeline: device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                    label: Some(file),
+                    layout: None,
+                    module: &module,
+                    entry_point: Some(entry),
+                    compilation_options: Default::default(),
+                    cache: None,
+                }),
+                bindings: shaders::used_bindings(file, entry),
+            }
         };
         Pipelines {
             edge_decide: make("bezier_edge_decide.wgsl", "main"),
@@ -161,7 +181,7 @@ pub struct BezierStage {
     status: wgpu::Buffer,
     status_readback: wgpu::Buffer,
     output: MeshBuffers,
-    pipelines: Pipelines,
+    pipelines: BezierKernels,
     bind_groups: BindGroups,
 }
 
@@ -191,13 +211,15 @@ fn upload(device: &wgpu::Device, label: &str, bytes: &[u8]) -> wgpu::Buffer {
     })
 }
 
+/// A bind group of the buffers in `entries` that `kernel` uses.
 fn bind(
     device: &wgpu::Device,
-    pipeline: &wgpu::ComputePipeline,
+    kernel: &Kernel,
     entries: &[(u32, &wgpu::Buffer)],
 ) -> wgpu::BindGroup {
     let entries: Vec<wgpu::BindGroupEntry> = entries
         .iter()
+        .filter(|(binding, _)| kernel.bindings.contains(binding))
         .map(|(binding, buffer)| wgpu::BindGroupEntry {
             binding: *binding,
             resource: buffer.as_entire_binding(),
@@ -205,7 +227,7 @@ fn bind(
         .collect();
     device.create_bind_group(&wgpu::BindGroupDescriptor {
         label: None,
-        layout: &pipeline.get_bind_group_layout(0),
+        layout: &kernel.pipeline.get_bind_group_layout(0),
         entries: &entries,
     })
 }
@@ -218,9 +240,11 @@ impl BezierStage {
         prepared: &PreparedBezier,
         params: &AdaptiveParams,
     ) -> Result<Self> {
+        params.validate()?;
         let l = prepared.layout;
         Self::with_capacity(
             device,
+            &BezierKernels::new(device),
             prepared,
             params,
             4 * l.coarse_vertices,
@@ -228,9 +252,11 @@ impl BezierStage {
         )
     }
 
-    /// As [`BezierStage::new`] with explicit initial capacities (vertices, indices).
+    /// As [`BezierStage::new`] with already compiled kernels and explicit initial
+    /// capacities (vertices, indices).
     pub fn with_capacity(
         device: &wgpu::Device,
+        kernels: &BezierKernels,
         prepared: &PreparedBezier,
         params: &AdaptiveParams,
         vertex_capacity: u32,
@@ -257,7 +283,7 @@ impl BezierStage {
             }
             n = blocks;
         }
-        let pipelines = Pipelines::new(device);
+        let pipelines = kernels.clone();
         let uniform = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("tessera bezier params"),
             size: std::mem::size_of::<BezierParams>() as u64,
@@ -284,10 +310,22 @@ impl BezierStage {
             prepared_layout: l,
             params: *params,
             uniform,
-            patches: upload(device, "tessera patches", bytemuck::cast_slice(&prepared.patches)),
+            patches: upload(
+                device,
+                "tessera patches",
+                bytemuck::cast_slice(&prepared.patches),
+            ),
             maps: upload(device, "tessera maps", bytemuck::cast_slice(&prepared.maps)),
-            topo: upload(device, "tessera topology", bytemuck::cast_slice(&prepared.topo)),
-            curves: upload(device, "tessera curves", bytemuck::cast_slice(&prepared.curves)),
+            topo: upload(
+                device,
+                "tessera topology",
+                bytemuck::cast_slice(&prepared.topo),
+            ),
+            curves: upload(
+                device,
+                "tessera curves",
+                bytemuck::cast_slice(&prepared.curves),
+            ),
             coarse_records: upload(
                 device,
                 "tessera coarse vertices",
@@ -310,7 +348,7 @@ impl BezierStage {
             status_readback,
             output,
             // Rebuilt just below, once every buffer exists.
-            bind_groups: placeholder_bind_groups(device, &pipelines),
+            bind_groups: placeholder_bind_groups(device),
             pipelines,
         };
         stage.resize_scratch(device);
@@ -353,7 +391,7 @@ impl BezierStage {
 
     fn rebind(&mut self, device: &wgpu::Device) {
         use slot::*;
-        let p = &self.pipelines;
+        let p = &*self.pipelines.0;
         let model: [(u32, &wgpu::Buffer); 5] = [
             (PARAMS, &self.uniform),
             (PATCHES, &self.patches),
@@ -379,7 +417,11 @@ impl BezierStage {
             edge_decide: bind(
                 device,
                 &p.edge_decide,
-                &with(&model, &all_model, &[(EDGE_BITS, &self.edge_bits), (COUNTS, &self.counts)]),
+                &with(
+                    &model,
+                    &all_model,
+                    &[(EDGE_BITS, &self.edge_bits), (COUNTS, &self.counts)],
+                ),
             ),
             tri_mark: bind(
                 device,
@@ -490,14 +532,26 @@ impl BezierStage {
         // The scan's trailing slot collects the grand total: zero it each run.
         encoder.clear_buffer(&self.counts, 4 * (counts_len as u64 - 1), Some(4));
         let bg = &self.bind_groups;
-        let p = &self.pipelines;
+        let p = &*self.pipelines.0;
         {
             let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                 label: Some("tessera bezier decide"),
                 timestamp_writes: None,
             });
-            dispatch(&mut pass, &p.edge_decide, &bg.edge_decide, l.coarse_edges, WORKGROUP);
-            dispatch(&mut pass, &p.tri_mark, &bg.tri_mark, l.coarse_triangles, WORKGROUP);
+            dispatch(
+                &mut pass,
+                &p.edge_decide,
+                &bg.edge_decide,
+                l.coarse_edges,
+                WORKGROUP,
+            );
+            dispatch(
+                &mut pass,
+                &p.tri_mark,
+                &bg.tri_mark,
+                l.coarse_triangles,
+                WORKGROUP,
+            );
             for (level, (blocks, _)) in self.scan_levels.iter().zip(&bg.scan) {
                 dispatch(&mut pass, &p.scan_blocks, blocks, level.n, SCAN_BLOCK);
             }
@@ -518,9 +572,21 @@ impl BezierStage {
                 label: Some("tessera bezier emit"),
                 timestamp_writes: None,
             });
-            dispatch(&mut pass, &p.edge_emit, &bg.edge_emit, l.coarse_edges, WORKGROUP);
-            dispatch(&mut pass, &p.tri_emit, &bg.tri_emit, l.coarse_triangles, WORKGROUP);
-            pass.set_pipeline(&p.vertex_eval);
+            dispatch(
+                &mut pass,
+                &p.edge_emit,
+                &bg.edge_emit,
+                l.coarse_edges,
+                WORKGROUP,
+            );
+            dispatch(
+                &mut pass,
+                &p.tri_emit,
+                &bg.tri_emit,
+                l.coarse_triangles,
+                WORKGROUP,
+            );
+            pass.set_pipeline(&p.vertex_eval.pipeline);
             pass.set_bind_group(0, &bg.vertex_eval, &[]);
             pass.dispatch_workgroups_indirect(&self.status, 16);
         }
@@ -567,7 +633,11 @@ impl BezierStage {
     /// Runs the stage to completion on its own submission, growing and rerunning until
     /// the output fits. For loading, tools and tests; a renderer records
     /// [`prepare`](Self::prepare) into its own frame instead.
-    pub fn run_blocking(&mut self, device: &wgpu::Device, queue: &wgpu::Queue) -> Result<BezierStatus> {
+    pub fn run_blocking(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+    ) -> Result<BezierStatus> {
         for _ in 0..4 {
             let mut encoder = device.create_command_encoder(&Default::default());
             self.prepare(device, queue, &mut encoder);
@@ -577,14 +647,23 @@ impl BezierStage {
                 return Ok(status);
             }
         }
-        Err(Error::Wgpu("output still overflows after growing 4 times".into()))
+        Err(Error::Wgpu(
+            "output still overflows after growing 4 times".into(),
+        ))
     }
 
     /// Copies the output mesh back to the CPU (for files and tests). `status` is what
     /// the run reported.
-    pub fn read_mesh(&self, device: &wgpu::Device, queue: &wgpu::Queue, status: &BezierStatus) -> Result<Mesh> {
+    pub fn read_mesh(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        status: &BezierStatus,
+    ) -> Result<Mesh> {
         if status.overflow != 0 {
-            return Err(Error::Wgpu("the last run overflowed its buffers; grow and rerun".into()));
+            return Err(Error::Wgpu(
+                "the last run overflowed its buffers; grow and rerun".into(),
+            ));
         }
         let vsize = status.vertices as u64 * std::mem::size_of::<OutVertex>() as u64;
         let isize = status.indices as u64 * 4;
@@ -598,9 +677,18 @@ impl BezierStage {
 
     /// The intermediate buffers, for comparison with the CPU twins in tests: edge bit
     /// sets, the scanned counts, and each coarse triangle's scratch words.
-    pub fn read_intermediates(&self, device: &wgpu::Device, queue: &wgpu::Queue) -> Result<Intermediates> {
+    pub fn read_intermediates(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+    ) -> Result<Intermediates> {
         let words = |b: &wgpu::Buffer| -> Result<Vec<u32>> {
-            Ok(bytemuck::pod_collect_to_vec(&read_buffer(device, queue, b, b.size())?))
+            Ok(bytemuck::pod_collect_to_vec(&read_buffer(
+                device,
+                queue,
+                b,
+                b.size(),
+            )?))
         };
         let (points_words, pole_words) = self.words_per_triangle();
         Ok(Intermediates {
@@ -641,7 +729,7 @@ fn with<'a>(
 
 fn dispatch(
     pass: &mut wgpu::ComputePass,
-    pipeline: &wgpu::ComputePipeline,
+    kernel: &Kernel,
     bind_group: &wgpu::BindGroup,
     items: u32,
     per_group: u32,
@@ -650,7 +738,7 @@ fn dispatch(
         return;
     }
     let (x, y) = groups_2d(items, per_group);
-    pass.set_pipeline(pipeline);
+    pass.set_pipeline(&kernel.pipeline);
     pass.set_bind_group(0, bind_group, &[]);
     pass.dispatch_workgroups(x, y, 1);
 }
@@ -674,7 +762,12 @@ fn map_read(device: &wgpu::Device, buffer: &wgpu::Buffer) -> Result<Vec<u8>> {
     Ok(bytes)
 }
 
-fn read_buffer(device: &wgpu::Device, queue: &wgpu::Queue, buffer: &wgpu::Buffer, size: u64) -> Result<Vec<u8>> {
+fn read_buffer(
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    buffer: &wgpu::Buffer,
+    size: u64,
+) -> Result<Vec<u8>> {
     if size == 0 {
         return Ok(Vec::new());
     }
@@ -691,7 +784,7 @@ fn read_buffer(device: &wgpu::Device, queue: &wgpu::Queue, buffer: &wgpu::Buffer
 }
 
 /// Bind groups before the buffers exist: never dispatched, replaced by `rebind`.
-fn placeholder_bind_groups(device: &wgpu::Device, _p: &Pipelines) -> BindGroups {
+fn placeholder_bind_groups(device: &wgpu::Device) -> BindGroups {
     let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
         label: None,
         entries: &[],

@@ -3,21 +3,63 @@
 
 /// Every shader file under `shaders/`, by its path relative to that folder.
 pub const SOURCES: &[(&str, &str)] = &[
-    ("shared/types.wgsl", include_str!("../../../shaders/shared/types.wgsl")),
-    ("shared/patch.wgsl", include_str!("../../../shaders/shared/patch.wgsl")),
-    ("shared/map.wgsl", include_str!("../../../shaders/shared/map.wgsl")),
-    ("shared/lattice.wgsl", include_str!("../../../shaders/shared/lattice.wgsl")),
-    ("shared/coarse.wgsl", include_str!("../../../shaders/shared/coarse.wgsl")),
-    ("shared/need.wgsl", include_str!("../../../shaders/shared/need.wgsl")),
-    ("shared/refine.wgsl", include_str!("../../../shaders/shared/refine.wgsl")),
+    (
+        "shared/types.wgsl",
+        include_str!("../../../shaders/shared/types.wgsl"),
+    ),
+    (
+        "shared/patch.wgsl",
+        include_str!("../../../shaders/shared/patch.wgsl"),
+    ),
+    (
+        "shared/map.wgsl",
+        include_str!("../../../shaders/shared/map.wgsl"),
+    ),
+    (
+        "shared/lattice.wgsl",
+        include_str!("../../../shaders/shared/lattice.wgsl"),
+    ),
+    (
+        "shared/coarse.wgsl",
+        include_str!("../../../shaders/shared/coarse.wgsl"),
+    ),
+    (
+        "shared/need.wgsl",
+        include_str!("../../../shaders/shared/need.wgsl"),
+    ),
+    (
+        "shared/refine.wgsl",
+        include_str!("../../../shaders/shared/refine.wgsl"),
+    ),
     ("scan.wgsl", include_str!("../../../shaders/scan.wgsl")),
-    ("bezier_edge_decide.wgsl", include_str!("../../../shaders/bezier_edge_decide.wgsl")),
-    ("bezier_tri_mark.wgsl", include_str!("../../../shaders/bezier_tri_mark.wgsl")),
-    ("bezier_tri_emit.wgsl", include_str!("../../../shaders/bezier_tri_emit.wgsl")),
-    ("bezier_edge_emit.wgsl", include_str!("../../../shaders/bezier_edge_emit.wgsl")),
-    ("bezier_vertex_eval.wgsl", include_str!("../../../shaders/bezier_vertex_eval.wgsl")),
-    ("bezier_finish.wgsl", include_str!("../../../shaders/bezier_finish.wgsl")),
-    ("render_mesh.wgsl", include_str!("../../../shaders/render_mesh.wgsl")),
+    (
+        "bezier_edge_decide.wgsl",
+        include_str!("../../../shaders/bezier_edge_decide.wgsl"),
+    ),
+    (
+        "bezier_tri_mark.wgsl",
+        include_str!("../../../shaders/bezier_tri_mark.wgsl"),
+    ),
+    (
+        "bezier_tri_emit.wgsl",
+        include_str!("../../../shaders/bezier_tri_emit.wgsl"),
+    ),
+    (
+        "bezier_edge_emit.wgsl",
+        include_str!("../../../shaders/bezier_edge_emit.wgsl"),
+    ),
+    (
+        "bezier_vertex_eval.wgsl",
+        include_str!("../../../shaders/bezier_vertex_eval.wgsl"),
+    ),
+    (
+        "bezier_finish.wgsl",
+        include_str!("../../../shaders/bezier_finish.wgsl"),
+    ),
+    (
+        "render_mesh.wgsl",
+        include_str!("../../../shaders/render_mesh.wgsl"),
+    ),
 ];
 
 /// The kernels and render shaders (files that are not shared includes).
@@ -67,4 +109,32 @@ pub fn module(device: &wgpu::Device, name: &str) -> wgpu::ShaderModule {
         label: Some(name),
         source: wgpu::ShaderSource::Wgsl(source(name).into()),
     })
+}
+
+/// The binding numbers (group 0) that entry point `entry` of `name` uses, by naga's
+/// reflection: pipelines with derived layouts expect exactly these in a bind group.
+pub fn used_bindings(name: &str, entry: &str) -> Vec<u32> {
+    let src = source(name);
+    let module = naga::front::wgsl::parse_str(&src)
+        .unwrap_or_else(|e| panic!("{name}: {}", e.emit_to_string(&src)));
+    let info = naga::valid::Validator::new(
+        naga::valid::ValidationFlags::all(),
+        naga::valid::Capabilities::all(),
+    )
+    .validate(&module)
+    .unwrap_or_else(|e| panic!("{name}: {}", e.emit_to_string(&src)));
+    let index = module
+        .entry_points
+        .iter()
+        .position(|e| e.name == entry)
+        .unwrap_or_else(|| panic!("{name} has no entry point {entry}"));
+    let ep = info.get_entry_point(index);
+    let mut used: Vec<u32> = module
+        .global_variables
+        .iter()
+        .filter(|(h, _)| !ep[*h].is_empty())
+        .filter_map(|(_, g)| g.binding.as_ref().map(|b| b.binding))
+        .collect();
+    used.sort_unstable();
+    used
 }

@@ -76,7 +76,12 @@ fn shared_structs_match_their_rust_twins() {
             assert_eq!(*woff as usize, *roff, "{name}.{wname} offset");
         }
     };
-    check(&module, "GpuPatch", size_of::<GpuPatch>(), &[("cp", offset_of!(GpuPatch, cp))]);
+    check(
+        &module,
+        "GpuPatch",
+        size_of::<GpuPatch>(),
+        &[("cp", offset_of!(GpuPatch, cp))],
+    );
     check(
         &module,
         "DisplacementMap",
@@ -130,11 +135,26 @@ fn shared_structs_match_their_rust_twins() {
         "DrawIndexedIndirectArgs",
         size_of::<DrawIndexedIndirectArgs>(),
         &[
-            ("index_count", offset_of!(DrawIndexedIndirectArgs, index_count)),
-            ("instance_count", offset_of!(DrawIndexedIndirectArgs, instance_count)),
-            ("first_index", offset_of!(DrawIndexedIndirectArgs, first_index)),
-            ("base_vertex", offset_of!(DrawIndexedIndirectArgs, base_vertex)),
-            ("first_instance", offset_of!(DrawIndexedIndirectArgs, first_instance)),
+            (
+                "index_count",
+                offset_of!(DrawIndexedIndirectArgs, index_count),
+            ),
+            (
+                "instance_count",
+                offset_of!(DrawIndexedIndirectArgs, instance_count),
+            ),
+            (
+                "first_index",
+                offset_of!(DrawIndexedIndirectArgs, first_index),
+            ),
+            (
+                "base_vertex",
+                offset_of!(DrawIndexedIndirectArgs, base_vertex),
+            ),
+            (
+                "first_instance",
+                offset_of!(DrawIndexedIndirectArgs, first_instance),
+            ),
         ],
     );
     let (wgsl_size, members) = layout(&finish, "BezierParams");
@@ -142,13 +162,22 @@ fn shared_structs_match_their_rust_twins() {
     let names: Vec<&str> = members.iter().map(|(n, _)| n.as_str()).collect();
     assert_eq!(names, BezierParams::FIELD_NAMES);
     for (k, (_, off)) in members.iter().enumerate() {
-        assert_eq!(*off as usize, 4 * k, "BezierParams fields are consecutive u32/f32");
+        assert_eq!(
+            *off as usize,
+            4 * k,
+            "BezierParams fields are consecutive u32/f32"
+        );
     }
     let (wgsl_size, members) = layout(&finish, "BezierStatus");
     assert_eq!(wgsl_size as usize, size_of::<BezierStatus>());
-    let dispatch = members.iter().find(|(n, _)| n == "dispatch_x").expect("dispatch_x");
+    let dispatch = members
+        .iter()
+        .find(|(n, _)| n == "dispatch_x")
+        .expect("dispatch_x");
     assert_eq!(dispatch.1 as usize, offset_of!(BezierStatus, dispatch));
-    let overflow = members.iter().find(|(n, _)| n == "overflow").expect("overflow");
+    let overflow = members
+        .iter()
+        .find(|(n, _)| n == "overflow")
+        .expect("overflow");
     assert_eq!(overflow.1 as usize, offset_of!(BezierStatus, overflow));
 }
-

@@ -1,0 +1,276 @@
+//! The GPU kernels against their CPU twins on the shipped models, stage by stage, and
+//! the grow-and-retry path from tiny capacities. Any wgpu validation error fails.
+//!
+//! Ties: float rounding may differ between the CPU and the GPU (fused multiply-adds,
+//! division accuracy), which can flip a decision whose tested value is within rounding
+//! of the threshold. A mismatch counts as a tie only when the CPU twin, run at the
+//! threshold moved by `TIE_REL` (0.1%) either way, reproduces the GPU's decision;
+//! anything else fails. Ties must stay under 0.1% of the decisions.
+
+use glam::Vec3;
+use tessera_core::bezier::refine::{tri_mark, TriScratch};
+use tessera_core::bezier::tessellate::{edge_decide, tri_context};
+use tessera_core::bezier::{
+    tessellate_adaptive, AdaptiveParams, BezierModel, EdgeTest, PreparedBezier,
+};
+use tessera_core::gpu_types::EDGE_BIT_WORDS;
+use tessera_wgpu::bezier::BezierStage;
+use tessera_wgpu::headless::Gpu;
+
+const TIE_REL: f32 = 1e-3;
+
+fn gpu() -> Gpu {
+    Gpu::new().expect("a wgpu adapter (CI installs Mesa's lavapipe; see `cargo xtask test`)")
+}
+
+fn model(name: &str) -> PreparedBezier {
+    let path = format!("{}/../../assets/teaset/{name}", env!("CARGO_MANIFEST_DIR"));
+    PreparedBezier::new(&BezierModel::load(std::path::Path::new(&path)).expect("model loads"))
+}
+
+fn with_threshold(p: &AdaptiveParams, th: f32) -> AdaptiveParams {
+    AdaptiveParams {
+        threshold: th,
+        ..*p
+    }
+}
+
+struct Comparison {
+    decisions: usize,
+    ties: usize,
+}
+
+/// Compares the edge and triangle decisions of the GPU with the CPU twins; panics on a
+/// mismatch that is not a tie.
+fn compare_decisions(
+    gpu: &Gpu,
+    stage: &BezierStage,
+    prep: &PreparedBezier,
+    params: &AdaptiveParams,
+) -> Comparison {
+    let inter = stage
+        .read_intermediates(&gpu.device, &gpu.queue)
+        .expect("readback");
+    let l = prep.layout;
+    let cps: Vec<[Vec3; 16]> = (0..l.patches).map(|p| prep.control_points(p)).collect();
+    let lo = with_threshold(params, params.threshold * (1.0 - TIE_REL));
+    let hi = with_threshold(params, params.threshold * (1.0 + TIE_REL));
+    let mut ties = 0;
+    let gpu_bits: Vec<[u32; EDGE_BIT_WORDS]> = (0..l.coarse_edges as usize)
+        .map(|e| std::array::from_fn(|w| inter.edge_bits[e * EDGE_BIT_WORDS + w]))
+        .collect();
+    for e in 0..l.coarse_edges {
+        let g = gpu_bits[e as usize];
+        if edge_decide(prep, &cps, params, e).0 != g {
+            let tie =
+                edge_decide(prep, &cps, &lo, e).0 == g || edge_decide(prep, &cps, &hi, e).0 == g;
+            assert!(
+                tie,
+                "edge {e}: GPU bits {g:08x?} differ from the CPU twin beyond a tie"
+            );
+            ties += 1;
+        }
+    }
+    // Triangles, from the GPU's own edge decisions, so that each stage is compared alone.
+    let stride = (inter.points_words + inter.pole_words) as usize;
+    for t in 0..l.coarse_triangles {
+        let gpu_words = &inter.scratch[t as usize * stride..(t as usize + 1) * stride];
+        let cpu_words = |p: &AdaptiveParams| {
+            let ctx = tri_context(prep, &cps, &gpu_bits, p, t);
+            let mut s = TriScratch::new(p.max_depth);
+            tri_mark(&ctx, &mut s);
+            [s.points, s.pole].concat()
+        };
+        if cpu_words(params) != gpu_words {
+            let tie = cpu_words(&lo) == gpu_words || cpu_words(&hi) == gpu_words;
+            assert!(
+                tie,
+                "coarse triangle {t}: GPU lattice points differ from the CPU twin beyond a tie"
+            );
+            ties += 1;
+        }
+    }
+    Comparison {
+        decisions: (l.coarse_edges + l.coarse_triangles) as usize,
+        ties,
+    }
+}
+
+fn bbox_diagonal(prep: &PreparedBezier) -> f32 {
+    let (mut lo, mut hi) = (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN));
+    for p in 0..prep.layout.patches {
+        for c in prep.control_points(p) {
+            lo = lo.min(c);
+            hi = hi.max(c);
+        }
+    }
+    (hi - lo).length()
+}
+
+#[test]
+fn gpu_matches_the_cpu_reference_on_every_shipped_model() {
+    let gpu = gpu();
+    let (mut decisions, mut ties) = (0usize, 0usize);
+    let mut compared_meshes = 0;
+    for name in ["teapot", "teacup", "teaspoon"] {
+        let prep = model(name);
+        let diag = bbox_diagonal(&prep);
+        let mut stage: Option<BezierStage> = None;
+        for (test, rel) in [
+            (EdgeTest::Map4p, 0.002),
+            (EdgeTest::Map2p, 0.001),
+            (EdgeTest::Map8p, 0.004),
+            (EdgeTest::Flat, 0.001),
+        ] {
+            let params = AdaptiveParams {
+                test,
+                threshold: rel * diag,
+                max_depth: 5,
+            };
+            // One stage per model, its parameters changed between runs (as an
+            // application would, and pipelines compile once).
+            let stage = match &mut stage {
+                Some(s) => {
+                    s.set_params(&gpu.device, &params).expect("params");
+                    s
+                }
+                None => stage.insert(BezierStage::new(&gpu.device, &prep, &params).expect("stage")),
+            };
+            let t0 = std::time::Instant::now();
+            let status = stage.run_blocking(&gpu.device, &gpu.queue).expect("run");
+            gpu.check().expect("no wgpu validation errors");
+            let gpu_time = t0.elapsed();
+            let t0 = std::time::Instant::now();
+            let cmp = compare_decisions(&gpu, stage, &prep, &params);
+            eprintln!(
+                "{name} {}: GPU run {gpu_time:?}, CPU comparison {:?}",
+                test.name(),
+                t0.elapsed()
+            );
+            decisions += cmp.decisions;
+            ties += cmp.ties;
+            if cmp.ties > 0 {
+                // The meshes legitimately differ where a tie flipped.
+                continue;
+            }
+            let mesh = stage
+                .read_mesh(&gpu.device, &gpu.queue, &status)
+                .expect("mesh");
+            let cpu = tessellate_adaptive(&prep, &params).expect("cpu").mesh;
+            let what = format!("{name} {}", test.name());
+            assert_eq!(
+                mesh.triangle_count(),
+                cpu.triangle_count(),
+                "{what}: triangles"
+            );
+            assert_eq!(mesh.vertices.len(), cpu.vertices.len(), "{what}: vertices");
+            // The numbering is the same by construction (scan order), so the topology
+            // is compared index for index.
+            assert_eq!(mesh.indices, cpu.indices, "{what}: topology");
+            let tol = 1e-5 * diag;
+            for (k, (g, c)) in mesh.vertices.iter().zip(&cpu.vertices).enumerate() {
+                let d = (Vec3::from_array(g.position) - Vec3::from_array(c.position)).length();
+                assert!(
+                    d <= tol,
+                    "{what}: vertex {k} is {d} from the CPU's (tolerance {tol})"
+                );
+                assert_eq!(g.patch, c.patch, "{what}: vertex {k} patch");
+                let dn = (Vec3::from_array(g.normal) - Vec3::from_array(c.normal)).length();
+                assert!(dn < 1e-3, "{what}: vertex {k} normal differs by {dn}");
+            }
+            compared_meshes += 1;
+        }
+    }
+    gpu.check().expect("no wgpu validation errors");
+    eprintln!(
+        "{ties} ties in {decisions} decisions; {compared_meshes} meshes compared vertex by vertex"
+    );
+    assert!(
+        (ties as f64) <= 0.001 * decisions as f64,
+        "{ties} ties in {decisions} decisions: above 0.1%"
+    );
+    assert!(
+        compared_meshes >= 6,
+        "only {compared_meshes} meshes compared exactly"
+    );
+}
+
+#[test]
+fn tiny_capacities_overflow_cleanly_then_grow_to_the_same_mesh() {
+    let gpu = gpu();
+    let prep = model("teapot");
+    let params = AdaptiveParams {
+        test: EdgeTest::Map4p,
+        threshold: 0.02,
+        max_depth: 6,
+    };
+    let kernels = tessera_wgpu::bezier::BezierKernels::new(&gpu.device);
+    let l = prep.layout;
+    let mut roomy = BezierStage::with_capacity(
+        &gpu.device,
+        &kernels,
+        &prep,
+        &params,
+        4 * l.coarse_vertices,
+        24 * l.coarse_triangles,
+    )
+    .expect("stage");
+    let want_status = roomy.run_blocking(&gpu.device, &gpu.queue).expect("run");
+    let want = roomy
+        .read_mesh(&gpu.device, &gpu.queue, &want_status)
+        .expect("mesh");
+
+    let mut tiny =
+        BezierStage::with_capacity(&gpu.device, &kernels, &prep, &params, 1, 3).expect("stage");
+    let mut encoder = gpu.device.create_command_encoder(&Default::default());
+    tiny.prepare(&gpu.device, &gpu.queue, &mut encoder);
+    gpu.queue.submit([encoder.finish()]);
+    let status = tiny.read_status(&gpu.device).expect("status");
+    assert_eq!(
+        status.overflow & 2,
+        2,
+        "indices must overflow a 3-index buffer"
+    );
+    assert_eq!(
+        status.vertices, want_status.vertices,
+        "the needed size is reported"
+    );
+    assert_eq!(status.indices, want_status.indices);
+    // Nothing was drawn or written: zero indices in the draw, and the 3-index buffer
+    // still holds what it was created with (zeros).
+    let args: Vec<u32> = gpu.read_pod(&tiny.output().indirect, 5).expect("args");
+    assert_eq!(args[0], 0, "an overflowed run draws nothing");
+    let idx: Vec<u32> = gpu.read_pod(&tiny.output().indices, 3).expect("indices");
+    assert_eq!(idx, [0, 0, 0], "an overflowed run writes no index");
+    assert!(tiny.read_mesh(&gpu.device, &gpu.queue, &status).is_err());
+
+    assert!(tiny.grow(&gpu.device, &status));
+    let grown = tiny.run_blocking(&gpu.device, &gpu.queue).expect("rerun");
+    assert_eq!(grown.overflow, 0);
+    let got = tiny
+        .read_mesh(&gpu.device, &gpu.queue, &grown)
+        .expect("mesh");
+    assert_eq!(got, want, "grown run gives the same mesh");
+    let args: Vec<u32> = gpu.read_pod(&tiny.output().indirect, 5).expect("args");
+    assert_eq!(args[0] as usize, want.indices.len());
+    assert_eq!(args[1], 1);
+    gpu.check().expect("no wgpu validation errors");
+}
+
+#[test]
+fn an_invalid_threshold_is_an_error_not_a_panic() {
+    let gpu = gpu();
+    let prep = model("teacup");
+    let params = AdaptiveParams {
+        test: EdgeTest::Map4p,
+        threshold: f32::NAN,
+        max_depth: 6,
+    };
+    assert!(BezierStage::new(&gpu.device, &prep, &params).is_err());
+    let deep = AdaptiveParams {
+        threshold: 0.01,
+        max_depth: 99,
+        ..params
+    };
+    assert!(BezierStage::new(&gpu.device, &prep, &deep).is_err());
+}
