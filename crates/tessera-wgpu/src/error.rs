@@ -22,6 +22,13 @@ pub enum Error {
     /// Writing an image failed.
     #[error("{path}: {msg}")]
     Image { path: String, msg: String },
+    /// A render was asked for something the device or the renderer cannot do (an image
+    /// size beyond the device's limits, say).
+    #[error("rendering: {0}")]
+    Render(String),
+    /// A snapshot did not match its reference, or the reference is missing.
+    #[error("snapshot {name}: {msg}")]
+    Snapshot { name: String, msg: String },
 }
 
 pub type Result<T, E = Error> = std::result::Result<T, E>;

@@ -17,9 +17,19 @@ pub struct Gpu {
 
 impl Gpu {
     /// The first adapter wgpu finds (`WGPU_BACKEND` and `WGPU_ADAPTER_NAME` narrow the
-    /// choice), with the limits the stage needs raised to what the adapter allows.
+    /// choice), with the limits the stage needs raised to what the adapter allows and the
+    /// renderer's optional features (wireframe) where the adapter has them.
     pub fn new() -> Result<Gpu> {
-        let instance = wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
+        Self::with_optional_features(crate::render::MeshRenderer::required_features(
+            wgpu::Features::all(),
+        ))
+    }
+
+    /// As [`new`](Self::new), with those of the `optional` features that the adapter has
+    /// (`Features::empty()` to test what happens without them).
+    pub fn with_optional_features(optional: wgpu::Features) -> Result<Gpu> {
+        let instance =
+            wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
         let adapter = pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions {
             power_preference: wgpu::PowerPreference::HighPerformance,
             ..Default::default()
@@ -27,6 +37,7 @@ impl Gpu {
         .map_err(|e| Error::NoAdapter(e.to_string()))?;
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
             label: Some("tessera"),
+            required_features: adapter.features() & optional,
             required_limits: crate::bezier::required_limits(&adapter.limits()),
             ..Default::default()
         }))
@@ -113,7 +124,11 @@ impl Gpu {
     }
 
     /// Reads a buffer of Pod values.
-    pub fn read_pod<T: bytemuck::Pod>(&self, buffer: &wgpu::Buffer, count: usize) -> Result<Vec<T>> {
+    pub fn read_pod<T: bytemuck::Pod>(
+        &self,
+        buffer: &wgpu::Buffer,
+        count: usize,
+    ) -> Result<Vec<T>> {
         let bytes = self.read_buffer(buffer, 0, (count * std::mem::size_of::<T>()) as u64)?;
         Ok(bytemuck::pod_collect_to_vec(&bytes))
     }

@@ -12,18 +12,26 @@
 //! | [`bezier`] | the Bézier (displacement-map) tessellation stage |
 //! | [`output`] | [`MeshBuffers`]: the vertex, index and indirect-draw buffers a stage leaves |
 //! | [`render`] | a lit (optionally wireframe) renderer for the stage's output |
-//! | [`headless`] | device creation without a window, readback, PNG output |
+//! | [`headless`] | device creation without a window, readback |
+//! | [`image_out`] | offscreen rendering to an RGBA image, PNG files |
+//! | [`snapshot`] | image comparison with a perceptual tolerance, for snapshot tests |
 //! | [`shaders`] | the WGSL sources with their shared includes resolved |
 
 pub use tessera_core;
 pub use wgpu;
+// In the public API: `Camera` and bounds are glam vectors, renders are `image` buffers.
+pub use glam;
+pub use image;
 
 pub mod bezier;
 pub mod error;
 pub mod headless;
+pub mod image_out;
 pub mod output;
 pub mod render;
 pub mod shaders;
+pub mod snapshot;
 
 pub use error::{Error, Result};
 pub use output::MeshBuffers;
+pub use render::{Camera, MeshRenderer, RenderOptions};
