@@ -1,0 +1,290 @@
+//! Snapshot tests of the renderer: the teapot, tessellated on the CPU and drawn through
+//! wgpu (lavapipe in CI), shaded and with its wireframe, against reference PNGs.
+//!
+//! The references live in `tests/snapshots/`. After an intended change to the rendering,
+//! rewrite them with
+//!
+//! ```text
+//! TESSERA_BLESS=1 cargo test -p tessera-wgpu --test render_snapshot
+//! ```
+//!
+//! then look at the PNGs and commit them. Without the variable a missing reference is a
+//! failure. A failed comparison writes `<name>.actual.png` and `<name>.diff.png` into
+//! `target/snapshots/`.
+//!
+//! There is no skipping: without any adapter (install Mesa's lavapipe,
+//! `mesa-vulkan-drivers`) every test fails and says so.
+
+use std::path::{Path, PathBuf};
+
+use image::{Rgba, RgbaImage};
+use tessera_core::bezier::{
+    tessellate_adaptive, AdaptiveParams, BezierModel, EdgeTest, PreparedBezier,
+};
+use tessera_wgpu::glam::Vec3;
+use tessera_wgpu::headless::Gpu;
+use tessera_wgpu::image_out::{load_png, render_camera_to_rgba, render_to_rgba, BACKGROUND};
+use tessera_wgpu::snapshot::{
+    self, check_images, check_snapshot, delta_e, failure_paths, Tolerance,
+};
+use tessera_wgpu::{wgpu, Camera, Error, MeshBuffers, MeshRenderer, RenderOptions};
+
+const WIDTH: u32 = 160;
+const HEIGHT: u32 = 120;
+
+fn gpu() -> Gpu {
+    let gpu = Gpu::new().unwrap_or_else(|e| {
+        panic!(
+            "no wgpu adapter, so the renderer cannot be tested: {e}. \
+             Install a Vulkan driver (Mesa's lavapipe: apt-get install mesa-vulkan-drivers)."
+        )
+    });
+    eprintln!("adapter: {}", gpu.adapter_name());
+    gpu
+}
+
+/// `model` from the shipped teaset, tessellated on the CPU (map4p, threshold 1% of the
+/// bounding-box diagonal: coarse enough that the wireframe reads at this size) and
+/// uploaded, with the mesh's bounds.
+fn upload(gpu: &Gpu, model: &str) -> (MeshBuffers, (Vec3, Vec3)) {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../assets/teaset")
+        .join(model);
+    let model = BezierModel::load(&path).expect("shipped model loads");
+    let (min, max) = model.bounds();
+    let params = AdaptiveParams {
+        test: EdgeTest::Map4p,
+        threshold: 0.01 * (max - min).length(),
+        max_depth: AdaptiveParams::DEFAULT_MAX_DEPTH,
+    };
+    let mesh = tessellate_adaptive(&PreparedBezier::new(&model), &params)
+        .expect("tessellation succeeds")
+        .mesh;
+    assert!(
+        mesh.triangle_count() > 100,
+        "{} triangles",
+        mesh.triangle_count()
+    );
+    (MeshBuffers::from_mesh(&gpu.device, &mesh), mesh.bounds())
+}
+
+/// `model` framed by [`Camera::framing`] (Z up, as the teapot is).
+fn render(gpu: &Gpu, model: &str, options: &RenderOptions) -> RgbaImage {
+    let (mesh, bounds) = upload(gpu, model);
+    render_to_rgba(gpu, &mesh, bounds, WIDTH, HEIGHT, options)
+        .unwrap_or_else(|e| panic!("rendering {model} failed: {e}"))
+}
+
+/// The teacup, which is Y up in the teaset data, upright in the same 3/4 view.
+fn render_teacup(gpu: &Gpu) -> RgbaImage {
+    let (mesh, (min, max)) = upload(gpu, "teacup");
+    let d = Camera::FRAMING_DIRECTION;
+    let camera = Camera::framing_along(
+        min,
+        max,
+        WIDTH as f32 / HEIGHT as f32,
+        Vec3::new(d.x, d.z, -d.y),
+        Vec3::Y,
+    );
+    render_camera_to_rgba(gpu, &mesh, &camera, WIDTH, HEIGHT, &shaded())
+        .unwrap_or_else(|e| panic!("rendering the teacup failed: {e}"))
+}
+
+fn shaded() -> RenderOptions {
+    RenderOptions::default()
+}
+
+fn wireframe() -> RenderOptions {
+    RenderOptions {
+        wireframe: true,
+        ..RenderOptions::default()
+    }
+}
+
+fn reference(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/snapshots")
+        .join(format!("{name}.png"))
+}
+
+/// `target/snapshots/`.
+fn out_dir() -> PathBuf {
+    Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .parent()
+        .expect("target/tmp has a parent")
+        .join("snapshots")
+}
+
+/// Fraction of pixels clearly not the background.
+fn coverage(img: &RgbaImage) -> f64 {
+    let [r, g, b] = BACKGROUND;
+    let bg = Rgba([r, g, b, 255]);
+    img.pixels().filter(|p| delta_e(**p, bg) > 10.0).count() as f64 / img.pixels().len() as f64
+}
+
+/// The model is in the picture, large, and not cut off. On failure the render is written
+/// to `target/snapshots/<name>.actual.png`.
+fn assert_framed(name: &str, img: &RgbaImage) {
+    let (actual, _) = failure_paths(name, &out_dir());
+    let fail = |msg: String| -> ! {
+        let _ = std::fs::create_dir_all(out_dir());
+        let _ = tessera_wgpu::image_out::save_png(img, &actual);
+        panic!("{name}: {msg} (render written to {})", actual.display())
+    };
+    let c = coverage(img);
+    if !(0.1..0.8).contains(&c) {
+        fail(format!("the model covers {:.1}% of the image", 100.0 * c));
+    }
+    // Every border row and column is background: nothing is cut off.
+    let (w, h) = img.dimensions();
+    let border = (0..w)
+        .flat_map(|x| [(x, 0), (x, h - 1)])
+        .chain((0..h).flat_map(|y| [(0, y), (w - 1, y)]));
+    let [r, g, b] = BACKGROUND;
+    for (x, y) in border {
+        let p = *img.get_pixel(x, y);
+        if delta_e(p, Rgba([r, g, b, 255])) >= 2.0 {
+            fail(format!("the model touches the border at ({x}, {y})"));
+        }
+    }
+}
+
+fn assert_snapshot(name: &str, img: &RgbaImage) {
+    let bless = snapshot::bless_requested();
+    match check_snapshot(
+        name,
+        img,
+        &reference(name),
+        &out_dir(),
+        &Tolerance::DEFAULT,
+        bless,
+    ) {
+        Ok(c) if bless => eprintln!(
+            "{name}: reference written (against the old one: {})",
+            c.summary()
+        ),
+        Ok(c) => eprintln!("{name}: {}", c.summary()),
+        Err(e) => panic!("{e}"),
+    }
+}
+
+#[test]
+fn teapot_shaded_matches_snapshot() {
+    let gpu = gpu();
+    let img = render(&gpu, "teapot", &shaded());
+    assert_framed("teapot_shaded", &img);
+    assert_snapshot("teapot_shaded", &img);
+}
+
+#[test]
+fn teapot_wireframe_matches_snapshot() {
+    let gpu = gpu();
+    let renderer = MeshRenderer::new(
+        &gpu.device,
+        tessera_wgpu::image_out::COLOR_FORMAT,
+        Some(tessera_wgpu::image_out::DEPTH_FORMAT),
+        1,
+    );
+    assert!(
+        renderer.wireframe_available(),
+        "{} lacks POLYGON_MODE_LINE, which the wireframe needs (lavapipe has it)",
+        gpu.adapter_name()
+    );
+    let img = render(&gpu, "teapot", &wireframe());
+    assert_framed("teapot_wireframe", &img);
+    // The lines are there: a good share of the model's pixels change.
+    let plain = render(&gpu, "teapot", &shaded());
+    let lined = img
+        .pixels()
+        .zip(plain.pixels())
+        .filter(|(a, b)| delta_e(**a, **b) > 10.0)
+        .count() as f64
+        / img.pixels().len() as f64;
+    assert!(
+        lined > 0.05,
+        "the wireframe changes only {:.2}% of the pixels",
+        100.0 * lined
+    );
+    gpu.check().expect("no wgpu errors");
+    assert_snapshot("teapot_wireframe", &img);
+}
+
+/// Without `POLYGON_MODE_LINE` the wireframe is reported unavailable and the mesh is
+/// drawn shaded only, without wgpu errors.
+#[test]
+fn wireframe_without_line_mode_renders_shaded_only() {
+    let gpu = Gpu::with_optional_features(wgpu::Features::empty())
+        .unwrap_or_else(|e| panic!("no wgpu adapter: {e}"));
+    assert!(!gpu
+        .device
+        .features()
+        .contains(wgpu::Features::POLYGON_MODE_LINE));
+    let renderer = MeshRenderer::new(
+        &gpu.device,
+        tessera_wgpu::image_out::COLOR_FORMAT,
+        Some(tessera_wgpu::image_out::DEPTH_FORMAT),
+        1,
+    );
+    assert!(!renderer.wireframe_available());
+    let with = render(&gpu, "teapot", &wireframe());
+    let without = render(&gpu, "teapot", &shaded());
+    gpu.check().expect("no wgpu errors");
+    assert_eq!(with, without);
+}
+
+/// A wgpu validation error (here: a vertex buffer without `VERTEX` usage) fails the
+/// render instead of giving a picture.
+#[test]
+fn validation_errors_fail_the_render() {
+    let gpu = gpu();
+    let (mut mesh, bounds) = upload(&gpu, "teapot");
+    mesh.vertices = gpu.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("not a vertex buffer"),
+        size: mesh.vertices.size(),
+        usage: wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    });
+    match render_to_rgba(&gpu, &mesh, bounds, WIDTH, HEIGHT, &shaded()) {
+        Err(Error::Wgpu(msg)) => eprintln!("as expected: {msg}"),
+        other => panic!(
+            "expected a wgpu error, got {:?}",
+            other.map(|i| i.dimensions())
+        ),
+    }
+    // The errors were reported once; the device still renders.
+    render(&gpu, "teapot", &shaded());
+}
+
+/// Tests the tester: another model must not pass as the teapot.
+#[test]
+fn teacup_fails_against_teapot_snapshot() {
+    let gpu = gpu();
+    // While blessing, the teapot reference may be being rewritten: render it afresh.
+    let teapot = if snapshot::bless_requested() {
+        render(&gpu, "teapot", &shaded())
+    } else {
+        load_png(&reference("teapot_shaded"))
+            .unwrap_or_else(|e| panic!("{e} (create the references with TESSERA_BLESS=1)"))
+    };
+    let teacup = render_teacup(&gpu);
+    assert_framed("teacup_shaded", &teacup);
+    let dir = out_dir().join("expected-failures");
+    let (actual, diff) = failure_paths("teacup_vs_teapot", &dir);
+    let _ = std::fs::remove_file(&actual);
+    let _ = std::fs::remove_file(&diff);
+    match check_images(
+        "teacup_vs_teapot",
+        &teapot,
+        &teacup,
+        &dir,
+        &Tolerance::DEFAULT,
+    ) {
+        Err(Error::Snapshot { msg, .. }) => eprintln!("as expected: {msg}"),
+        other => panic!("the teacup passed as the teapot: {other:?}"),
+    }
+    assert_eq!(load_png(&actual).expect("actual written"), teacup);
+    assert_eq!(
+        load_png(&diff).expect("diff written").dimensions(),
+        teacup.dimensions()
+    );
+}
