@@ -19,6 +19,8 @@ pub struct Cli {
 pub enum Command {
     /// Tessellate a surface and write the mesh and/or its statistics.
     Tessellate(TessellateArgs),
+    /// Tessellate a surface on the GPU and render it headless to a PNG.
+    Render(RenderArgs),
     /// Print what a surface file holds.
     Info { input: PathBuf },
 }
@@ -35,7 +37,10 @@ pub enum Method {
 
 #[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Backend {
+    /// The CPU reference (the kernels' twins).
     Cpu,
+    /// The WGSL kernels through wgpu (any Vulkan, Metal, DX12 adapter; lavapipe on CPU).
+    Gpu,
 }
 
 #[derive(Args, Debug)]
@@ -58,9 +63,9 @@ pub struct TessellateArgs {
     /// Search the threshold (or the uniform segment count) for this many triangles (±2%).
     #[arg(long, conflicts_with = "threshold")]
     pub target_triangles: Option<usize>,
-    /// Where the tessellation runs.
-    #[arg(long, value_enum, default_value = "cpu")]
-    pub backend: Backend,
+    /// Where the tessellation runs. Default: gpu when an adapter exists, else cpu.
+    #[arg(long, value_enum)]
+    pub backend: Option<Backend>,
     /// Output mesh (.obj or .ply).
     #[arg(short = 'o', long = "output")]
     pub output: Option<PathBuf>,
@@ -73,4 +78,55 @@ pub struct TessellateArgs {
     /// Surface samples per patch side for --measure.
     #[arg(long, default_value_t = tessera_core::measure::DEFAULT_SAMPLES_PER_SIDE)]
     pub measure_samples: usize,
+}
+
+#[derive(Args, Debug)]
+pub struct RenderArgs {
+    /// Input surface: a Newell teaset file (Bézier patches).
+    pub input: PathBuf,
+    /// Output PNG.
+    #[arg(short = 'o', long = "output")]
+    pub output: PathBuf,
+    /// Image size, WIDTHxHEIGHT.
+    #[arg(long, default_value = "800x600", value_parser = parse_size)]
+    pub size: (u32, u32),
+    /// Edge test (map2p, map4p, map8p or flat).
+    #[arg(long, value_enum, default_value = "map4p")]
+    pub method: Method,
+    /// Edge-test threshold in model units. Default: 0.002 of the bounding-box diagonal.
+    #[arg(long)]
+    pub threshold: Option<f32>,
+    /// Levels of recursive edge bisection.
+    #[arg(long, default_value_t = 6)]
+    pub max_depth: u32,
+    /// Draw the triangle edges over the shading.
+    #[arg(long)]
+    pub wireframe: bool,
+    /// Tint each patch slightly differently.
+    #[arg(long)]
+    pub patch_tint: bool,
+    /// The model's up axis (the Newell teapot is z-up; the teacup and teaspoon y-up).
+    #[arg(long, value_enum, default_value = "z")]
+    pub up: Axis,
+}
+
+#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Axis {
+    X,
+    Y,
+    Z,
+}
+
+fn parse_size(s: &str) -> Result<(u32, u32), String> {
+    let (w, h) = s
+        .split_once(['x', 'X'])
+        .ok_or_else(|| format!("size {s:?} is not WIDTHxHEIGHT"))?;
+    let parse = |v: &str| {
+        v.trim()
+            .parse::<u32>()
+            .ok()
+            .filter(|&n| (1..=16384).contains(&n))
+            .ok_or_else(|| format!("size {s:?}: {v:?} is not a number in 1..=16384"))
+    };
+    Ok((parse(w)?, parse(h)?))
 }

@@ -4,6 +4,8 @@
 //! output file is left behind.
 
 mod cli;
+mod gpu;
+mod render;
 mod tessellate;
 
 use clap::Parser;

@@ -7,12 +7,15 @@ use serde::Serialize;
 use tessera_core::bezier::search::{segments_for_triangles, threshold_for_triangles};
 use tessera_core::bezier::{
     tessellate_adaptive, tessellate_uniform, AdaptiveParams, BezierModel, EdgeTest, PreparedBezier,
+    Tessellation,
 };
 use tessera_core::io::export::{write_atomically, write_mesh, MeshFormat};
 use tessera_core::measure::{bezier_surface_samples, measure_error, ErrorStats};
-use tessera_core::Error;
+use tessera_core::Error as CoreError;
+use tessera_wgpu::Error;
 
 use crate::cli::{Backend, Cli, Command, Method, TessellateArgs};
+use crate::gpu::GpuTimings;
 
 /// Default threshold as a fraction of the bounding-box diagonal.
 const DEFAULT_THRESHOLD_REL: f32 = 0.002;
@@ -25,6 +28,9 @@ struct Timings {
     measure: f64,
     write: f64,
     total: f64,
+    /// The GPU backend's stages (`tessellate` above is its timed run).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    gpu: Option<GpuTimings>,
 }
 
 #[derive(Serialize)]
@@ -32,6 +38,8 @@ struct Stats {
     input: String,
     method: &'static str,
     backend: &'static str,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    adapter: Option<String>,
     threshold: Option<f32>,
     max_depth: Option<u32>,
     segments: Option<u32>,
@@ -39,7 +47,9 @@ struct Stats {
     triangles: usize,
     vertices: usize,
     patches: usize,
-    evaluations: u64,
+    /// Surface evaluations; on the GPU only the vertex evaluations are counted, so the
+    /// flat test's candidate evaluations are missing there (reported as null).
+    evaluations: Option<u64>,
     upload_bytes: usize,
     upload_bytes_per_patch: f64,
     timings_ms: Timings,
@@ -55,17 +65,18 @@ fn ms(t: Instant) -> f64 {
 pub fn run(cli: Cli) -> Result<(), Error> {
     match cli.command {
         Command::Tessellate(args) => tessellate(args),
+        Command::Render(args) => crate::render::render(args),
         Command::Info { input } => info(&input),
     }
 }
 
-fn load(input: &Path) -> Result<BezierModel, Error> {
+pub fn load(input: &Path) -> Result<BezierModel, CoreError> {
     let ext = input
         .extension()
         .and_then(|e| e.to_str())
         .map(str::to_ascii_lowercase);
     if matches!(ext.as_deref(), Some("obj" | "off" | "gltf" | "glb")) {
-        return Err(Error::Input {
+        return Err(CoreError::Input {
             file: input.to_path_buf(),
             msg: "Catmull-Clark control meshes are not supported by this build yet; give a Newell teaset file".into(),
         });
@@ -116,12 +127,12 @@ fn tessellate(args: TessellateArgs) -> Result<(), Error> {
         Method::Flat => Some(EdgeTest::Flat),
         Method::Uniform => None,
         Method::Adaptive => {
-            return Err(Error::Param(
+            return Err(CoreError::Param(
                 "--method adaptive is the Catmull-Clark method; Bézier inputs take map2p, map4p, map8p, flat or uniform".into(),
-            ))
+            )
+            .into())
         }
     };
-    let Backend::Cpu = args.backend;
 
     let t = Instant::now();
     let model = load(&args.input)?;
@@ -132,8 +143,54 @@ fn tessellate(args: TessellateArgs) -> Result<(), Error> {
     let (lo, hi) = model.bounds();
     let diag = (hi - lo).length();
 
+    // The GPU runs the adaptive methods; uniform tessellation is CPU only. Without
+    // --backend, the GPU is used when an adapter exists.
+    let mut gpu_timings = GpuTimings::default();
+    let gpu = match (args.backend, test) {
+        (Some(Backend::Cpu), _) | (None, None) => None,
+        (Some(Backend::Gpu), None) => {
+            return Err(CoreError::Param(
+                "--method uniform runs on the CPU only; use --backend cpu".into(),
+            )
+            .into())
+        }
+        (Some(Backend::Gpu), Some(_)) => Some(crate::gpu::open(&mut gpu_timings)?),
+        (None, Some(_)) => match crate::gpu::open(&mut gpu_timings) {
+            Ok(g) => Some(g),
+            Err(e) => {
+                eprintln!("note: no GPU adapter ({e}); tessellating on the CPU");
+                None
+            }
+        },
+    };
+    let mut adapter = None;
+
     let t = Instant::now();
     let (out, threshold, segments) = match (test, args.target_triangles) {
+        (Some(test), target) if gpu.is_some() => {
+            let gpu = gpu.as_ref().expect("checked");
+            adapter = Some(gpu.adapter_name());
+            let mut params = AdaptiveParams {
+                test,
+                threshold: args.threshold.unwrap_or(DEFAULT_THRESHOLD_REL * diag),
+                max_depth: args.max_depth,
+            };
+            params.validate()?;
+            if let Some(n) = target {
+                // The search runs the CPU twin, which makes the same mesh as the kernels.
+                params.threshold = threshold_for_triangles(&prep, params, diag, n)?.threshold;
+            }
+            let (stage, status) = crate::gpu::run(gpu, &prep, &params, &mut gpu_timings)?;
+            let t = Instant::now();
+            let mesh = stage.read_mesh(&gpu.device, &gpu.queue, &status)?;
+            gpu_timings.readback = ms(t);
+            let evaluations = mesh.vertices.len() as u64;
+            (
+                Tessellation { mesh, evaluations },
+                Some(params.threshold),
+                None,
+            )
+        }
         (Some(test), target) => {
             let base = AdaptiveParams {
                 test,
@@ -170,7 +227,12 @@ fn tessellate(args: TessellateArgs) -> Result<(), Error> {
             Some(args.segments),
         ),
     };
-    timings.tessellate = ms(t);
+    timings.tessellate = if gpu.is_some() {
+        gpu_timings.tessellate
+    } else {
+        ms(t)
+    };
+    timings.gpu = gpu.as_ref().map(|_| gpu_timings);
 
     let error = if args.measure {
         let t = Instant::now();
@@ -200,7 +262,8 @@ fn tessellate(args: TessellateArgs) -> Result<(), Error> {
     let stats = Stats {
         input: args.input.display().to_string(),
         method: test.map_or("uniform", EdgeTest::name),
-        backend: "cpu",
+        backend: if gpu.is_some() { "gpu" } else { "cpu" },
+        adapter,
         threshold,
         max_depth: test.map(|_| args.max_depth),
         segments,
@@ -208,7 +271,7 @@ fn tessellate(args: TessellateArgs) -> Result<(), Error> {
         triangles: out.mesh.triangle_count(),
         vertices: out.mesh.vertices.len(),
         patches: model.patches.len(),
-        evaluations: out.evaluations,
+        evaluations: (gpu.is_none() || test != Some(EdgeTest::Flat)).then_some(out.evaluations),
         upload_bytes: upload,
         upload_bytes_per_patch: upload as f64 / model.patches.len() as f64,
         timings_ms: timings,
@@ -232,7 +295,7 @@ fn print_summary(s: &Stats) {
         s.triangles,
         s.vertices,
         s.patches,
-        s.evaluations,
+        s.evaluations.map_or("uncounted".to_string(), |e| e.to_string()),
         s.upload_bytes,
         s.upload_bytes_per_patch,
         s.timings_ms.tessellate
@@ -244,6 +307,9 @@ fn print_summary(s: &Stats) {
         line += &format!(", segments {n}");
     }
     println!("{line}");
+    if let Some(a) = &s.adapter {
+        println!("adapter: {a}");
+    }
     if let Some(e) = &s.error {
         println!(
             "error vs exact surface: max {:.6} ({:.3e} of diagonal {:.4}), mean {:.6}, p99 {:.6} over {} samples",

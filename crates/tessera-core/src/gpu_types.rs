@@ -183,13 +183,13 @@ pub struct BezierStatus {
 }
 
 /// Bytes uploaded per patch and once per model for the map-based tessellator.
-pub fn bezier_upload_bytes(patches: usize, curves: usize, corners: usize) -> usize {
+pub fn bezier_upload_bytes(patches: usize, curves: usize, coarse_vertices: usize) -> usize {
     patches
         * (std::mem::size_of::<GpuPatch>()
             + std::mem::size_of::<DisplacementMap>()
             + std::mem::size_of::<GpuPatchTopo>())
         + curves * std::mem::size_of::<GpuCurve>()
-        + corners * std::mem::size_of::<VertexRecord>()
+        + coarse_vertices * std::mem::size_of::<VertexRecord>()
 }
 
 #[cfg(test)]

@@ -28,8 +28,13 @@ impl Gpu {
     /// As [`new`](Self::new), with those of the `optional` features that the adapter has
     /// (`Features::empty()` to test what happens without them).
     pub fn with_optional_features(optional: wgpu::Features) -> Result<Gpu> {
-        let instance =
-            wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
+        let mut desc = wgpu::InstanceDescriptor::new_without_display_handle_from_env();
+        if std::env::var_os("WGPU_BACKEND").is_none() {
+            // Vulkan, Metal, DX12: the GL backend without a display only adds noise
+            // (EGL complaining about XDG_RUNTIME_DIR) and is never the better choice.
+            desc.backends = wgpu::Backends::PRIMARY;
+        }
+        let instance = wgpu::Instance::new(desc);
         let adapter = pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions {
             power_preference: wgpu::PowerPreference::HighPerformance,
             ..Default::default()

@@ -134,7 +134,12 @@ impl PreparedBezier {
 
     /// Bytes this model uploads to the GPU.
     pub fn upload_bytes(&self) -> usize {
-        bezier_upload_bytes(self.patches.len(), self.curves.len(), self.corners.len())
+        // The GPU stage uploads the evaluation record of every coarse vertex.
+        bezier_upload_bytes(
+            self.patches.len(),
+            self.curves.len(),
+            self.layout.coarse_vertices as usize,
+        )
     }
 
     /// Control points of patch `p` as vectors.

@@ -1,0 +1,62 @@
+//! The GPU backend of the CLI: device, stage, a warm-up run that grows the buffers, then
+//! the timed run (GPU work to completion) and the readback.
+
+use std::time::Instant;
+
+use serde::Serialize;
+use tessera_core::bezier::{AdaptiveParams, PreparedBezier};
+use tessera_core::gpu_types::BezierStatus;
+use tessera_wgpu::bezier::BezierStage;
+use tessera_wgpu::headless::Gpu;
+use tessera_wgpu::Result;
+
+/// Stages of a GPU run, ms. `tessellate` is the tessellation alone.
+#[derive(Serialize, Default, Clone, Copy, Debug)]
+pub struct GpuTimings {
+    /// Adapter and device creation.
+    pub device: f64,
+    /// Kernel compilation and the model's upload.
+    pub pipelines_and_upload: f64,
+    /// First run: grows the output buffers to fit (and warms the driver's caches).
+    pub first_run: f64,
+    /// Recording, submitting and waiting for the kernels to finish.
+    pub tessellate: f64,
+    /// Copying the mesh back (only for files and measurement; drawing needs none).
+    pub readback: f64,
+}
+
+fn ms(t: Instant) -> f64 {
+    t.elapsed().as_secs_f64() * 1e3
+}
+
+pub fn open(timings: &mut GpuTimings) -> Result<Gpu> {
+    let t = Instant::now();
+    let gpu = Gpu::new()?;
+    timings.device = ms(t);
+    Ok(gpu)
+}
+
+/// Builds the stage and runs it: once to fit the buffers, once timed.
+pub fn run(
+    gpu: &Gpu,
+    prep: &PreparedBezier,
+    params: &AdaptiveParams,
+    timings: &mut GpuTimings,
+) -> Result<(BezierStage, BezierStatus)> {
+    let t = Instant::now();
+    let mut stage = BezierStage::new(&gpu.device, prep, params)?;
+    gpu.check()?;
+    timings.pipelines_and_upload = ms(t);
+    let t = Instant::now();
+    stage.run_blocking(&gpu.device, &gpu.queue)?;
+    timings.first_run = ms(t);
+    let t = Instant::now();
+    let mut encoder = gpu.device.create_command_encoder(&Default::default());
+    stage.prepare(&gpu.device, &gpu.queue, &mut encoder);
+    gpu.queue.submit([encoder.finish()]);
+    gpu.wait()?;
+    timings.tessellate = ms(t);
+    let status = stage.read_status(&gpu.device)?;
+    gpu.check()?;
+    Ok((stage, status))
+}
