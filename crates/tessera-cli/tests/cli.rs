@@ -174,3 +174,65 @@ fn bad_parameters_fail_cleanly() {
     assert!(!r.status.success());
     assert!(String::from_utf8_lossy(&r.stderr).contains("/nonexistent/teapot"));
 }
+
+#[test]
+fn gpu_and_cpu_backends_write_identical_files() {
+    let (gpu, cpu, stats) = (tmp("gpu.ply"), tmp("cpu.ply"), tmp("gpu.json"));
+    for (backend, out) in [("gpu", &gpu), ("cpu", &cpu)] {
+        let st = tessera()
+            .args(["tessellate", teapot().to_str().unwrap(), "--method", "map4p"])
+            .args(["--threshold", "0.02", "--backend", backend, "--stats"])
+            .arg(&stats)
+            .arg("-o")
+            .arg(out)
+            .output()
+            .unwrap();
+        assert!(st.status.success(), "{backend}: {}", String::from_utf8_lossy(&st.stderr));
+        if backend == "gpu" {
+            let s: serde_json::Value =
+                serde_json::from_str(&std::fs::read_to_string(&stats).unwrap()).unwrap();
+            assert_eq!(s["backend"], "gpu");
+            assert!(s["adapter"].is_string());
+            assert!(s["timings_ms"]["tessellate"].as_f64().unwrap() > 0.0);
+            assert!(s["timings_ms"]["gpu"]["pipelines_and_upload"].as_f64().is_some());
+        }
+    }
+    assert_eq!(
+        std::fs::read(&gpu).unwrap(),
+        std::fs::read(&cpu).unwrap(),
+        "the GPU and CPU backends write the same PLY"
+    );
+}
+
+#[test]
+fn render_writes_a_png_of_the_requested_size() {
+    let png = tmp("teapot.png");
+    let st = tessera()
+        .args(["render", teapot().to_str().unwrap(), "--size", "96x64", "--wireframe", "-o"])
+        .arg(&png)
+        .output()
+        .unwrap();
+    assert!(st.status.success(), "{}", String::from_utf8_lossy(&st.stderr));
+    let bytes = std::fs::read(&png).unwrap();
+    assert_eq!(&bytes[..8], b"\x89PNG\r\n\x1a\n");
+    // IHDR: width and height, big-endian, at bytes 16..24.
+    let w = u32::from_be_bytes(bytes[16..20].try_into().unwrap());
+    let h = u32::from_be_bytes(bytes[20..24].try_into().unwrap());
+    assert_eq!((w, h), (96, 64));
+}
+
+#[test]
+fn render_rejects_bad_arguments_without_writing() {
+    for (size, out) in [("96x0", "a.png"), ("axb", "b.png"), ("64x64", "c.ply")] {
+        let path = tmp(out);
+        let st = tessera()
+            .args(["render", teapot().to_str().unwrap(), "--size", size, "-o"])
+            .arg(&path)
+            .output()
+            .unwrap();
+        assert!(!st.status.success(), "{size} {out} accepted");
+        let err = String::from_utf8_lossy(&st.stderr);
+        assert!(!err.contains("panicked"), "{err}");
+        assert!(!path.exists(), "{out} written despite the error");
+    }
+}
