@@ -599,6 +599,83 @@ impl BezierStage {
         );
     }
 
+    /// Runs the script one kernel at a time, each on its own submission, and returns
+    /// the wall time of each (ms) for profiling. Slower than [`prepare`](Self::prepare)
+    /// (one wait per kernel); the output is the same.
+    pub fn profile_kernels(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+    ) -> Result<Vec<(&'static str, f64)>> {
+        let l = self.prepared_layout;
+        queue.write_buffer(&self.uniform, 0, bytemuck::bytes_of(&self.gpu_params()));
+        let counts_len = l.coarse_edges + 2 * l.coarse_triangles + 1;
+        let mut out = Vec::new();
+        let bg = &self.bind_groups;
+        let p = &*self.pipelines.0;
+        let mut step = |name: &'static str, record: &dyn Fn(&mut wgpu::CommandEncoder)| -> Result<()> {
+            let t = std::time::Instant::now();
+            let mut encoder = device.create_command_encoder(&Default::default());
+            record(&mut encoder);
+            queue.submit([encoder.finish()]);
+            device
+                .poll(wgpu::PollType::wait_indefinitely())
+                .map_err(|e| Error::Readback(e.to_string()))?;
+            out.push((name, t.elapsed().as_secs_f64() * 1e3));
+            Ok(())
+        };
+        let pass = |e: &mut wgpu::CommandEncoder, f: &dyn Fn(&mut wgpu::ComputePass)| {
+            let mut pass = e.begin_compute_pass(&Default::default());
+            f(&mut pass);
+        };
+        step("edge_decide", &|e| {
+            e.clear_buffer(&self.counts, 4 * (counts_len as u64 - 1), Some(4));
+            pass(e, &|ps| dispatch(ps, &p.edge_decide, &bg.edge_decide, l.coarse_edges, WORKGROUP));
+        })?;
+        step("tri_mark", &|e| {
+            pass(e, &|ps| dispatch(ps, &p.tri_mark, &bg.tri_mark, l.coarse_triangles, WORKGROUP));
+        })?;
+        step("scan+finish", &|e| {
+            pass(e, &|ps| {
+                for (level, (blocks, _)) in self.scan_levels.iter().zip(&bg.scan) {
+                    dispatch(ps, &p.scan_blocks, blocks, level.n, SCAN_BLOCK);
+                }
+                for (level, (_, add)) in self.scan_levels.iter().zip(&bg.scan).rev().skip(1) {
+                    dispatch(ps, &p.add_offsets, add, level.n, SCAN_BLOCK);
+                }
+                dispatch(ps, &p.finish, &bg.finish, 1, 1);
+            });
+        })?;
+        step("edge_emit", &|e| {
+            e.copy_buffer_to_buffer(
+                &self.coarse_records,
+                0,
+                &self.records,
+                0,
+                l.coarse_vertices as u64 * std::mem::size_of::<VertexRecord>() as u64,
+            );
+            pass(e, &|ps| dispatch(ps, &p.edge_emit, &bg.edge_emit, l.coarse_edges, WORKGROUP));
+        })?;
+        step("tri_emit", &|e| {
+            pass(e, &|ps| dispatch(ps, &p.tri_emit, &bg.tri_emit, l.coarse_triangles, WORKGROUP));
+        })?;
+        step("vertex_eval", &|e| {
+            pass(e, &|ps| {
+                ps.set_pipeline(&p.vertex_eval.pipeline);
+                ps.set_bind_group(0, &bg.vertex_eval, &[]);
+                ps.dispatch_workgroups_indirect(&self.status, 16);
+            });
+            e.copy_buffer_to_buffer(
+                &self.status,
+                0,
+                &self.status_readback,
+                0,
+                std::mem::size_of::<BezierStatus>() as u64,
+            );
+        })?;
+        Ok(out)
+    }
+
     /// Reads what the last submitted run needed (waits for the GPU).
     pub fn read_status(&self, device: &wgpu::Device) -> Result<BezierStatus> {
         let bytes = map_read(device, &self.status_readback)?;

@@ -103,7 +103,11 @@ impl MeshBuffers {
                 bytemuck::cast_slice(vertices),
                 Self::VERTEX_USAGE,
             ),
-            indices: init("tessera indices", bytemuck::cast_slice(indices), Self::INDEX_USAGE),
+            indices: init(
+                "tessera indices",
+                bytemuck::cast_slice(indices),
+                Self::INDEX_USAGE,
+            ),
             indirect: init(
                 "tessera draw args",
                 bytemuck::bytes_of(&args),

@@ -1,0 +1,212 @@
+//! The GPU stage against the CPU reference: 1, 32 and 1024 patches (one teapot patch, a
+//! teapot, 32 teapots side by side) at several thresholds. Tessellation time is the GPU
+//! work to completion (record, submit, wait), after a first run that grows the buffers;
+//! the CPU reference runs the same stages on one thread. Medians of repeated runs.
+
+use std::path::Path;
+use std::time::Instant;
+
+use glam::Vec3;
+use serde::Serialize;
+use tessera_core::bezier::{tessellate_adaptive, AdaptiveParams, BezierModel, EdgeTest, PreparedBezier};
+use tessera_wgpu::bezier::{BezierKernels, BezierStage};
+use tessera_wgpu::headless::Gpu;
+
+#[derive(Serialize, Clone)]
+pub struct GpuRow {
+    patches: usize,
+    test: String,
+    threshold: f32,
+    triangles: u32,
+    vertices: u32,
+    cpu_ms: f64,
+    gpu_ms: f64,
+    /// `cpu_ms / gpu_ms`.
+    speedup: f64,
+    gpu_triangles_per_s: f64,
+    cpu_triangles_per_s: f64,
+    /// Each kernel on its own submission (ms): where the GPU time goes.
+    kernels_ms: Vec<(String, f64)>,
+}
+
+#[derive(Serialize)]
+pub struct GpuReport {
+    adapter: String,
+    repeats: usize,
+    rows: Vec<GpuRow>,
+}
+
+/// `copies` teapots on a grid, `spacing` apart (1 copy of `patches` patches when `copies`
+/// is 0: the first `patches` patches of one teapot).
+fn teapots(base: &BezierModel, copies: usize, spacing: f32) -> BezierModel {
+    let side = (copies as f32).sqrt().ceil() as usize;
+    let mut points = Vec::new();
+    let mut nets = Vec::new();
+    for c in 0..copies {
+        let offset = Vec3::new((c % side) as f32 * spacing, (c / side) as f32 * spacing, 0.0);
+        let first = points.len() as u32;
+        points.extend(base.points.iter().map(|p| *p + offset));
+        nets.extend(base.nets.iter().map(|n| n.map(|i| i + first)));
+    }
+    BezierModel::from_nets(points, nets)
+}
+
+fn single_patch(base: &BezierModel) -> BezierModel {
+    // A body patch: no collapsed side, curved in both directions.
+    let net = base.nets[4];
+    let points: Vec<Vec3> = net.iter().map(|&i| base.points[i as usize]).collect();
+    BezierModel::from_nets(points, vec![std::array::from_fn(|k| k as u32)])
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    v[v.len() / 2]
+}
+
+pub fn run(assets: &Path, out_dir: &Path, quick: bool) {
+    let gpu = match Gpu::new() {
+        Ok(g) => g,
+        Err(e) => {
+            eprintln!("bench: no GPU adapter ({e}); skipping the GPU bench");
+            return;
+        }
+    };
+    let kernels = BezierKernels::new(&gpu.device);
+    let teapot = BezierModel::load(&assets.join("teapot")).unwrap_or_else(|e| panic!("{e}"));
+    let (lo, hi) = teapot.bounds();
+    let diag = (hi - lo).length();
+    let repeats = if quick { 3 } else { 7 };
+    let thresholds: &[f32] = if quick {
+        &[0.004, 0.001]
+    } else {
+        &[0.008, 0.004, 0.002, 0.001, 0.0005]
+    };
+    let models = [
+        (1, single_patch(&teapot)),
+        (32, teapot.clone()),
+        (1024, teapots(&teapot, 32, 1.2 * diag)),
+    ];
+    let mut rows = Vec::new();
+    for (patches, model) in &models {
+        let prep = PreparedBezier::new(model);
+        let first = AdaptiveParams {
+            test: EdgeTest::Map4p,
+            threshold: thresholds[0] * diag,
+            max_depth: AdaptiveParams::DEFAULT_MAX_DEPTH,
+        };
+        let l = prep.layout;
+        let mut stage = BezierStage::with_capacity(
+            &gpu.device,
+            &kernels,
+            &prep,
+            &first,
+            4 * l.coarse_vertices,
+            24 * l.coarse_triangles,
+        )
+        .expect("stage");
+        for &rel in thresholds {
+            let params = AdaptiveParams {
+                threshold: rel * diag,
+                ..first
+            };
+            stage.set_params(&gpu.device, &params).expect("params");
+            let status = stage.run_blocking(&gpu.device, &gpu.queue).expect("first run");
+            let gpu_ms = median(
+                (0..repeats)
+                    .map(|_| {
+                        let t = Instant::now();
+                        let mut encoder = gpu.device.create_command_encoder(&Default::default());
+                        stage.prepare(&gpu.device, &gpu.queue, &mut encoder);
+                        gpu.queue.submit([encoder.finish()]);
+                        gpu.wait().expect("gpu");
+                        t.elapsed().as_secs_f64() * 1e3
+                    })
+                    .collect(),
+            );
+            gpu.check().expect("no wgpu errors");
+            // One kernel per submission, for the per-kernel column (not the timed run).
+            let kernels_ms = stage.profile_kernels(&gpu.device, &gpu.queue).expect("profile");
+            let mut cpu_triangles = 0;
+            let cpu_ms = median(
+                (0..repeats)
+                    .map(|_| {
+                        let t = Instant::now();
+                        let out = tessellate_adaptive(&prep, &params).expect("cpu");
+                        cpu_triangles = out.mesh.triangle_count();
+                        t.elapsed().as_secs_f64() * 1e3
+                    })
+                    .collect(),
+            );
+            let triangles = status.indices / 3;
+            assert_eq!(
+                cpu_triangles, triangles as usize,
+                "GPU and CPU triangle counts differ at {patches} patches, threshold {rel}"
+            );
+            eprintln!(
+                "bench gpu: {patches} patches, th {rel}: {triangles} triangles, GPU {gpu_ms:.2} ms, CPU {cpu_ms:.2} ms"
+            );
+            rows.push(GpuRow {
+                patches: *patches,
+                test: "map4p".into(),
+                threshold: params.threshold,
+                triangles,
+                vertices: status.vertices,
+                cpu_ms,
+                gpu_ms,
+                speedup: cpu_ms / gpu_ms,
+                gpu_triangles_per_s: triangles as f64 / (gpu_ms * 1e-3),
+                cpu_triangles_per_s: triangles as f64 / (cpu_ms * 1e-3),
+                kernels_ms: kernels_ms.into_iter().map(|(k, t)| (k.to_string(), t)).collect(),
+            });
+        }
+    }
+    let report = GpuReport {
+        adapter: gpu.adapter_name(),
+        repeats,
+        rows,
+    };
+    let json = serde_json::to_string_pretty(&report).expect("serialize");
+    std::fs::write(out_dir.join("bezier_gpu.json"), json).expect("write json");
+    std::fs::write(out_dir.join("bezier_gpu.md"), table(&report)).expect("write md");
+}
+
+fn table(r: &GpuReport) -> String {
+    let mut s = format!(
+        "Measured by `cargo xtask bench` on {} (map4p, max depth 6; medians of {} runs; GPU time = record + submit + wait, after a first run that sizes the buffers; CPU = the reference twins, one thread).\n\n",
+        r.adapter, r.repeats
+    );
+    s += "| patches | threshold | triangles | CPU (ms) | GPU (ms) | GPU speed-up | GPU triangles/s | GPU kernels alone (ms) |\n|---:|---:|---:|---:|---:|---:|---:|---|\n";
+    for row in &r.rows {
+        let kernels: Vec<String> = row
+            .kernels_ms
+            .iter()
+            .map(|(k, t)| format!("{k} {t:.1}"))
+            .collect();
+        s += &format!(
+            "| {} | {:.4} | {} | {:.2} | {:.2} | {:.2}× | {:.3e} | {} |\n",
+            row.patches,
+            row.threshold,
+            row.triangles,
+            row.cpu_ms,
+            row.gpu_ms,
+            row.speedup,
+            row.gpu_triangles_per_s,
+            kernels.join(", ")
+        );
+    }
+    // Scaling with output: the largest against the smallest output per model size.
+    s += "\nScaling with output size (GPU): time ratio against triangle ratio, coarsest to finest threshold.\n\n| patches | triangles ratio | GPU time ratio | CPU time ratio |\n|---:|---:|---:|---:|\n";
+    for patches in [1, 32, 1024] {
+        let rows: Vec<&GpuRow> = r.rows.iter().filter(|x| x.patches == patches).collect();
+        if let (Some(a), Some(b)) = (rows.first(), rows.last()) {
+            s += &format!(
+                "| {} | {:.1}× | {:.1}× | {:.1}× |\n",
+                patches,
+                b.triangles as f64 / a.triangles as f64,
+                b.gpu_ms / a.gpu_ms,
+                b.cpu_ms / a.cpu_ms
+            );
+        }
+    }
+    s
+}
