@@ -8,7 +8,9 @@ use std::time::Instant;
 
 use glam::Vec3;
 use serde::Serialize;
-use tessera_core::bezier::{tessellate_adaptive, AdaptiveParams, BezierModel, EdgeTest, PreparedBezier};
+use tessera_core::bezier::{
+    tessellate_adaptive, AdaptiveParams, BezierModel, EdgeTest, PreparedBezier,
+};
 use tessera_wgpu::bezier::{BezierKernels, BezierStage};
 use tessera_wgpu::headless::Gpu;
 
@@ -43,7 +45,11 @@ fn teapots(base: &BezierModel, copies: usize, spacing: f32) -> BezierModel {
     let mut points = Vec::new();
     let mut nets = Vec::new();
     for c in 0..copies {
-        let offset = Vec3::new((c % side) as f32 * spacing, (c / side) as f32 * spacing, 0.0);
+        let offset = Vec3::new(
+            (c % side) as f32 * spacing,
+            (c / side) as f32 * spacing,
+            0.0,
+        );
         let first = points.len() as u32;
         points.extend(base.points.iter().map(|p| *p + offset));
         nets.extend(base.nets.iter().map(|n| n.map(|i| i + first)));
@@ -110,7 +116,9 @@ pub fn run(assets: &Path, out_dir: &Path, quick: bool) {
                 ..first
             };
             stage.set_params(&gpu.device, &params).expect("params");
-            let status = stage.run_blocking(&gpu.device, &gpu.queue).expect("first run");
+            let status = stage
+                .run_blocking(&gpu.device, &gpu.queue)
+                .expect("first run");
             let gpu_ms = median(
                 (0..repeats)
                     .map(|_| {
@@ -125,7 +133,9 @@ pub fn run(assets: &Path, out_dir: &Path, quick: bool) {
             );
             gpu.check().expect("no wgpu errors");
             // One kernel per submission, for the per-kernel column (not the timed run).
-            let kernels_ms = stage.profile_kernels(&gpu.device, &gpu.queue).expect("profile");
+            let kernels_ms = stage
+                .profile_kernels(&gpu.device, &gpu.queue)
+                .expect("profile");
             let mut cpu_triangles = 0;
             let cpu_ms = median(
                 (0..repeats)
@@ -156,7 +166,10 @@ pub fn run(assets: &Path, out_dir: &Path, quick: bool) {
                 speedup: cpu_ms / gpu_ms,
                 gpu_triangles_per_s: triangles as f64 / (gpu_ms * 1e-3),
                 cpu_triangles_per_s: triangles as f64 / (cpu_ms * 1e-3),
-                kernels_ms: kernels_ms.into_iter().map(|(k, t)| (k.to_string(), t)).collect(),
+                kernels_ms: kernels_ms
+                    .into_iter()
+                    .map(|(k, t)| (k.to_string(), t))
+                    .collect(),
             });
         }
     }

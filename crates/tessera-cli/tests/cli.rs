@@ -180,21 +180,32 @@ fn gpu_and_cpu_backends_write_identical_files() {
     let (gpu, cpu, stats) = (tmp("gpu.ply"), tmp("cpu.ply"), tmp("gpu.json"));
     for (backend, out) in [("gpu", &gpu), ("cpu", &cpu)] {
         let st = tessera()
-            .args(["tessellate", teapot().to_str().unwrap(), "--method", "map4p"])
+            .args([
+                "tessellate",
+                teapot().to_str().unwrap(),
+                "--method",
+                "map4p",
+            ])
             .args(["--threshold", "0.02", "--backend", backend, "--stats"])
             .arg(&stats)
             .arg("-o")
             .arg(out)
             .output()
             .unwrap();
-        assert!(st.status.success(), "{backend}: {}", String::from_utf8_lossy(&st.stderr));
+        assert!(
+            st.status.success(),
+            "{backend}: {}",
+            String::from_utf8_lossy(&st.stderr)
+        );
         if backend == "gpu" {
             let s: serde_json::Value =
                 serde_json::from_str(&std::fs::read_to_string(&stats).unwrap()).unwrap();
             assert_eq!(s["backend"], "gpu");
             assert!(s["adapter"].is_string());
             assert!(s["timings_ms"]["tessellate"].as_f64().unwrap() > 0.0);
-            assert!(s["timings_ms"]["gpu"]["pipelines_and_upload"].as_f64().is_some());
+            assert!(s["timings_ms"]["gpu"]["pipelines_and_upload"]
+                .as_f64()
+                .is_some());
         }
     }
     assert_eq!(
@@ -208,11 +219,22 @@ fn gpu_and_cpu_backends_write_identical_files() {
 fn render_writes_a_png_of_the_requested_size() {
     let png = tmp("teapot.png");
     let st = tessera()
-        .args(["render", teapot().to_str().unwrap(), "--size", "96x64", "--wireframe", "-o"])
+        .args([
+            "render",
+            teapot().to_str().unwrap(),
+            "--size",
+            "96x64",
+            "--wireframe",
+            "-o",
+        ])
         .arg(&png)
         .output()
         .unwrap();
-    assert!(st.status.success(), "{}", String::from_utf8_lossy(&st.stderr));
+    assert!(
+        st.status.success(),
+        "{}",
+        String::from_utf8_lossy(&st.stderr)
+    );
     let bytes = std::fs::read(&png).unwrap();
     assert_eq!(&bytes[..8], b"\x89PNG\r\n\x1a\n");
     // IHDR: width and height, big-endian, at bytes 16..24.

@@ -613,27 +613,38 @@ impl BezierStage {
         let mut out = Vec::new();
         let bg = &self.bind_groups;
         let p = &*self.pipelines.0;
-        let mut step = |name: &'static str, record: &dyn Fn(&mut wgpu::CommandEncoder)| -> Result<()> {
-            let t = std::time::Instant::now();
-            let mut encoder = device.create_command_encoder(&Default::default());
-            record(&mut encoder);
-            queue.submit([encoder.finish()]);
-            device
-                .poll(wgpu::PollType::wait_indefinitely())
-                .map_err(|e| Error::Readback(e.to_string()))?;
-            out.push((name, t.elapsed().as_secs_f64() * 1e3));
-            Ok(())
-        };
+        let mut step =
+            |name: &'static str, record: &dyn Fn(&mut wgpu::CommandEncoder)| -> Result<()> {
+                let t = std::time::Instant::now();
+                let mut encoder = device.create_command_encoder(&Default::default());
+                record(&mut encoder);
+                queue.submit([encoder.finish()]);
+                device
+                    .poll(wgpu::PollType::wait_indefinitely())
+                    .map_err(|e| Error::Readback(e.to_string()))?;
+                out.push((name, t.elapsed().as_secs_f64() * 1e3));
+                Ok(())
+            };
         let pass = |e: &mut wgpu::CommandEncoder, f: &dyn Fn(&mut wgpu::ComputePass)| {
             let mut pass = e.begin_compute_pass(&Default::default());
             f(&mut pass);
         };
         step("edge_decide", &|e| {
             e.clear_buffer(&self.counts, 4 * (counts_len as u64 - 1), Some(4));
-            pass(e, &|ps| dispatch(ps, &p.edge_decide, &bg.edge_decide, l.coarse_edges, WORKGROUP));
+            pass(e, &|ps| {
+                dispatch(
+                    ps,
+                    &p.edge_decide,
+                    &bg.edge_decide,
+                    l.coarse_edges,
+                    WORKGROUP,
+                )
+            });
         })?;
         step("tri_mark", &|e| {
-            pass(e, &|ps| dispatch(ps, &p.tri_mark, &bg.tri_mark, l.coarse_triangles, WORKGROUP));
+            pass(e, &|ps| {
+                dispatch(ps, &p.tri_mark, &bg.tri_mark, l.coarse_triangles, WORKGROUP)
+            });
         })?;
         step("scan+finish", &|e| {
             pass(e, &|ps| {
@@ -654,10 +665,14 @@ impl BezierStage {
                 0,
                 l.coarse_vertices as u64 * std::mem::size_of::<VertexRecord>() as u64,
             );
-            pass(e, &|ps| dispatch(ps, &p.edge_emit, &bg.edge_emit, l.coarse_edges, WORKGROUP));
+            pass(e, &|ps| {
+                dispatch(ps, &p.edge_emit, &bg.edge_emit, l.coarse_edges, WORKGROUP)
+            });
         })?;
         step("tri_emit", &|e| {
-            pass(e, &|ps| dispatch(ps, &p.tri_emit, &bg.tri_emit, l.coarse_triangles, WORKGROUP));
+            pass(e, &|ps| {
+                dispatch(ps, &p.tri_emit, &bg.tri_emit, l.coarse_triangles, WORKGROUP)
+            });
         })?;
         step("vertex_eval", &|e| {
             pass(e, &|ps| {
