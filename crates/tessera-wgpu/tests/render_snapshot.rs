@@ -288,3 +288,34 @@ fn teacup_fails_against_teapot_snapshot() {
         teacup.dimensions()
     );
 }
+
+/// The same teapot tessellated by the GPU stage and drawn straight from its buffers (the
+/// index count comes from the draw arguments the kernels wrote; nothing is read back)
+/// matches the snapshot made from the CPU reference's mesh.
+#[test]
+fn teapot_tessellated_on_the_gpu_matches_the_wireframe_snapshot() {
+    let gpu = gpu();
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/teaset/teapot");
+    let model = BezierModel::load(&path).expect("shipped model loads");
+    let (min, max) = model.bounds();
+    let params = AdaptiveParams {
+        test: EdgeTest::Map4p,
+        threshold: 0.01 * (max - min).length(),
+        max_depth: AdaptiveParams::DEFAULT_MAX_DEPTH,
+    };
+    let prepared = PreparedBezier::new(&model);
+    let mut stage = tessera_wgpu::bezier::BezierStage::new(&gpu.device, &prepared, &params)
+        .expect("stage");
+    stage
+        .run_blocking(&gpu.device, &gpu.queue)
+        .expect("stage runs");
+    // Framing only: the snapshot was framed on the mesh's bounds.
+    let bounds = tessellate_adaptive(&prepared, &params)
+        .expect("cpu")
+        .mesh
+        .bounds();
+    let img = render_to_rgba(&gpu, stage.output(), bounds, WIDTH, HEIGHT, &wireframe())
+        .expect("render");
+    gpu.check().expect("no wgpu errors");
+    assert_snapshot("teapot_wireframe", &img);
+}
