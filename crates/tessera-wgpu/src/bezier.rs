@@ -162,11 +162,126 @@ struct BindGroups {
     vertex_eval: wgpu::BindGroup,
 }
 
+impl BindGroups {
+    fn new(device: &wgpu::Device, p: &Pipelines, b: &Buffers) -> Self {
+        use slot::*;
+        let model: [(u32, &wgpu::Buffer); 5] = [
+            (PARAMS, &b.uniform),
+            (PATCHES, &b.patches),
+            (MAPS, &b.maps),
+            (TOPO, &b.topo),
+            (CURVES, &b.curves),
+        ];
+        let all_model = [PARAMS, PATCHES, MAPS, TOPO, CURVES];
+        let mut scan = Vec::new();
+        for (k, level) in b.scan_levels.iter().enumerate() {
+            let data = if k == 0 {
+                &b.counts
+            } else {
+                &b.scan_levels[k - 1].sums
+            };
+            let entries = [(0, &level.uniform), (1, data), (2, &level.sums)];
+            scan.push((
+                bind(device, &p.scan_blocks, &entries),
+                bind(device, &p.add_offsets, &entries),
+            ));
+        }
+        BindGroups {
+            edge_decide: bind(
+                device,
+                &p.edge_decide,
+                &with(
+                    &model,
+                    &all_model,
+                    &[(EDGE_BITS, &b.edge_bits), (COUNTS, &b.counts)],
+                ),
+            ),
+            tri_mark: bind(
+                device,
+                &p.tri_mark,
+                &with(
+                    &model,
+                    &all_model,
+                    &[
+                        (EDGE_BITS, &b.edge_bits),
+                        (COUNTS, &b.counts),
+                        (SCRATCH, &b.scratch),
+                    ],
+                ),
+            ),
+            scan,
+            finish: bind(
+                device,
+                &p.finish,
+                &with(
+                    &model,
+                    &[PARAMS],
+                    &[
+                        (COUNTS, &b.counts),
+                        (DRAW_ARGS, &b.output.indirect),
+                        (STATUS, &b.status),
+                    ],
+                ),
+            ),
+            edge_emit: bind(
+                device,
+                &p.edge_emit,
+                &with(
+                    &model,
+                    &[PARAMS, TOPO, CURVES],
+                    &[
+                        (EDGE_BITS, &b.edge_bits),
+                        (COUNTS, &b.counts),
+                        (RECORDS, &b.records),
+                        (STATUS, &b.status),
+                    ],
+                ),
+            ),
+            tri_emit: bind(
+                device,
+                &p.tri_emit,
+                &with(
+                    &model,
+                    &all_model,
+                    &[
+                        (EDGE_BITS, &b.edge_bits),
+                        (COUNTS, &b.counts),
+                        (SCRATCH, &b.scratch),
+                        (RECORDS, &b.records),
+                        (INDICES, &b.output.indices),
+                        (STATUS, &b.status),
+                    ],
+                ),
+            ),
+            vertex_eval: bind(
+                device,
+                &p.vertex_eval,
+                &with(
+                    &model,
+                    &[PATCHES, TOPO],
+                    &[
+                        (RECORDS, &b.records),
+                        (VERTICES, &b.output.vertices),
+                        (STATUS, &b.status),
+                    ],
+                ),
+            ),
+        }
+    }
+}
+
 /// The embeddable Bézier stage: uploads a prepared model once, records its kernels into
 /// the caller's encoder, and leaves [`MeshBuffers`] on the GPU.
 pub struct BezierStage {
     prepared_layout: tessera_core::bezier::prepare::CoarseLayout,
     params: AdaptiveParams,
+    buffers: Buffers,
+    pipelines: BezierKernels,
+    bind_groups: BindGroups,
+}
+
+/// Every buffer of a stage: the upload, the working buffers, the output.
+struct Buffers {
     uniform: wgpu::Buffer,
     patches: wgpu::Buffer,
     maps: wgpu::Buffer,
@@ -181,8 +296,20 @@ pub struct BezierStage {
     status: wgpu::Buffer,
     status_readback: wgpu::Buffer,
     output: MeshBuffers,
-    pipelines: BezierKernels,
-    bind_groups: BindGroups,
+}
+
+/// Words per coarse triangle in the scratch buffer at `depth`: lattice points, then
+/// collapsed-side points.
+fn triangle_words(depth: u32) -> (u32, u32) {
+    let points = Lattice::points_words(depth) as u32;
+    let pole = (3 * ((1u32 << depth) + 1)).div_ceil(32);
+    (points, pole)
+}
+
+fn scratch_buffer(device: &wgpu::Device, depth: u32, coarse_triangles: u32) -> wgpu::Buffer {
+    let (points, pole) = triangle_words(depth);
+    let words = (points + pole) as u64 * coarse_triangles as u64;
+    storage(device, "tessera triangle scratch", 4 * words)
 }
 
 fn storage(device: &wgpu::Device, label: &str, size: u64) -> wgpu::Buffer {
@@ -306,9 +433,7 @@ impl BezierStage {
             usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
             mapped_at_creation: false,
         });
-        let mut stage = BezierStage {
-            prepared_layout: l,
-            params: *params,
+        let buffers = Buffers {
             uniform,
             patches: upload(
                 device,
@@ -338,7 +463,7 @@ impl BezierStage {
             ),
             counts: storage(device, "tessera counts", 4 * counts_len as u64),
             scan_levels,
-            scratch: storage(device, "tessera triangle scratch", 4),
+            scratch: scratch_buffer(device, params.max_depth, l.coarse_triangles),
             records: storage(
                 device,
                 "tessera vertex records",
@@ -347,12 +472,14 @@ impl BezierStage {
             status,
             status_readback,
             output,
-            // Rebuilt just below, once every buffer exists.
-            bind_groups: placeholder_bind_groups(device),
-            pipelines,
         };
-        stage.resize_scratch(device);
-        Ok(stage)
+        Ok(BezierStage {
+            prepared_layout: l,
+            params: *params,
+            bind_groups: BindGroups::new(device, &pipelines.0, &buffers),
+            buffers,
+            pipelines,
+        })
     }
 
     /// Changes the test, threshold or depth; takes effect at the next [`prepare`](Self::prepare).
@@ -372,128 +499,21 @@ impl BezierStage {
 
     /// The buffers to draw: valid after the recorded work has run.
     pub fn output(&self) -> &MeshBuffers {
-        &self.output
+        &self.buffers.output
     }
 
     fn words_per_triangle(&self) -> (u32, u32) {
-        let depth = self.params.max_depth;
-        let points = Lattice::points_words(depth) as u32;
-        let pole = (3 * ((1u32 << depth) + 1)).div_ceil(32);
-        (points, pole)
+        triangle_words(self.params.max_depth)
     }
 
     fn resize_scratch(&mut self, device: &wgpu::Device) {
-        let (points, pole) = self.words_per_triangle();
-        let words = (points + pole) as u64 * self.prepared_layout.coarse_triangles as u64;
-        self.scratch = storage(device, "tessera triangle scratch", 4 * words);
+        let l = self.prepared_layout;
+        self.buffers.scratch = scratch_buffer(device, self.params.max_depth, l.coarse_triangles);
         self.rebind(device);
     }
 
     fn rebind(&mut self, device: &wgpu::Device) {
-        use slot::*;
-        let p = &*self.pipelines.0;
-        let model: [(u32, &wgpu::Buffer); 5] = [
-            (PARAMS, &self.uniform),
-            (PATCHES, &self.patches),
-            (MAPS, &self.maps),
-            (TOPO, &self.topo),
-            (CURVES, &self.curves),
-        ];
-        let all_model = [PARAMS, PATCHES, MAPS, TOPO, CURVES];
-        let mut scan = Vec::new();
-        for (k, level) in self.scan_levels.iter().enumerate() {
-            let data = if k == 0 {
-                &self.counts
-            } else {
-                &self.scan_levels[k - 1].sums
-            };
-            let entries = [(0, &level.uniform), (1, data), (2, &level.sums)];
-            scan.push((
-                bind(device, &p.scan_blocks, &entries),
-                bind(device, &p.add_offsets, &entries),
-            ));
-        }
-        self.bind_groups = BindGroups {
-            edge_decide: bind(
-                device,
-                &p.edge_decide,
-                &with(
-                    &model,
-                    &all_model,
-                    &[(EDGE_BITS, &self.edge_bits), (COUNTS, &self.counts)],
-                ),
-            ),
-            tri_mark: bind(
-                device,
-                &p.tri_mark,
-                &with(
-                    &model,
-                    &all_model,
-                    &[
-                        (EDGE_BITS, &self.edge_bits),
-                        (COUNTS, &self.counts),
-                        (SCRATCH, &self.scratch),
-                    ],
-                ),
-            ),
-            scan,
-            finish: bind(
-                device,
-                &p.finish,
-                &with(
-                    &model,
-                    &[PARAMS],
-                    &[
-                        (COUNTS, &self.counts),
-                        (DRAW_ARGS, &self.output.indirect),
-                        (STATUS, &self.status),
-                    ],
-                ),
-            ),
-            edge_emit: bind(
-                device,
-                &p.edge_emit,
-                &with(
-                    &model,
-                    &[PARAMS, TOPO, CURVES],
-                    &[
-                        (EDGE_BITS, &self.edge_bits),
-                        (COUNTS, &self.counts),
-                        (RECORDS, &self.records),
-                        (STATUS, &self.status),
-                    ],
-                ),
-            ),
-            tri_emit: bind(
-                device,
-                &p.tri_emit,
-                &with(
-                    &model,
-                    &all_model,
-                    &[
-                        (EDGE_BITS, &self.edge_bits),
-                        (COUNTS, &self.counts),
-                        (SCRATCH, &self.scratch),
-                        (RECORDS, &self.records),
-                        (INDICES, &self.output.indices),
-                        (STATUS, &self.status),
-                    ],
-                ),
-            ),
-            vertex_eval: bind(
-                device,
-                &p.vertex_eval,
-                &with(
-                    &model,
-                    &[PATCHES, TOPO],
-                    &[
-                        (RECORDS, &self.records),
-                        (VERTICES, &self.output.vertices),
-                        (STATUS, &self.status),
-                    ],
-                ),
-            ),
-        };
+        self.bind_groups = BindGroups::new(device, &self.pipelines.0, &self.buffers);
     }
 
     fn gpu_params(&self) -> BezierParams {
@@ -511,8 +531,8 @@ impl BezierStage {
             points_words,
             pole_words,
             inv_lattice: inv_lattice(self.params.max_depth),
-            vertex_capacity: self.output.vertex_capacity,
-            index_capacity: self.output.index_capacity,
+            vertex_capacity: self.buffers.output.vertex_capacity,
+            index_capacity: self.buffers.output.index_capacity,
             _pad: [0; 3],
         }
     }
@@ -527,10 +547,14 @@ impl BezierStage {
         encoder: &mut wgpu::CommandEncoder,
     ) {
         let l = self.prepared_layout;
-        queue.write_buffer(&self.uniform, 0, bytemuck::bytes_of(&self.gpu_params()));
+        queue.write_buffer(
+            &self.buffers.uniform,
+            0,
+            bytemuck::bytes_of(&self.gpu_params()),
+        );
         let counts_len = l.coarse_edges + 2 * l.coarse_triangles + 1;
         // The scan's trailing slot collects the grand total: zero it each run.
-        encoder.clear_buffer(&self.counts, 4 * (counts_len as u64 - 1), Some(4));
+        encoder.clear_buffer(&self.buffers.counts, 4 * (counts_len as u64 - 1), Some(4));
         let bg = &self.bind_groups;
         let p = &*self.pipelines.0;
         {
@@ -552,18 +576,18 @@ impl BezierStage {
                 l.coarse_triangles,
                 WORKGROUP,
             );
-            for (level, (blocks, _)) in self.scan_levels.iter().zip(&bg.scan) {
+            for (level, (blocks, _)) in self.buffers.scan_levels.iter().zip(&bg.scan) {
                 dispatch(&mut pass, &p.scan_blocks, blocks, level.n, SCAN_BLOCK);
             }
-            for (level, (_, add)) in self.scan_levels.iter().zip(&bg.scan).rev().skip(1) {
+            for (level, (_, add)) in self.buffers.scan_levels.iter().zip(&bg.scan).rev().skip(1) {
                 dispatch(&mut pass, &p.add_offsets, add, level.n, SCAN_BLOCK);
             }
             dispatch(&mut pass, &p.finish, &bg.finish, 1, 1);
         }
         encoder.copy_buffer_to_buffer(
-            &self.coarse_records,
+            &self.buffers.coarse_records,
             0,
-            &self.records,
+            &self.buffers.records,
             0,
             l.coarse_vertices as u64 * std::mem::size_of::<VertexRecord>() as u64,
         );
@@ -588,12 +612,12 @@ impl BezierStage {
             );
             pass.set_pipeline(&p.vertex_eval.pipeline);
             pass.set_bind_group(0, &bg.vertex_eval, &[]);
-            pass.dispatch_workgroups_indirect(&self.status, 16);
+            pass.dispatch_workgroups_indirect(&self.buffers.status, 16);
         }
         encoder.copy_buffer_to_buffer(
-            &self.status,
+            &self.buffers.status,
             0,
-            &self.status_readback,
+            &self.buffers.status_readback,
             0,
             std::mem::size_of::<BezierStatus>() as u64,
         );
@@ -608,7 +632,11 @@ impl BezierStage {
         queue: &wgpu::Queue,
     ) -> Result<Vec<(&'static str, f64)>> {
         let l = self.prepared_layout;
-        queue.write_buffer(&self.uniform, 0, bytemuck::bytes_of(&self.gpu_params()));
+        queue.write_buffer(
+            &self.buffers.uniform,
+            0,
+            bytemuck::bytes_of(&self.gpu_params()),
+        );
         let counts_len = l.coarse_edges + 2 * l.coarse_triangles + 1;
         let mut out = Vec::new();
         let bg = &self.bind_groups;
@@ -630,7 +658,7 @@ impl BezierStage {
             f(&mut pass);
         };
         step("edge_decide", &|e| {
-            e.clear_buffer(&self.counts, 4 * (counts_len as u64 - 1), Some(4));
+            e.clear_buffer(&self.buffers.counts, 4 * (counts_len as u64 - 1), Some(4));
             pass(e, &|ps| {
                 dispatch(
                     ps,
@@ -648,10 +676,11 @@ impl BezierStage {
         })?;
         step("scan+finish", &|e| {
             pass(e, &|ps| {
-                for (level, (blocks, _)) in self.scan_levels.iter().zip(&bg.scan) {
+                for (level, (blocks, _)) in self.buffers.scan_levels.iter().zip(&bg.scan) {
                     dispatch(ps, &p.scan_blocks, blocks, level.n, SCAN_BLOCK);
                 }
-                for (level, (_, add)) in self.scan_levels.iter().zip(&bg.scan).rev().skip(1) {
+                for (level, (_, add)) in self.buffers.scan_levels.iter().zip(&bg.scan).rev().skip(1)
+                {
                     dispatch(ps, &p.add_offsets, add, level.n, SCAN_BLOCK);
                 }
                 dispatch(ps, &p.finish, &bg.finish, 1, 1);
@@ -659,9 +688,9 @@ impl BezierStage {
         })?;
         step("edge_emit", &|e| {
             e.copy_buffer_to_buffer(
-                &self.coarse_records,
+                &self.buffers.coarse_records,
                 0,
-                &self.records,
+                &self.buffers.records,
                 0,
                 l.coarse_vertices as u64 * std::mem::size_of::<VertexRecord>() as u64,
             );
@@ -678,12 +707,12 @@ impl BezierStage {
             pass(e, &|ps| {
                 ps.set_pipeline(&p.vertex_eval.pipeline);
                 ps.set_bind_group(0, &bg.vertex_eval, &[]);
-                ps.dispatch_workgroups_indirect(&self.status, 16);
+                ps.dispatch_workgroups_indirect(&self.buffers.status, 16);
             });
             e.copy_buffer_to_buffer(
-                &self.status,
+                &self.buffers.status,
                 0,
-                &self.status_readback,
+                &self.buffers.status_readback,
                 0,
                 std::mem::size_of::<BezierStatus>() as u64,
             );
@@ -693,7 +722,7 @@ impl BezierStage {
 
     /// Reads what the last submitted run needed (waits for the GPU).
     pub fn read_status(&self, device: &wgpu::Device) -> Result<BezierStatus> {
-        let bytes = map_read(device, &self.status_readback)?;
+        let bytes = map_read(device, &self.buffers.status_readback)?;
         Ok(*bytemuck::from_bytes(&bytes))
     }
 
@@ -710,13 +739,13 @@ impl BezierStage {
                 have
             }
         };
-        let vertices = grow(status.vertices, self.output.vertex_capacity);
-        let indices = grow(status.indices, self.output.index_capacity);
-        self.output = MeshBuffers::with_capacity(device, vertices, indices);
-        self.records = storage(
+        let vertices = grow(status.vertices, self.buffers.output.vertex_capacity);
+        let indices = grow(status.indices, self.buffers.output.index_capacity);
+        self.buffers.output = MeshBuffers::with_capacity(device, vertices, indices);
+        self.buffers.records = storage(
             device,
             "tessera vertex records",
-            self.output.vertex_capacity as u64 * std::mem::size_of::<VertexRecord>() as u64,
+            self.buffers.output.vertex_capacity as u64 * std::mem::size_of::<VertexRecord>() as u64,
         );
         self.rebind(device);
         true
@@ -759,8 +788,8 @@ impl BezierStage {
         }
         let vsize = status.vertices as u64 * std::mem::size_of::<OutVertex>() as u64;
         let isize = status.indices as u64 * 4;
-        let vertices = read_buffer(device, queue, &self.output.vertices, vsize)?;
-        let indices = read_buffer(device, queue, &self.output.indices, isize)?;
+        let vertices = read_buffer(device, queue, &self.buffers.output.vertices, vsize)?;
+        let indices = read_buffer(device, queue, &self.buffers.output.indices, isize)?;
         Ok(Mesh {
             vertices: bytemuck::pod_collect_to_vec(&vertices),
             indices: bytemuck::pod_collect_to_vec(&indices),
@@ -784,9 +813,9 @@ impl BezierStage {
         };
         let (points_words, pole_words) = self.words_per_triangle();
         Ok(Intermediates {
-            edge_bits: words(&self.edge_bits)?,
-            counts: words(&self.counts)?,
-            scratch: words(&self.scratch)?,
+            edge_bits: words(&self.buffers.edge_bits)?,
+            counts: words(&self.buffers.counts)?,
+            scratch: words(&self.buffers.scratch)?,
             points_words,
             pole_words,
         })
@@ -873,28 +902,4 @@ fn read_buffer(
     encoder.copy_buffer_to_buffer(buffer, 0, &staging, 0, size);
     queue.submit([encoder.finish()]);
     map_read(device, &staging)
-}
-
-/// Bind groups before the buffers exist: never dispatched, replaced by `rebind`.
-fn placeholder_bind_groups(device: &wgpu::Device) -> BindGroups {
-    let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-        label: None,
-        entries: &[],
-    });
-    let empty = || {
-        device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: None,
-            layout: &layout,
-            entries: &[],
-        })
-    };
-    BindGroups {
-        edge_decide: empty(),
-        tri_mark: empty(),
-        scan: Vec::new(),
-        finish: empty(),
-        edge_emit: empty(),
-        tri_emit: empty(),
-        vertex_eval: empty(),
-    }
 }

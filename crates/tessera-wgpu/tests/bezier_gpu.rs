@@ -274,3 +274,26 @@ fn an_invalid_threshold_is_an_error_not_a_panic() {
     };
     assert!(BezierStage::new(&gpu.device, &prep, &deep).is_err());
 }
+
+#[test]
+fn changing_the_depth_resizes_the_scratch_and_matches_the_cpu() {
+    let gpu = gpu();
+    let prep = model("teacup");
+    let mut params = AdaptiveParams {
+        test: EdgeTest::Map4p,
+        threshold: 0.004,
+        max_depth: 3,
+    };
+    let mut stage = BezierStage::new(&gpu.device, &prep, &params).expect("stage");
+    for depth in [3, 7, 2] {
+        params.max_depth = depth;
+        stage.set_params(&gpu.device, &params).expect("params");
+        let status = stage.run_blocking(&gpu.device, &gpu.queue).expect("run");
+        let mesh = stage
+            .read_mesh(&gpu.device, &gpu.queue, &status)
+            .expect("mesh");
+        let cpu = tessellate_adaptive(&prep, &params).expect("cpu").mesh;
+        assert_eq!(mesh.indices, cpu.indices, "depth {depth}: topology");
+    }
+    gpu.check().expect("no wgpu validation errors");
+}

@@ -304,8 +304,8 @@ fn teapot_tessellated_on_the_gpu_matches_the_wireframe_snapshot() {
         max_depth: AdaptiveParams::DEFAULT_MAX_DEPTH,
     };
     let prepared = PreparedBezier::new(&model);
-    let mut stage = tessera_wgpu::bezier::BezierStage::new(&gpu.device, &prepared, &params)
-        .expect("stage");
+    let mut stage =
+        tessera_wgpu::bezier::BezierStage::new(&gpu.device, &prepared, &params).expect("stage");
     stage
         .run_blocking(&gpu.device, &gpu.queue)
         .expect("stage runs");
@@ -314,8 +314,8 @@ fn teapot_tessellated_on_the_gpu_matches_the_wireframe_snapshot() {
         .expect("cpu")
         .mesh
         .bounds();
-    let img = render_to_rgba(&gpu, stage.output(), bounds, WIDTH, HEIGHT, &wireframe())
-        .expect("render");
+    let img =
+        render_to_rgba(&gpu, stage.output(), bounds, WIDTH, HEIGHT, &wireframe()).expect("render");
     gpu.check().expect("no wgpu errors");
     assert_snapshot("teapot_wireframe", &img);
 }
