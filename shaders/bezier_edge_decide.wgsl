@@ -15,6 +15,7 @@
 @group(0) @binding(4) var<storage, read> curves: array<GpuCurve>;
 @group(0) @binding(6) var<storage, read_write> edge_bits: array<u32>;
 @group(0) @binding(7) var<storage, read_write> counts: array<u32>;
+@group(0) @binding(14) var<storage, read_write> evaluations: atomic<u32>;
 
 struct Piece {
     lo: u32,
@@ -86,4 +87,7 @@ fn main(@builtin(global_invocation_id) gid: vec3u, @builtin(num_workgroups) grou
         count += countOneBits(bits[w]);
     }
     counts[e] = count;
+    if flat_evaluations > 0u {
+        atomicAdd(&evaluations, flat_evaluations);
+    }
 }

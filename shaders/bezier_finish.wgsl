@@ -7,6 +7,7 @@
 @group(0) @binding(7) var<storage, read> counts: array<u32>;
 @group(0) @binding(12) var<storage, read_write> draw_args: DrawIndexedIndirectArgs;
 @group(0) @binding(13) var<storage, read_write> status: BezierStatus;
+@group(0) @binding(14) var<storage, read> evaluations: u32;
 
 const VERTEX_WORKGROUP: u32 = 64u;
 const MAX_GROUPS_X: u32 = 32768u;
@@ -31,6 +32,7 @@ fn main() {
     status.indices = indices;
     status.overflow = overflow;
     status.edge_vertices = edge_vertices;
+    status.evaluations = evaluations + vertices;
     let groups = select((vertices + VERTEX_WORKGROUP - 1u) / VERTEX_WORKGROUP, 0u, overflow != 0u);
     status.dispatch_x = min(groups, MAX_GROUPS_X);
     status.dispatch_y = (groups + MAX_GROUPS_X - 1u) / MAX_GROUPS_X;

@@ -17,6 +17,7 @@
 @group(0) @binding(4) var<storage, read> curves: array<GpuCurve>;
 @group(0) @binding(6) var<storage, read> edge_bits: array<u32>;
 @group(0) @binding(7) var<storage, read_write> counts: array<u32>;
+@group(0) @binding(14) var<storage, read_write> evaluations: atomic<u32>;
 @group(0) @binding(8) var<storage, read_write> scratch: array<u32>;
 
 // The counting sink: any injective numbering of inner points will do.
@@ -66,6 +67,9 @@ fn main(@builtin(global_invocation_id) gid: vec3u, @builtin(num_workgroups) grou
         scratch[c.points_base + w] = 0u;
     }
     tri_mark(c);
+    if flat_evaluations > 0u {
+        atomicAdd(&evaluations, flat_evaluations);
+    }
     triangles = 0u;
     tri_triangles(c);
     counts[params.coarse_edges + t] = inner_count(c);

@@ -122,8 +122,12 @@ fn map_test(test: u32, p: u32, th: f32, uv1: vec2f, uv2: vec2f) -> bool {
 
 // The edge test on uv1 → uv2 (twin of `segment_test`): map tests read the map; the
 // flat test compares the surface midpoint with the chord midpoint.
+// Surface evaluations this invocation made (the kernel adds them to `evaluations`).
+var<private> flat_evaluations: u32;
+
 fn segment_test(test: u32, p: u32, th: f32, uv1: vec2f, uv2: vec2f) -> bool {
     if test == TEST_FLAT {
+        flat_evaluations += 3u;
         let m = vec2f((uv1.x + uv2.x) * 0.5, (uv1.y + uv2.y) * 0.5);
         let chord = (eval_frame(p, uv1.x, uv1.y).pos + eval_frame(p, uv2.x, uv2.y).pos) * 0.5;
         return length(eval_frame(p, m.x, m.y).pos - chord) > th;

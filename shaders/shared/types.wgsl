@@ -93,7 +93,8 @@ struct BezierStatus {
     dispatch_x: u32,
     dispatch_y: u32,
     dispatch_z: u32,
-    _pad: u32,
+    // The flat test's evaluations plus one per vertex (twin of `Tessellation::evaluations`).
+    evaluations: u32,
 }
 
 @group(0) @binding(0) var<uniform> params: BezierParams;

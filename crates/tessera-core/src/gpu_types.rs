@@ -179,7 +179,8 @@ pub struct BezierStatus {
     pub overflow: u32,
     pub edge_vertices: u32,
     pub dispatch: [u32; 3],
-    pub _pad: u32,
+    /// Surface evaluations: the flat test's (3 per tested chord) plus one per vertex.
+    pub evaluations: u32,
 }
 
 /// Bytes uploaded per patch and once per model for the map-based tessellator.

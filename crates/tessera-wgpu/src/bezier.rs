@@ -85,6 +85,7 @@ mod slot {
     pub const INDICES: u32 = 11;
     pub const DRAW_ARGS: u32 = 12;
     pub const STATUS: u32 = 13;
+    pub const EVALUATIONS: u32 = 14;
 }
 
 /// A compute pipeline and the bindings its entry point uses.
@@ -193,7 +194,11 @@ impl BindGroups {
                 &with(
                     &model,
                     &all_model,
-                    &[(EDGE_BITS, &b.edge_bits), (COUNTS, &b.counts)],
+                    &[
+                        (EDGE_BITS, &b.edge_bits),
+                        (COUNTS, &b.counts),
+                        (EVALUATIONS, &b.evaluations),
+                    ],
                 ),
             ),
             tri_mark: bind(
@@ -206,6 +211,7 @@ impl BindGroups {
                         (EDGE_BITS, &b.edge_bits),
                         (COUNTS, &b.counts),
                         (SCRATCH, &b.scratch),
+                        (EVALUATIONS, &b.evaluations),
                     ],
                 ),
             ),
@@ -220,6 +226,7 @@ impl BindGroups {
                         (COUNTS, &b.counts),
                         (DRAW_ARGS, &b.output.indirect),
                         (STATUS, &b.status),
+                        (EVALUATIONS, &b.evaluations),
                     ],
                 ),
             ),
@@ -295,6 +302,8 @@ struct Buffers {
     records: wgpu::Buffer,
     status: wgpu::Buffer,
     status_readback: wgpu::Buffer,
+    /// The flat test's evaluations (an atomic counter, zeroed each run).
+    evaluations: wgpu::Buffer,
     output: MeshBuffers,
 }
 
@@ -471,6 +480,7 @@ impl BezierStage {
             ),
             status,
             status_readback,
+            evaluations: storage(device, "tessera evaluation counter", 4),
             output,
         };
         Ok(BezierStage {
@@ -555,6 +565,7 @@ impl BezierStage {
         let counts_len = l.coarse_edges + 2 * l.coarse_triangles + 1;
         // The scan's trailing slot collects the grand total: zero it each run.
         encoder.clear_buffer(&self.buffers.counts, 4 * (counts_len as u64 - 1), Some(4));
+        encoder.clear_buffer(&self.buffers.evaluations, 0, None);
         let bg = &self.bind_groups;
         let p = &*self.pipelines.0;
         {
@@ -659,6 +670,7 @@ impl BezierStage {
         };
         step("edge_decide", &|e| {
             e.clear_buffer(&self.buffers.counts, 4 * (counts_len as u64 - 1), Some(4));
+            e.clear_buffer(&self.buffers.evaluations, 0, None);
             pass(e, &|ps| {
                 dispatch(
                     ps,

@@ -156,8 +156,13 @@ fn gpu_matches_the_cpu_reference_on_every_shipped_model() {
             let mesh = stage
                 .read_mesh(&gpu.device, &gpu.queue, &status)
                 .expect("mesh");
-            let cpu = tessellate_adaptive(&prep, &params).expect("cpu").mesh;
+            let cpu_run = tessellate_adaptive(&prep, &params).expect("cpu");
             let what = format!("{name} {}", test.name());
+            assert_eq!(
+                status.evaluations as u64, cpu_run.evaluations,
+                "{what}: evaluations"
+            );
+            let cpu = cpu_run.mesh;
             assert_eq!(
                 mesh.triangle_count(),
                 cpu.triangle_count(),
