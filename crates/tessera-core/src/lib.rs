@@ -21,6 +21,7 @@ pub mod gpu_types;
 pub mod io;
 pub mod measure;
 pub mod mesh;
+pub mod scan;
 pub mod watertight;
 pub mod weld;
 

@@ -46,8 +46,9 @@ use tessera_core::Mesh;
 use wgpu::util::DeviceExt;
 
 use crate::error::{Error, Result};
+use crate::kernel::{storage, Kernel};
 use crate::output::MeshBuffers;
-use crate::shaders;
+use crate::scan::{PrefixSum, ScanKernels};
 
 /// Limits the stage needs, within what `adapter` offers: large storage buffers for big
 /// models; no more than 8 storage buffers per kernel, so WebGPU's defaults suffice there.
@@ -60,15 +61,6 @@ pub fn required_limits(adapter: &wgpu::Limits) -> wgpu::Limits {
 }
 
 const WORKGROUP: u32 = 64;
-const SCAN_BLOCK: u32 = 512;
-const MAX_GROUPS_X: u32 = 32768;
-
-/// Workgroups for `items` invocations, as (x, y) within the per-dimension limit; the
-/// kernels fold `y` back in.
-fn groups_2d(items: u32, per_group: u32) -> (u32, u32) {
-    let g = items.div_ceil(per_group);
-    (g.min(MAX_GROUPS_X), g.div_ceil(MAX_GROUPS_X).max(1))
-}
 
 /// Binding numbers shared by every Bézier kernel (see `shaders/shared/types.wgsl`).
 mod slot {
@@ -88,12 +80,6 @@ mod slot {
     pub const EVALUATIONS: u32 = 14;
 }
 
-/// A compute pipeline and the bindings its entry point uses.
-struct Kernel {
-    pipeline: wgpu::ComputePipeline,
-    bindings: Vec<u32>,
-}
-
 /// The compiled Bézier kernels of one device. Compiling them is the slow part of
 /// creating a stage (seconds on a CPU driver), so stages can share one set.
 #[derive(Clone)]
@@ -108,8 +94,7 @@ impl BezierKernels {
 struct Pipelines {
     edge_decide: Kernel,
     tri_mark: Kernel,
-    scan_blocks: Kernel,
-    add_offsets: Kernel,
+    scan: ScanKernels,
     finish: Kernel,
     edge_emit: Kernel,
     tri_emit: Kernel,
@@ -118,45 +103,22 @@ struct Pipelines {
 
 impl Pipelines {
     fn new(device: &wgpu::Device) -> Self {
-        let make = |file: &str, entry: &str| {
-            let module = shaders::module(device, file);
-            Kernel {
-                pipeline: device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                    label: Some(file),
-                    layout: None,
-                    module: &module,
-                    entry_point: Some(entry),
-                    compilation_options: Default::default(),
-                    cache: None,
-                }),
-                bindings: shaders::used_bindings(file, entry),
-            }
-        };
+        let make = |file: &str| Kernel::new(device, file, "main");
         Pipelines {
-            edge_decide: make("bezier_edge_decide.wgsl", "main"),
-            tri_mark: make("bezier_tri_mark.wgsl", "main"),
-            scan_blocks: make("scan.wgsl", "scan_blocks"),
-            add_offsets: make("scan.wgsl", "add_offsets"),
-            finish: make("bezier_finish.wgsl", "main"),
-            edge_emit: make("bezier_edge_emit.wgsl", "main"),
-            tri_emit: make("bezier_tri_emit.wgsl", "main"),
-            vertex_eval: make("bezier_vertex_eval.wgsl", "main"),
+            edge_decide: make("bezier_edge_decide.wgsl"),
+            tri_mark: make("bezier_tri_mark.wgsl"),
+            scan: ScanKernels::new(device),
+            finish: make("bezier_finish.wgsl"),
+            edge_emit: make("bezier_edge_emit.wgsl"),
+            tri_emit: make("bezier_tri_emit.wgsl"),
+            vertex_eval: make("bezier_vertex_eval.wgsl"),
         }
     }
-}
-
-/// One level of the multi-level scan: `data` is scanned per block, block totals go to
-/// `sums` (the next level's data).
-struct ScanLevel {
-    n: u32,
-    uniform: wgpu::Buffer,
-    sums: wgpu::Buffer,
 }
 
 struct BindGroups {
     edge_decide: wgpu::BindGroup,
     tri_mark: wgpu::BindGroup,
-    scan: Vec<(wgpu::BindGroup, wgpu::BindGroup)>,
     finish: wgpu::BindGroup,
     edge_emit: wgpu::BindGroup,
     tri_emit: wgpu::BindGroup,
@@ -174,23 +136,9 @@ impl BindGroups {
             (CURVES, &b.curves),
         ];
         let all_model = [PARAMS, PATCHES, MAPS, TOPO, CURVES];
-        let mut scan = Vec::new();
-        for (k, level) in b.scan_levels.iter().enumerate() {
-            let data = if k == 0 {
-                &b.counts
-            } else {
-                &b.scan_levels[k - 1].sums
-            };
-            let entries = [(0, &level.uniform), (1, data), (2, &level.sums)];
-            scan.push((
-                bind(device, &p.scan_blocks, &entries),
-                bind(device, &p.add_offsets, &entries),
-            ));
-        }
         BindGroups {
-            edge_decide: bind(
+            edge_decide: p.edge_decide.bind(
                 device,
-                &p.edge_decide,
                 &with(
                     &model,
                     &all_model,
@@ -201,9 +149,8 @@ impl BindGroups {
                     ],
                 ),
             ),
-            tri_mark: bind(
+            tri_mark: p.tri_mark.bind(
                 device,
-                &p.tri_mark,
                 &with(
                     &model,
                     &all_model,
@@ -215,10 +162,8 @@ impl BindGroups {
                     ],
                 ),
             ),
-            scan,
-            finish: bind(
+            finish: p.finish.bind(
                 device,
-                &p.finish,
                 &with(
                     &model,
                     &[PARAMS],
@@ -230,9 +175,8 @@ impl BindGroups {
                     ],
                 ),
             ),
-            edge_emit: bind(
+            edge_emit: p.edge_emit.bind(
                 device,
-                &p.edge_emit,
                 &with(
                     &model,
                     &[PARAMS, TOPO, CURVES],
@@ -244,9 +188,8 @@ impl BindGroups {
                     ],
                 ),
             ),
-            tri_emit: bind(
+            tri_emit: p.tri_emit.bind(
                 device,
-                &p.tri_emit,
                 &with(
                     &model,
                     &all_model,
@@ -260,9 +203,8 @@ impl BindGroups {
                     ],
                 ),
             ),
-            vertex_eval: bind(
+            vertex_eval: p.vertex_eval.bind(
                 device,
-                &p.vertex_eval,
                 &with(
                     &model,
                     &[PATCHES, TOPO],
@@ -297,7 +239,7 @@ struct Buffers {
     coarse_records: wgpu::Buffer,
     edge_bits: wgpu::Buffer,
     counts: wgpu::Buffer,
-    scan_levels: Vec<ScanLevel>,
+    scan: PrefixSum,
     scratch: wgpu::Buffer,
     records: wgpu::Buffer,
     status: wgpu::Buffer,
@@ -321,17 +263,6 @@ fn scratch_buffer(device: &wgpu::Device, depth: u32, coarse_triangles: u32) -> w
     storage(device, "tessera triangle scratch", 4 * words)
 }
 
-fn storage(device: &wgpu::Device, label: &str, size: u64) -> wgpu::Buffer {
-    device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some(label),
-        size: size.max(4),
-        usage: wgpu::BufferUsages::STORAGE
-            | wgpu::BufferUsages::COPY_SRC
-            | wgpu::BufferUsages::COPY_DST,
-        mapped_at_creation: false,
-    })
-}
-
 fn upload(device: &wgpu::Device, label: &str, bytes: &[u8]) -> wgpu::Buffer {
     let padded;
     let contents = if bytes.is_empty() {
@@ -344,27 +275,6 @@ fn upload(device: &wgpu::Device, label: &str, bytes: &[u8]) -> wgpu::Buffer {
         label: Some(label),
         contents,
         usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
-    })
-}
-
-/// A bind group of the buffers in `entries` that `kernel` uses.
-fn bind(
-    device: &wgpu::Device,
-    kernel: &Kernel,
-    entries: &[(u32, &wgpu::Buffer)],
-) -> wgpu::BindGroup {
-    let entries: Vec<wgpu::BindGroupEntry> = entries
-        .iter()
-        .filter(|(binding, _)| kernel.bindings.contains(binding))
-        .map(|(binding, buffer)| wgpu::BindGroupEntry {
-            binding: *binding,
-            resource: buffer.as_entire_binding(),
-        })
-        .collect();
-    device.create_bind_group(&wgpu::BindGroupDescriptor {
-        label: None,
-        layout: &kernel.pipeline.get_bind_group_layout(0),
-        entries: &entries,
     })
 }
 
@@ -401,25 +311,9 @@ impl BezierStage {
         params.validate()?;
         let l = prepared.layout;
         let counts_len = l.coarse_edges + 2 * l.coarse_triangles + 1;
-        let mut scan_levels = Vec::new();
-        let mut n = counts_len;
-        loop {
-            let blocks = n.div_ceil(SCAN_BLOCK);
-            scan_levels.push(ScanLevel {
-                n,
-                uniform: device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                    label: Some("tessera scan params"),
-                    contents: bytemuck::bytes_of(&[n, 0, 0, 0]),
-                    usage: wgpu::BufferUsages::UNIFORM,
-                }),
-                sums: storage(device, "tessera scan sums", 4 * blocks as u64),
-            });
-            if blocks == 1 {
-                break;
-            }
-            n = blocks;
-        }
         let pipelines = kernels.clone();
+        let counts = storage(device, "tessera counts", 4 * counts_len as u64);
+        let scan = PrefixSum::new(device, &pipelines.0.scan, &counts, counts_len);
         let uniform = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("tessera bezier params"),
             size: std::mem::size_of::<BezierParams>() as u64,
@@ -470,8 +364,8 @@ impl BezierStage {
                 "tessera edge bits",
                 4 * (EDGE_BIT_WORDS as u64) * l.coarse_edges as u64,
             ),
-            counts: storage(device, "tessera counts", 4 * counts_len as u64),
-            scan_levels,
+            counts,
+            scan,
             scratch: scratch_buffer(device, params.max_depth, l.coarse_triangles),
             records: storage(
                 device,
@@ -573,27 +467,12 @@ impl BezierStage {
                 label: Some("tessera bezier decide"),
                 timestamp_writes: None,
             });
-            dispatch(
-                &mut pass,
-                &p.edge_decide,
-                &bg.edge_decide,
-                l.coarse_edges,
-                WORKGROUP,
-            );
-            dispatch(
-                &mut pass,
-                &p.tri_mark,
-                &bg.tri_mark,
-                l.coarse_triangles,
-                WORKGROUP,
-            );
-            for (level, (blocks, _)) in self.buffers.scan_levels.iter().zip(&bg.scan) {
-                dispatch(&mut pass, &p.scan_blocks, blocks, level.n, SCAN_BLOCK);
-            }
-            for (level, (_, add)) in self.buffers.scan_levels.iter().zip(&bg.scan).rev().skip(1) {
-                dispatch(&mut pass, &p.add_offsets, add, level.n, SCAN_BLOCK);
-            }
-            dispatch(&mut pass, &p.finish, &bg.finish, 1, 1);
+            p.edge_decide
+                .dispatch(&mut pass, &bg.edge_decide, l.coarse_edges, WORKGROUP);
+            p.tri_mark
+                .dispatch(&mut pass, &bg.tri_mark, l.coarse_triangles, WORKGROUP);
+            self.buffers.scan.record(&mut pass, &p.scan);
+            p.finish.dispatch(&mut pass, &bg.finish, 1, 1);
         }
         encoder.copy_buffer_to_buffer(
             &self.buffers.coarse_records,
@@ -607,20 +486,10 @@ impl BezierStage {
                 label: Some("tessera bezier emit"),
                 timestamp_writes: None,
             });
-            dispatch(
-                &mut pass,
-                &p.edge_emit,
-                &bg.edge_emit,
-                l.coarse_edges,
-                WORKGROUP,
-            );
-            dispatch(
-                &mut pass,
-                &p.tri_emit,
-                &bg.tri_emit,
-                l.coarse_triangles,
-                WORKGROUP,
-            );
+            p.edge_emit
+                .dispatch(&mut pass, &bg.edge_emit, l.coarse_edges, WORKGROUP);
+            p.tri_emit
+                .dispatch(&mut pass, &bg.tri_emit, l.coarse_triangles, WORKGROUP);
             pass.set_pipeline(&p.vertex_eval.pipeline);
             pass.set_bind_group(0, &bg.vertex_eval, &[]);
             pass.dispatch_workgroups_indirect(&self.buffers.status, 16);
@@ -672,30 +541,20 @@ impl BezierStage {
             e.clear_buffer(&self.buffers.counts, 4 * (counts_len as u64 - 1), Some(4));
             e.clear_buffer(&self.buffers.evaluations, 0, None);
             pass(e, &|ps| {
-                dispatch(
-                    ps,
-                    &p.edge_decide,
-                    &bg.edge_decide,
-                    l.coarse_edges,
-                    WORKGROUP,
-                )
+                p.edge_decide
+                    .dispatch(ps, &bg.edge_decide, l.coarse_edges, WORKGROUP)
             });
         })?;
         step("tri_mark", &|e| {
             pass(e, &|ps| {
-                dispatch(ps, &p.tri_mark, &bg.tri_mark, l.coarse_triangles, WORKGROUP)
+                p.tri_mark
+                    .dispatch(ps, &bg.tri_mark, l.coarse_triangles, WORKGROUP)
             });
         })?;
         step("scan+finish", &|e| {
             pass(e, &|ps| {
-                for (level, (blocks, _)) in self.buffers.scan_levels.iter().zip(&bg.scan) {
-                    dispatch(ps, &p.scan_blocks, blocks, level.n, SCAN_BLOCK);
-                }
-                for (level, (_, add)) in self.buffers.scan_levels.iter().zip(&bg.scan).rev().skip(1)
-                {
-                    dispatch(ps, &p.add_offsets, add, level.n, SCAN_BLOCK);
-                }
-                dispatch(ps, &p.finish, &bg.finish, 1, 1);
+                self.buffers.scan.record(ps, &p.scan);
+                p.finish.dispatch(ps, &bg.finish, 1, 1);
             });
         })?;
         step("edge_emit", &|e| {
@@ -707,12 +566,14 @@ impl BezierStage {
                 l.coarse_vertices as u64 * std::mem::size_of::<VertexRecord>() as u64,
             );
             pass(e, &|ps| {
-                dispatch(ps, &p.edge_emit, &bg.edge_emit, l.coarse_edges, WORKGROUP)
+                p.edge_emit
+                    .dispatch(ps, &bg.edge_emit, l.coarse_edges, WORKGROUP)
             });
         })?;
         step("tri_emit", &|e| {
             pass(e, &|ps| {
-                dispatch(ps, &p.tri_emit, &bg.tri_emit, l.coarse_triangles, WORKGROUP)
+                p.tri_emit
+                    .dispatch(ps, &bg.tri_emit, l.coarse_triangles, WORKGROUP)
             });
         })?;
         step("vertex_eval", &|e| {
@@ -858,22 +719,6 @@ fn with<'a>(
         .chain(extra)
         .copied()
         .collect()
-}
-
-fn dispatch(
-    pass: &mut wgpu::ComputePass,
-    kernel: &Kernel,
-    bind_group: &wgpu::BindGroup,
-    items: u32,
-    per_group: u32,
-) {
-    if items == 0 {
-        return;
-    }
-    let (x, y) = groups_2d(items, per_group);
-    pass.set_pipeline(&kernel.pipeline);
-    pass.set_bind_group(0, bind_group, &[]);
-    pass.dispatch_workgroups(x, y, 1);
 }
 
 fn map_read(device: &wgpu::Device, buffer: &wgpu::Buffer) -> Result<Vec<u8>> {

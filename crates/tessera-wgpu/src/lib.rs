@@ -15,6 +15,7 @@
 //! | [`headless`] | device creation without a window, readback |
 //! | [`image_out`] | offscreen rendering to an RGBA image, PNG files |
 //! | [`snapshot`] | image comparison with a perceptual tolerance, for snapshot tests |
+//! | [`scan`] | the GPU exclusive prefix sum the stages use |
 //! | [`shaders`] | the WGSL sources with their shared includes resolved |
 
 pub use tessera_core;
@@ -27,8 +28,10 @@ pub mod bezier;
 pub mod error;
 pub mod headless;
 pub mod image_out;
+mod kernel;
 pub mod output;
 pub mod render;
+pub mod scan;
 pub mod shaders;
 pub mod snapshot;
 

@@ -29,6 +29,7 @@ use super::refine::{
 use crate::error::{Error, Result};
 use crate::gpu_types::{OutVertex, VertexRecord, EDGE_BIT_WORDS, MAX_DEPTH_LIMIT};
 use crate::mesh::Mesh;
+pub use crate::scan::exclusive_scan;
 
 /// Parameters of the adaptive (map or flat) tessellator.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -133,17 +134,6 @@ pub fn edge_decide(
         }
         (false, evals)
     })
-}
-
-/// Exclusive prefix sum; returns the total. (On the GPU: `scan.wgsl`.)
-pub fn exclusive_scan(values: &mut [u32]) -> u32 {
-    let mut sum = 0u32;
-    for v in values {
-        let x = *v;
-        *v = sum;
-        sum += x;
-    }
-    sum
 }
 
 /// What the triangle stages of coarse triangle `t` read.

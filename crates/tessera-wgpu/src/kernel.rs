@@ -1,0 +1,83 @@
+//! What every compute stage shares: compiling a kernel with the bindings its entry point
+//! uses, binding buffers by number, and dispatching any number of invocations.
+
+use crate::shaders;
+
+/// Largest x dimension dispatched; larger counts spill into y (kernels fold it back).
+pub(crate) const MAX_GROUPS_X: u32 = 32768;
+
+/// A compute pipeline and the bindings (group 0) its entry point uses.
+pub(crate) struct Kernel {
+    pub pipeline: wgpu::ComputePipeline,
+    pub bindings: Vec<u32>,
+}
+
+impl Kernel {
+    /// Compiles entry point `entry` of shader file `file` with a derived layout.
+    pub fn new(device: &wgpu::Device, file: &str, entry: &str) -> Self {
+        let module = shaders::module(device, file);
+        Kernel {
+            pipeline: device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                label: Some(file),
+                layout: None,
+                module: &module,
+                entry_point: Some(entry),
+                compilation_options: Default::default(),
+                cache: None,
+            }),
+            bindings: shaders::used_bindings(file, entry),
+        }
+    }
+
+    /// A bind group of those `entries` this kernel uses.
+    pub fn bind(&self, device: &wgpu::Device, entries: &[(u32, &wgpu::Buffer)]) -> wgpu::BindGroup {
+        let entries: Vec<wgpu::BindGroupEntry> = entries
+            .iter()
+            .filter(|(binding, _)| self.bindings.contains(binding))
+            .map(|(binding, buffer)| wgpu::BindGroupEntry {
+                binding: *binding,
+                resource: buffer.as_entire_binding(),
+            })
+            .collect();
+        device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: None,
+            layout: &self.pipeline.get_bind_group_layout(0),
+            entries: &entries,
+        })
+    }
+
+    /// Dispatches enough workgroups of `per_group` items for `items` items.
+    pub fn dispatch(
+        &self,
+        pass: &mut wgpu::ComputePass,
+        bind_group: &wgpu::BindGroup,
+        items: u32,
+        per_group: u32,
+    ) {
+        if items == 0 {
+            return;
+        }
+        let (x, y) = groups_2d(items, per_group);
+        pass.set_pipeline(&self.pipeline);
+        pass.set_bind_group(0, bind_group, &[]);
+        pass.dispatch_workgroups(x, y, 1);
+    }
+}
+
+/// Workgroups for `items` invocations, as (x, y) within the per-dimension limit.
+pub(crate) fn groups_2d(items: u32, per_group: u32) -> (u32, u32) {
+    let g = items.div_ceil(per_group);
+    (g.min(MAX_GROUPS_X), g.div_ceil(MAX_GROUPS_X).max(1))
+}
+
+/// A storage buffer the kernels write and tests can copy.
+pub(crate) fn storage(device: &wgpu::Device, label: &str, size: u64) -> wgpu::Buffer {
+    device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some(label),
+        size: size.max(4),
+        usage: wgpu::BufferUsages::STORAGE
+            | wgpu::BufferUsages::COPY_SRC
+            | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    })
+}

@@ -1,0 +1,86 @@
+//! Exclusive prefix sum of `u32` on the GPU, in place, over any length: blocks of 512
+//! values per workgroup, their totals scanned the same way level by level, then added
+//! back. CPU twin: [`tessera_core::scan`].
+
+use tessera_core::scan::SCAN_BLOCK;
+use wgpu::util::DeviceExt;
+
+use crate::kernel::{storage, Kernel};
+
+/// The two scan kernels of one device.
+pub struct ScanKernels {
+    scan_blocks: Kernel,
+    add_offsets: Kernel,
+}
+
+impl ScanKernels {
+    pub fn new(device: &wgpu::Device) -> Self {
+        ScanKernels {
+            scan_blocks: Kernel::new(device, "scan.wgsl", "scan_blocks"),
+            add_offsets: Kernel::new(device, "scan.wgsl", "add_offsets"),
+        }
+    }
+}
+
+/// One level: `n` values scanned per block, block totals to `sums` (the next level).
+struct Level {
+    n: u32,
+    blocks: wgpu::BindGroup,
+    add: wgpu::BindGroup,
+    // Kept alive for the bind groups.
+    _uniform: wgpu::Buffer,
+    _sums: wgpu::Buffer,
+}
+
+/// A scan of the first `n` values of one buffer, recorded as many times as needed.
+pub struct PrefixSum {
+    levels: Vec<Level>,
+}
+
+impl PrefixSum {
+    /// Plans the scan of the first `n` `u32` of `data` (which needs `STORAGE` usage).
+    pub fn new(device: &wgpu::Device, kernels: &ScanKernels, data: &wgpu::Buffer, n: u32) -> Self {
+        let block = SCAN_BLOCK as u32;
+        let mut levels: Vec<Level> = Vec::new();
+        let mut n = n;
+        loop {
+            let count = n.div_ceil(block).max(1);
+            let uniform = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("tessera scan params"),
+                contents: bytemuck::bytes_of(&[n, 0u32, 0, 0]),
+                usage: wgpu::BufferUsages::UNIFORM,
+            });
+            let sums = storage(device, "tessera scan sums", 4 * count as u64);
+            let input = levels.last().map_or(data, |l| &l._sums);
+            let entries = [(0, &uniform), (1, input), (2, &sums)];
+            let level = Level {
+                n,
+                blocks: kernels.scan_blocks.bind(device, &entries),
+                add: kernels.add_offsets.bind(device, &entries),
+                _uniform: uniform,
+                _sums: sums,
+            };
+            levels.push(level);
+            if count == 1 {
+                return PrefixSum { levels };
+            }
+            n = count;
+        }
+    }
+
+    /// Records the scan into `pass`: every level's blocks upward, then the offsets back
+    /// down (the top level is a single block and needs none).
+    pub fn record(&self, pass: &mut wgpu::ComputePass, kernels: &ScanKernels) {
+        let block = SCAN_BLOCK as u32;
+        for level in &self.levels {
+            kernels
+                .scan_blocks
+                .dispatch(pass, &level.blocks, level.n, block);
+        }
+        for level in self.levels.iter().rev().skip(1) {
+            kernels
+                .add_offsets
+                .dispatch(pass, &level.add, level.n, block);
+        }
+    }
+}
