@@ -600,10 +600,11 @@ impl BezierStage {
     }
 
     /// Grows the output buffers to what `status` says the run needed (with headroom).
-    /// Returns whether anything was reallocated.
-    pub fn grow(&mut self, device: &wgpu::Device, status: &BezierStatus) -> bool {
+    /// Returns whether anything was reallocated, or an error when the device cannot hold
+    /// buffers that large (nothing is reallocated then).
+    pub fn grow(&mut self, device: &wgpu::Device, status: &BezierStatus) -> Result<bool> {
         if status.overflow == 0 {
-            return false;
+            return Ok(false);
         }
         let grow = |need: u32, have: u32| {
             if need > have {
@@ -614,6 +615,21 @@ impl BezierStage {
         };
         let vertices = grow(status.vertices, self.buffers.output.vertex_capacity);
         let indices = grow(status.indices, self.buffers.output.index_capacity);
+        let limits = device.limits();
+        let limit = limits
+            .max_buffer_size
+            .min(limits.max_storage_buffer_binding_size as u64);
+        for (what, bytes) in [
+            (
+                "vertex",
+                vertices as u64 * std::mem::size_of::<OutVertex>() as u64,
+            ),
+            ("index", indices as u64 * 4),
+        ] {
+            if bytes > limit {
+                return Err(Error::OutputTooLarge { what, bytes, limit });
+            }
+        }
         self.buffers.output = MeshBuffers::with_capacity(device, vertices, indices);
         self.buffers.records = storage(
             device,
@@ -621,7 +637,7 @@ impl BezierStage {
             self.buffers.output.vertex_capacity as u64 * std::mem::size_of::<VertexRecord>() as u64,
         );
         self.rebind(device);
-        true
+        Ok(true)
     }
 
     /// Runs the stage to completion on its own submission, growing and rerunning until
@@ -637,7 +653,7 @@ impl BezierStage {
             self.prepare(device, queue, &mut encoder);
             queue.submit([encoder.finish()]);
             let status = self.read_status(device)?;
-            if !self.grow(device, &status) {
+            if !self.grow(device, &status)? {
                 return Ok(status);
             }
         }

@@ -13,6 +13,13 @@ pub enum Error {
     /// wgpu reported a validation or out-of-memory error.
     #[error("wgpu error: {0}")]
     Wgpu(String),
+    /// A run needs an output buffer larger than the device allows.
+    #[error("the {what} buffer would need {bytes} bytes, over the device's limit of {limit}; raise the threshold or lower the depth")]
+    OutputTooLarge {
+        what: &'static str,
+        bytes: u64,
+        limit: u64,
+    },
     /// Waiting for the GPU or mapping a buffer failed.
     #[error("GPU readback failed: {0}")]
     Readback(String),

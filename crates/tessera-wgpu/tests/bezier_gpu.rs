@@ -249,7 +249,7 @@ fn tiny_capacities_overflow_cleanly_then_grow_to_the_same_mesh() {
     assert_eq!(idx, [0, 0, 0], "an overflowed run writes no index");
     assert!(tiny.read_mesh(&gpu.device, &gpu.queue, &status).is_err());
 
-    assert!(tiny.grow(&gpu.device, &status));
+    assert!(tiny.grow(&gpu.device, &status).expect("fits the device"));
     let grown = tiny.run_blocking(&gpu.device, &gpu.queue).expect("rerun");
     assert_eq!(grown.overflow, 0);
     let got = tiny
@@ -300,5 +300,31 @@ fn changing_the_depth_resizes_the_scratch_and_matches_the_cpu() {
         let cpu = tessellate_adaptive(&prep, &params).expect("cpu").mesh;
         assert_eq!(mesh.indices, cpu.indices, "depth {depth}: topology");
     }
+    gpu.check().expect("no wgpu validation errors");
+}
+
+#[test]
+fn growing_past_the_device_limits_is_an_error_not_a_wgpu_failure() {
+    let gpu = gpu();
+    let prep = model("teacup");
+    let params = AdaptiveParams {
+        test: EdgeTest::Map4p,
+        threshold: 0.01,
+        max_depth: 4,
+    };
+    let mut stage = BezierStage::new(&gpu.device, &prep, &params).expect("stage");
+    let impossible = tessera_core::gpu_types::BezierStatus {
+        vertices: u32::MAX / 2,
+        indices: 3,
+        overflow: 1,
+        ..Default::default()
+    };
+    let err = stage
+        .grow(&gpu.device, &impossible)
+        .expect_err("cannot fit");
+    assert!(err.to_string().contains("vertex buffer"), "{err}");
+    // The stage still works with the buffers it had.
+    let status = stage.run_blocking(&gpu.device, &gpu.queue).expect("run");
+    assert_eq!(status.overflow, 0);
     gpu.check().expect("no wgpu validation errors");
 }

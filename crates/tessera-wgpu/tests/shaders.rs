@@ -181,3 +181,44 @@ fn shared_structs_match_their_rust_twins() {
         .expect("overflow");
     assert_eq!(overflow.1 as usize, offset_of!(BezierStatus, overflow));
 }
+
+#[test]
+fn every_kernel_fits_webgpu_default_limits() {
+    // An embedding application may bring a device with WebGPU's default limits: at most
+    // 8 storage buffers per stage (and one bind group).
+    let default = wgpu::Limits::default().max_storage_buffers_per_shader_stage as usize;
+    for name in shaders::entry_files().filter(|n| *n != "render_mesh.wgsl") {
+        let (module, _) = parse(name);
+        for ep in &module.entry_points {
+            let used = shaders::used_bindings(name, &ep.name);
+            let storage = module
+                .global_variables
+                .iter()
+                .filter(|(_, g)| matches!(g.space, naga::AddressSpace::Storage { .. }))
+                .filter(|(_, g)| {
+                    g.binding
+                        .as_ref()
+                        .is_some_and(|b| used.contains(&b.binding))
+                })
+                .count();
+            eprintln!(
+                "{name} {}: {storage} storage buffers, bindings {used:?}",
+                ep.name
+            );
+            assert!(
+                storage <= default,
+                "{name} {} uses {storage} storage buffers, over the default {default}",
+                ep.name
+            );
+            let groups: Vec<u32> = module
+                .global_variables
+                .iter()
+                .filter_map(|(_, g)| g.binding.as_ref().map(|b| b.group))
+                .collect();
+            assert!(
+                groups.iter().all(|&g| g == 0),
+                "{name}: bind groups other than 0"
+            );
+        }
+    }
+}
