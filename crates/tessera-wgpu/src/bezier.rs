@@ -618,7 +618,7 @@ impl BezierStage {
         let limits = device.limits();
         let limit = limits
             .max_buffer_size
-            .min(limits.max_storage_buffer_binding_size as u64);
+            .min(limits.max_storage_buffer_binding_size);
         for (what, bytes) in [
             (
                 "vertex",
