@@ -25,7 +25,8 @@ fn main() {
     if vertices > params.vertex_capacity {
         overflow |= 1u;
     }
-    if indices > params.index_capacity {
+    // 3 × triangles must not wrap past u32 (the check would pass a wrapped count).
+    if indices > params.index_capacity || triangles > 0x55555555u {
         overflow |= 2u;
     }
     status.vertices = vertices;

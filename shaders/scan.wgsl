@@ -1,7 +1,7 @@
 // Exclusive prefix sum of u32, in place, one level of a multi-level scan (the host
 // records the levels). `scan_blocks`: each workgroup scans its block of
 // 2 × WORKGROUP values and writes the block's total to `sums`; `add_offsets` adds the
-// scanned block totals back. Twin of `tessera_core::bezier::tessellate::exclusive_scan`.
+// scanned block totals back. Twin of `tessera_core::scan::{scan_blocks, add_offsets}`.
 
 const WORKGROUP: u32 = 256u;
 const BLOCK: u32 = 2u * WORKGROUP;
@@ -55,7 +55,8 @@ fn scan_blocks(
     if i0 + 1u < scan.n {
         data[i0 + 1u] = before + a;
     }
-    if lid == WORKGROUP - 1u {
+    // Dispatches folded into two dimensions may carry whole groups past the last block.
+    if lid == WORKGROUP - 1u && block < arrayLength(&sums) {
         sums[block] = partial[lid];
     }
 }
@@ -67,6 +68,9 @@ fn add_offsets(
     @builtin(local_invocation_index) lid: u32,
 ) {
     let block = block_index(wg, groups);
+    if block >= arrayLength(&sums) {
+        return;
+    }
     let i0 = block * BLOCK + 2u * lid;
     let add = sums[block];
     if i0 < scan.n {

@@ -59,7 +59,7 @@ struct DrawIndexedIndirectArgs {
     first_instance: u32,
 }
 
-// Twin of `tessera_wgpu::bezier::BezierParams`.
+// Twin of `tessera_core::gpu_types::BezierParams`.
 struct BezierParams {
     test: u32,
     threshold: f32,

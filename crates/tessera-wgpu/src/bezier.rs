@@ -12,8 +12,8 @@
 //! | 5 | copy + `bezier_edge_emit` + `bezier_tri_emit` | edge / triangle | vertex records, indices |
 //! | 6 | `bezier_vertex_eval` (indirect) | output vertex | vertices |
 //!
-//! Output sizes are not known in advance. The finish kernel compares what the run needs
-//! with the capacities; on overflow no emit kernel writes anything, the draw has zero
+//! Output sizes are not known in advance, and change with the threshold and depth. The
+//! finish kernel compares what the run needs with the capacities; on overflow no emit kernel writes anything, the draw has zero
 //! indices, and [`BezierStage::read_status`] reports the sizes needed. [`BezierStage::grow`]
 //! then reallocates, and the next run fits ([`BezierStage::run_blocking`] does both).
 //!
@@ -30,7 +30,8 @@
 //! let mut encoder = gpu.device.create_command_encoder(&Default::default());
 //! stage.prepare(&gpu.device, &gpu.queue, &mut encoder);
 //! gpu.queue.submit([encoder.finish()]);
-//! // Once after loading: make sure the buffers were large enough (grow and rerun if not).
+//! // After loading and after `set_params`: make sure the buffers were large enough
+//! // (grow and rerun if not).
 //! let status = stage.run_blocking(&gpu.device, &gpu.queue)?;
 //! println!("{} triangles", status.indices / 3);
 //! // Draw `stage.output()` with `draw_indexed_indirect`, e.g. through `render::MeshRenderer`.
@@ -257,10 +258,28 @@ fn triangle_words(depth: u32) -> (u32, u32) {
     (points, pole)
 }
 
-fn scratch_buffer(device: &wgpu::Device, depth: u32, coarse_triangles: u32) -> wgpu::Buffer {
+/// Fails with [`Error::OutputTooLarge`] when a storage buffer of `bytes` would exceed
+/// what `device` can bind.
+fn check_size(device: &wgpu::Device, what: &'static str, bytes: u64) -> Result<()> {
+    let limits = device.limits();
+    let limit = limits
+        .max_buffer_size
+        .min(limits.max_storage_buffer_binding_size);
+    if bytes > limit {
+        return Err(Error::OutputTooLarge { what, bytes, limit });
+    }
+    Ok(())
+}
+
+fn scratch_buffer(
+    device: &wgpu::Device,
+    depth: u32,
+    coarse_triangles: u32,
+) -> Result<wgpu::Buffer> {
     let (points, pole) = triangle_words(depth);
-    let words = (points + pole) as u64 * coarse_triangles as u64;
-    storage(device, "tessera triangle scratch", 4 * words)
+    let bytes = 4 * (points + pole) as u64 * coarse_triangles as u64;
+    check_size(device, "triangle scratch", bytes)?;
+    Ok(storage(device, "tessera triangle scratch", bytes))
 }
 
 fn upload(device: &wgpu::Device, label: &str, bytes: &[u8]) -> wgpu::Buffer {
@@ -312,6 +331,12 @@ impl BezierStage {
         let l = prepared.layout;
         let counts_len = l.coarse_edges + 2 * l.coarse_triangles + 1;
         let pipelines = kernels.clone();
+        check_size(device, "count", 4 * counts_len as u64)?;
+        check_size(
+            device,
+            "edge bits",
+            4 * (EDGE_BIT_WORDS as u64) * l.coarse_edges as u64,
+        )?;
         let counts = storage(device, "tessera counts", 4 * counts_len as u64);
         let scan = PrefixSum::new(device, &pipelines.0.scan, &counts, counts_len);
         let uniform = device.create_buffer(&wgpu::BufferDescriptor {
@@ -366,7 +391,7 @@ impl BezierStage {
             ),
             counts,
             scan,
-            scratch: scratch_buffer(device, params.max_depth, l.coarse_triangles),
+            scratch: scratch_buffer(device, params.max_depth, l.coarse_triangles)?,
             records: storage(
                 device,
                 "tessera vertex records",
@@ -387,13 +412,18 @@ impl BezierStage {
     }
 
     /// Changes the test, threshold or depth; takes effect at the next [`prepare`](Self::prepare).
+    /// A lower threshold or a greater depth can need larger output buffers: check
+    /// [`read_status`](Self::read_status) and [`grow`](Self::grow) (or call
+    /// [`run_blocking`](Self::run_blocking)) after the change, as after loading.
     pub fn set_params(&mut self, device: &wgpu::Device, params: &AdaptiveParams) -> Result<()> {
         params.validate()?;
-        let depth_changed = params.max_depth != self.params.max_depth;
-        self.params = *params;
-        if depth_changed {
-            self.resize_scratch(device);
+        if params.max_depth != self.params.max_depth {
+            let l = self.prepared_layout;
+            self.buffers.scratch = scratch_buffer(device, params.max_depth, l.coarse_triangles)?;
+            self.params = *params;
+            self.rebind(device);
         }
+        self.params = *params;
         Ok(())
     }
 
@@ -408,12 +438,6 @@ impl BezierStage {
 
     fn words_per_triangle(&self) -> (u32, u32) {
         triangle_words(self.params.max_depth)
-    }
-
-    fn resize_scratch(&mut self, device: &wgpu::Device) {
-        let l = self.prepared_layout;
-        self.buffers.scratch = scratch_buffer(device, self.params.max_depth, l.coarse_triangles);
-        self.rebind(device);
     }
 
     fn rebind(&mut self, device: &wgpu::Device) {
@@ -446,15 +470,25 @@ impl BezierStage {
     /// submission has run.
     pub fn prepare(
         &mut self,
-        _device: &wgpu::Device,
-        queue: &wgpu::Queue,
+        device: &wgpu::Device,
+        _queue: &wgpu::Queue,
         encoder: &mut wgpu::CommandEncoder,
     ) {
         let l = self.prepared_layout;
-        queue.write_buffer(
+        // The parameters travel in the encoder, not by `queue.write_buffer` (which lands
+        // before the whole submission): recordings that share a submission, with
+        // `set_params` between them, each run with their own.
+        let staging = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("tessera bezier params upload"),
+            contents: bytemuck::bytes_of(&self.gpu_params()),
+            usage: wgpu::BufferUsages::COPY_SRC,
+        });
+        encoder.copy_buffer_to_buffer(
+            &staging,
+            0,
             &self.buffers.uniform,
             0,
-            bytemuck::bytes_of(&self.gpu_params()),
+            std::mem::size_of::<BezierParams>() as u64,
         );
         let counts_len = l.coarse_edges + 2 * l.coarse_triangles + 1;
         // The scan's trailing slot collects the grand total: zero it each run.

@@ -290,7 +290,7 @@ fn changing_the_depth_resizes_the_scratch_and_matches_the_cpu() {
         max_depth: 3,
     };
     let mut stage = BezierStage::new(&gpu.device, &prep, &params).expect("stage");
-    for depth in [3, 7, 2] {
+    for depth in [3, 8, 0, 7, 2] {
         params.max_depth = depth;
         stage.set_params(&gpu.device, &params).expect("params");
         let status = stage.run_blocking(&gpu.device, &gpu.queue).expect("run");

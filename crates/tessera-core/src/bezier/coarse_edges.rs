@@ -1,6 +1,6 @@
 //! Numbering of coarse edges (see [`CoarseLayout`](super::prepare::CoarseLayout)):
 //! three per boundary curve in its canonical direction, then 21 per patch.
-//! CPU twin of `shaders/shared/coarse_edges.wgsl`.
+//! CPU twin of `shaders/shared/coarse.wgsl`.
 
 use super::prepare::coarse_triangle_grid;
 use super::prepare::PreparedBezier;

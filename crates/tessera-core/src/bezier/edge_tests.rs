@@ -1,5 +1,5 @@
 //! Edge tests (paper §2.2, SPEC §1) and the recursive bisection they drive.
-//! CPU twin of `shaders/shared/edge_tests.wgsl`.
+//! CPU twin of `shaders/shared/map.wgsl`.
 //!
 //! A segment from `(u1, v1)` to `(u2, v2)` in a patch's parameter space is split at its
 //! midpoint `(u12, v12)` when its test is positive; the halves are tested again, down to

@@ -7,7 +7,7 @@
 //! The front side is the side of `∂S/∂u × ∂S/∂v`.
 //!
 //! There are two copies of the evaluator: `f32` (the CPU twin of the WGSL evaluator,
-//! `shaders/bezier_eval.wgsl`) and `f64` (the "true surface" for error measurement).
+//! `shaders/shared/patch.wgsl`) and `f64` (the "true surface" for error measurement).
 
 use glam::{DVec3, Vec3};
 

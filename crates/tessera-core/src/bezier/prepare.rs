@@ -203,7 +203,7 @@ impl PreparedBezier {
 }
 
 /// Bilinear read of a displacement map at `(u, v)`, clamped to the patch.
-/// CPU twin of `map_read` in `shaders/shared/bezier_common.wgsl`.
+/// CPU twin of `map_read` in `shaders/shared/map.wgsl`.
 pub fn map_read(map: &DisplacementMap, u: f32, v: f32) -> f32 {
     let last = (MAP_RES - 1) as f32;
     let x = u.clamp(0.0, 1.0) * last;

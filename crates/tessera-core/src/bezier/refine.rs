@@ -1,6 +1,6 @@
 //! Refinement of one coarse triangle from its edge decisions and tests inside it.
-//! CPU twin of `shaders/bezier_tri_mark.wgsl`, `bezier_tri_count.wgsl` and
-//! `bezier_tri_emit.wgsl`.
+//! CPU twin of `shaders/bezier_tri_mark.wgsl` (mark, count) and `bezier_tri_emit.wgsl`,
+//! with the shared parts in `shaders/shared/need.wgsl` and `refine.wgsl`.
 //!
 //! The pattern lives on the triangle's dyadic [`Lattice`]. A coarse triangle is a right
 //! isosceles triangle in `(u, v)`, and so is each half of one cut from its right angle to

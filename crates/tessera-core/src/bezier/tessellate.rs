@@ -4,10 +4,10 @@
 //! | stage | kernel | work item |
 //! |---|---|---|
 //! | [`edge_decide`] | `bezier_edge_decide.wgsl` | coarse edge |
-//! | [`exclusive_scan`] | `scan.wgsl` | — |
-//! | [`tri_mark`] | `bezier_tri_mark.wgsl` | coarse triangle |
-//! | [`tri_count`] | `bezier_tri_count.wgsl` | coarse triangle |
-//! | [`coarse_vertex_records`](PreparedBezier::coarse_vertex_records), [`edge_emit`], [`tri_emit`] | `bezier_*_emit.wgsl` | vertex / edge / triangle |
+//! | [`tri_mark`], [`tri_count`] | `bezier_tri_mark.wgsl` | coarse triangle |
+//! | [`exclusive_scan`] | `scan.wgsl` (the GPU scans all three counts as one array) | — |
+//! | totals | `bezier_finish.wgsl` | 1 |
+//! | [`coarse_vertex_records`](PreparedBezier::coarse_vertex_records) (uploaded), [`edge_emit`], [`tri_emit`] | `bezier_*_emit.wgsl` | edge / triangle |
 //! | [`vertex_eval`] | `bezier_vertex_eval.wgsl` | output vertex |
 
 use glam::Vec3;
