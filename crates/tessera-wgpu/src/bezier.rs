@@ -13,9 +13,10 @@
 //! | 6 | `bezier_vertex_eval` (indirect) | output vertex | vertices |
 //!
 //! Output sizes are not known in advance, and change with the threshold and depth. The
-//! finish kernel compares what the run needs with the capacities; on overflow no emit kernel writes anything, the draw has zero
-//! indices, and [`BezierStage::read_status`] reports the sizes needed. [`BezierStage::grow`]
-//! then reallocates, and the next run fits ([`BezierStage::run_blocking`] does both).
+//! finish kernel compares what the run needs with the capacities; on overflow no emit
+//! kernel writes anything, the draw has zero indices, and [`BezierStage::read_status`]
+//! reports the sizes needed. [`BezierStage::grow`] then reallocates, and the next run
+//! fits ([`BezierStage::run_blocking`] does both).
 //!
 //! ```no_run
 //! use tessera_core::bezier::{AdaptiveParams, BezierModel, EdgeTest, PreparedBezier};
