@@ -12,11 +12,6 @@
 @group(0) @binding(9) var<storage, read_write> records: array<VertexRecord>;
 @group(0) @binding(13) var<storage, read> status: BezierStatus;
 
-fn lerp_uv(a: vec2f, b: vec2f, k: u32) -> vec2f {
-    let f = f32(k) * (1.0 / f32(DYADIC_SCALE));
-    return vec2f(a.x + (b.x - a.x) * f, a.y + (b.y - a.y) * f);
-}
-
 @compute @workgroup_size(64)
 fn main(@builtin(global_invocation_id) gid: vec3u, @builtin(num_workgroups) groups: vec3u) {
     let e = gid.x + gid.y * groups.x * 64u;

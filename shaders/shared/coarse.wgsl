@@ -211,3 +211,9 @@ fn coarse_vertex(p: u32, g: vec2u) -> u32 {
     let interior_base = params.coarse_vertices - INTERIOR_COARSE_VERTICES_PER_PATCH * params.patches;
     return interior_base + INTERIOR_COARSE_VERTICES_PER_PATCH * p + (g.y - 1u) * 2u + (g.x - 1u);
 }
+
+// Point at fraction k / 256 of a → b (1/256 is exact, so CPU and GPU agree).
+fn lerp_uv(a: vec2f, b: vec2f, k: u32) -> vec2f {
+    let f = f32(k) * (1.0 / f32(DYADIC_SCALE));
+    return vec2f(a.x + (b.x - a.x) * f, a.y + (b.y - a.y) * f);
+}

@@ -134,9 +134,3 @@ fn segment_test(test: u32, p: u32, th: f32, uv1: vec2f, uv2: vec2f) -> bool {
     }
     return map_test(test, p, th, uv1, uv2);
 }
-
-// Point at fraction k / 256 of a → b (1/256 is exact, so CPU and GPU agree).
-fn lerp_uv(a: vec2f, b: vec2f, k: u32) -> vec2f {
-    let f = f32(k) * (1.0 / f32(DYADIC_SCALE));
-    return vec2f(a.x + (b.x - a.x) * f, a.y + (b.y - a.y) * f);
-}

@@ -48,6 +48,7 @@ use tessera_core::Mesh;
 use wgpu::util::DeviceExt;
 
 use crate::error::{Error, Result};
+use crate::headless::{map_read, read_buffer};
 use crate::kernel::{storage, Kernel};
 use crate::output::MeshBuffers;
 use crate::scan::{PrefixSum, ScanKernels};
@@ -118,6 +119,39 @@ impl Pipelines {
     }
 }
 
+/// The steps of the script, in order.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Step {
+    EdgeDecide,
+    TriMark,
+    ScanFinish,
+    EdgeEmit,
+    TriEmit,
+    VertexEval,
+}
+
+impl Step {
+    const ALL: [Step; 6] = [
+        Step::EdgeDecide,
+        Step::TriMark,
+        Step::ScanFinish,
+        Step::EdgeEmit,
+        Step::TriEmit,
+        Step::VertexEval,
+    ];
+
+    fn name(self) -> &'static str {
+        match self {
+            Step::EdgeDecide => "edge_decide",
+            Step::TriMark => "tri_mark",
+            Step::ScanFinish => "scan+finish",
+            Step::EdgeEmit => "edge_emit",
+            Step::TriEmit => "tri_emit",
+            Step::VertexEval => "vertex_eval",
+        }
+    }
+}
+
 struct BindGroups {
     edge_decide: wgpu::BindGroup,
     tri_mark: wgpu::BindGroup,
@@ -128,95 +162,33 @@ struct BindGroups {
 }
 
 impl BindGroups {
+    /// Every buffer under its binding number; each kernel takes the ones its entry point
+    /// uses (see [`Kernel::bind`]).
     fn new(device: &wgpu::Device, p: &Pipelines, b: &Buffers) -> Self {
         use slot::*;
-        let model: [(u32, &wgpu::Buffer); 5] = [
+        let all = [
             (PARAMS, &b.uniform),
             (PATCHES, &b.patches),
             (MAPS, &b.maps),
             (TOPO, &b.topo),
             (CURVES, &b.curves),
+            (EDGE_BITS, &b.edge_bits),
+            (COUNTS, &b.counts),
+            (SCRATCH, &b.scratch),
+            (RECORDS, &b.records),
+            (VERTICES, &b.output.vertices),
+            (INDICES, &b.output.indices),
+            (DRAW_ARGS, &b.output.indirect),
+            (STATUS, &b.status),
+            (EVALUATIONS, &b.evaluations),
         ];
-        let all_model = [PARAMS, PATCHES, MAPS, TOPO, CURVES];
         BindGroups {
-            edge_decide: p.edge_decide.bind(
-                device,
-                &with(
-                    &model,
-                    &all_model,
-                    &[
-                        (EDGE_BITS, &b.edge_bits),
-                        (COUNTS, &b.counts),
-                        (EVALUATIONS, &b.evaluations),
-                    ],
-                ),
-            ),
-            tri_mark: p.tri_mark.bind(
-                device,
-                &with(
-                    &model,
-                    &all_model,
-                    &[
-                        (EDGE_BITS, &b.edge_bits),
-                        (COUNTS, &b.counts),
-                        (SCRATCH, &b.scratch),
-                        (EVALUATIONS, &b.evaluations),
-                    ],
-                ),
-            ),
-            finish: p.finish.bind(
-                device,
-                &with(
-                    &model,
-                    &[PARAMS],
-                    &[
-                        (COUNTS, &b.counts),
-                        (DRAW_ARGS, &b.output.indirect),
-                        (STATUS, &b.status),
-                        (EVALUATIONS, &b.evaluations),
-                    ],
-                ),
-            ),
-            edge_emit: p.edge_emit.bind(
-                device,
-                &with(
-                    &model,
-                    &[PARAMS, TOPO, CURVES],
-                    &[
-                        (EDGE_BITS, &b.edge_bits),
-                        (COUNTS, &b.counts),
-                        (RECORDS, &b.records),
-                        (STATUS, &b.status),
-                    ],
-                ),
-            ),
-            tri_emit: p.tri_emit.bind(
-                device,
-                &with(
-                    &model,
-                    &all_model,
-                    &[
-                        (EDGE_BITS, &b.edge_bits),
-                        (COUNTS, &b.counts),
-                        (SCRATCH, &b.scratch),
-                        (RECORDS, &b.records),
-                        (INDICES, &b.output.indices),
-                        (STATUS, &b.status),
-                    ],
-                ),
-            ),
-            vertex_eval: p.vertex_eval.bind(
-                device,
-                &with(
-                    &model,
-                    &[PATCHES, TOPO],
-                    &[
-                        (RECORDS, &b.records),
-                        (VERTICES, &b.output.vertices),
-                        (STATUS, &b.status),
-                    ],
-                ),
-            ),
+            edge_decide: p.edge_decide.bind(device, &all),
+            tri_mark: p.tri_mark.bind(device, &all),
+            finish: p.finish.bind(device, &all),
+            edge_emit: p.edge_emit.bind(device, &all),
+            tri_emit: p.tri_emit.bind(device, &all),
+            vertex_eval: p.vertex_eval.bind(device, &all),
         }
     }
 }
@@ -475,10 +447,41 @@ impl BezierStage {
         _queue: &wgpu::Queue,
         encoder: &mut wgpu::CommandEncoder,
     ) {
-        let l = self.prepared_layout;
-        // The parameters travel in the encoder, not by `queue.write_buffer` (which lands
-        // before the whole submission): recordings that share a submission, with
-        // `set_params` between them, each run with their own.
+        self.record_params(device, encoder);
+        for step in Step::ALL {
+            self.record_step(step, encoder);
+        }
+    }
+
+    /// Runs the script one step at a time, each on its own submission, and returns the
+    /// wall time of each (ms) for profiling. Slower than [`prepare`](Self::prepare)
+    /// (one wait per step); the output is the same.
+    pub fn profile_kernels(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+    ) -> Result<Vec<(&'static str, f64)>> {
+        let mut encoder = device.create_command_encoder(&Default::default());
+        self.record_params(device, &mut encoder);
+        queue.submit([encoder.finish()]);
+        let mut out = Vec::new();
+        for step in Step::ALL {
+            let t = std::time::Instant::now();
+            let mut encoder = device.create_command_encoder(&Default::default());
+            self.record_step(step, &mut encoder);
+            queue.submit([encoder.finish()]);
+            device
+                .poll(wgpu::PollType::wait_indefinitely())
+                .map_err(|e| Error::Readback(e.to_string()))?;
+            out.push((step.name(), t.elapsed().as_secs_f64() * 1e3));
+        }
+        Ok(out)
+    }
+
+    /// Copies the parameters into their uniform inside the encoder, not by
+    /// `queue.write_buffer` (which lands before the whole submission): recordings that
+    /// share a submission, with `set_params` between them, each run with their own.
+    fn record_params(&self, device: &wgpu::Device, encoder: &mut wgpu::CommandEncoder) {
         let staging = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("tessera bezier params upload"),
             contents: bytemuck::bytes_of(&self.gpu_params()),
@@ -491,141 +494,72 @@ impl BezierStage {
             0,
             std::mem::size_of::<BezierParams>() as u64,
         );
-        let counts_len = l.coarse_edges + 2 * l.coarse_triangles + 1;
-        // The scan's trailing slot collects the grand total: zero it each run.
-        encoder.clear_buffer(&self.buffers.counts, 4 * (counts_len as u64 - 1), Some(4));
-        encoder.clear_buffer(&self.buffers.evaluations, 0, None);
-        let bg = &self.bind_groups;
-        let p = &*self.pipelines.0;
-        {
-            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some("tessera bezier decide"),
-                timestamp_writes: None,
-            });
-            p.edge_decide
-                .dispatch(&mut pass, &bg.edge_decide, l.coarse_edges, WORKGROUP);
-            p.tri_mark
-                .dispatch(&mut pass, &bg.tri_mark, l.coarse_triangles, WORKGROUP);
-            self.buffers.scan.record(&mut pass, &p.scan);
-            p.finish.dispatch(&mut pass, &bg.finish, 1, 1);
-        }
-        encoder.copy_buffer_to_buffer(
-            &self.buffers.coarse_records,
-            0,
-            &self.buffers.records,
-            0,
-            l.coarse_vertices as u64 * std::mem::size_of::<VertexRecord>() as u64,
-        );
-        {
-            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some("tessera bezier emit"),
-                timestamp_writes: None,
-            });
-            p.edge_emit
-                .dispatch(&mut pass, &bg.edge_emit, l.coarse_edges, WORKGROUP);
-            p.tri_emit
-                .dispatch(&mut pass, &bg.tri_emit, l.coarse_triangles, WORKGROUP);
-            pass.set_pipeline(&p.vertex_eval.pipeline);
-            pass.set_bind_group(0, &bg.vertex_eval, &[]);
-            pass.dispatch_workgroups_indirect(&self.buffers.status, 16);
-        }
-        encoder.copy_buffer_to_buffer(
-            &self.buffers.status,
-            0,
-            &self.buffers.status_readback,
-            0,
-            std::mem::size_of::<BezierStatus>() as u64,
-        );
     }
 
-    /// Runs the script one kernel at a time, each on its own submission, and returns
-    /// the wall time of each (ms) for profiling. Slower than [`prepare`](Self::prepare)
-    /// (one wait per kernel); the output is the same.
-    pub fn profile_kernels(
-        &mut self,
-        device: &wgpu::Device,
-        queue: &wgpu::Queue,
-    ) -> Result<Vec<(&'static str, f64)>> {
+    /// Records one step of the script (each in its own compute pass).
+    fn record_step(&self, step: Step, encoder: &mut wgpu::CommandEncoder) {
         let l = self.prepared_layout;
-        queue.write_buffer(
-            &self.buffers.uniform,
-            0,
-            bytemuck::bytes_of(&self.gpu_params()),
-        );
-        let counts_len = l.coarse_edges + 2 * l.coarse_triangles + 1;
-        let mut out = Vec::new();
+        let b = &self.buffers;
         let bg = &self.bind_groups;
         let p = &*self.pipelines.0;
-        let mut step =
-            |name: &'static str, record: &dyn Fn(&mut wgpu::CommandEncoder)| -> Result<()> {
-                let t = std::time::Instant::now();
-                let mut encoder = device.create_command_encoder(&Default::default());
-                record(&mut encoder);
-                queue.submit([encoder.finish()]);
-                device
-                    .poll(wgpu::PollType::wait_indefinitely())
-                    .map_err(|e| Error::Readback(e.to_string()))?;
-                out.push((name, t.elapsed().as_secs_f64() * 1e3));
-                Ok(())
-            };
-        let pass = |e: &mut wgpu::CommandEncoder, f: &dyn Fn(&mut wgpu::ComputePass)| {
-            let mut pass = e.begin_compute_pass(&Default::default());
-            f(&mut pass);
-        };
-        step("edge_decide", &|e| {
-            e.clear_buffer(&self.buffers.counts, 4 * (counts_len as u64 - 1), Some(4));
-            e.clear_buffer(&self.buffers.evaluations, 0, None);
-            pass(e, &|ps| {
-                p.edge_decide
-                    .dispatch(ps, &bg.edge_decide, l.coarse_edges, WORKGROUP)
-            });
-        })?;
-        step("tri_mark", &|e| {
-            pass(e, &|ps| {
-                p.tri_mark
-                    .dispatch(ps, &bg.tri_mark, l.coarse_triangles, WORKGROUP)
-            });
-        })?;
-        step("scan+finish", &|e| {
-            pass(e, &|ps| {
-                self.buffers.scan.record(ps, &p.scan);
-                p.finish.dispatch(ps, &bg.finish, 1, 1);
-            });
-        })?;
-        step("edge_emit", &|e| {
-            e.copy_buffer_to_buffer(
-                &self.buffers.coarse_records,
+        let counts_len = l.coarse_edges + 2 * l.coarse_triangles + 1;
+        match step {
+            Step::EdgeDecide => {
+                // The scan's trailing slot collects the grand total: zero it each run.
+                encoder.clear_buffer(&b.counts, 4 * (counts_len as u64 - 1), Some(4));
+                encoder.clear_buffer(&b.evaluations, 0, None);
+            }
+            Step::EdgeEmit => encoder.copy_buffer_to_buffer(
+                &b.coarse_records,
                 0,
-                &self.buffers.records,
+                &b.records,
                 0,
                 l.coarse_vertices as u64 * std::mem::size_of::<VertexRecord>() as u64,
-            );
-            pass(e, &|ps| {
-                p.edge_emit
-                    .dispatch(ps, &bg.edge_emit, l.coarse_edges, WORKGROUP)
+            ),
+            _ => {}
+        }
+        {
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some(step.name()),
+                timestamp_writes: None,
             });
-        })?;
-        step("tri_emit", &|e| {
-            pass(e, &|ps| {
-                p.tri_emit
-                    .dispatch(ps, &bg.tri_emit, l.coarse_triangles, WORKGROUP)
-            });
-        })?;
-        step("vertex_eval", &|e| {
-            pass(e, &|ps| {
-                ps.set_pipeline(&p.vertex_eval.pipeline);
-                ps.set_bind_group(0, &bg.vertex_eval, &[]);
-                ps.dispatch_workgroups_indirect(&self.buffers.status, 16);
-            });
-            e.copy_buffer_to_buffer(
-                &self.buffers.status,
+            match step {
+                Step::EdgeDecide => {
+                    p.edge_decide
+                        .dispatch(&mut pass, &bg.edge_decide, l.coarse_edges, WORKGROUP)
+                }
+                Step::TriMark => {
+                    p.tri_mark
+                        .dispatch(&mut pass, &bg.tri_mark, l.coarse_triangles, WORKGROUP)
+                }
+                Step::ScanFinish => {
+                    b.scan.record(&mut pass, &p.scan);
+                    p.finish.dispatch(&mut pass, &bg.finish, 1, 1);
+                }
+                Step::EdgeEmit => {
+                    p.edge_emit
+                        .dispatch(&mut pass, &bg.edge_emit, l.coarse_edges, WORKGROUP)
+                }
+                Step::TriEmit => {
+                    p.tri_emit
+                        .dispatch(&mut pass, &bg.tri_emit, l.coarse_triangles, WORKGROUP)
+                }
+                Step::VertexEval => {
+                    pass.set_pipeline(&p.vertex_eval.pipeline);
+                    pass.set_bind_group(0, &bg.vertex_eval, &[]);
+                    pass.dispatch_workgroups_indirect(&b.status, 16);
+                }
+            }
+        }
+        if step == Step::VertexEval {
+            encoder.copy_buffer_to_buffer(
+                &b.status,
                 0,
-                &self.buffers.status_readback,
+                &b.status_readback,
                 0,
                 std::mem::size_of::<BezierStatus>() as u64,
             );
-        })?;
-        Ok(out)
+        }
     }
 
     /// Reads what the last submitted run needed (waits for the GPU).
@@ -712,8 +646,8 @@ impl BezierStage {
         }
         let vsize = status.vertices as u64 * std::mem::size_of::<OutVertex>() as u64;
         let isize = status.indices as u64 * 4;
-        let vertices = read_buffer(device, queue, &self.buffers.output.vertices, vsize)?;
-        let indices = read_buffer(device, queue, &self.buffers.output.indices, isize)?;
+        let vertices = read_buffer(device, queue, &self.buffers.output.vertices, 0, vsize)?;
+        let indices = read_buffer(device, queue, &self.buffers.output.indices, 0, isize)?;
         Ok(Mesh {
             vertices: bytemuck::pod_collect_to_vec(&vertices),
             indices: bytemuck::pod_collect_to_vec(&indices),
@@ -732,6 +666,7 @@ impl BezierStage {
                 device,
                 queue,
                 b,
+                0,
                 b.size(),
             )?))
         };
@@ -756,58 +691,4 @@ pub struct Intermediates {
     pub scratch: Vec<u32>,
     pub points_words: u32,
     pub pole_words: u32,
-}
-
-/// The model bindings listed in `keep`, then `extra`.
-fn with<'a>(
-    model: &[(u32, &'a wgpu::Buffer)],
-    keep: &[u32],
-    extra: &[(u32, &'a wgpu::Buffer)],
-) -> Vec<(u32, &'a wgpu::Buffer)> {
-    model
-        .iter()
-        .filter(|(b, _)| keep.contains(b))
-        .chain(extra)
-        .copied()
-        .collect()
-}
-
-fn map_read(device: &wgpu::Device, buffer: &wgpu::Buffer) -> Result<Vec<u8>> {
-    let (tx, rx) = std::sync::mpsc::channel();
-    buffer.map_async(wgpu::MapMode::Read, .., move |r| {
-        let _ = tx.send(r);
-    });
-    device
-        .poll(wgpu::PollType::wait_indefinitely())
-        .map_err(|e| Error::Readback(e.to_string()))?;
-    rx.recv()
-        .map_err(|e| Error::Readback(e.to_string()))?
-        .map_err(|e| Error::Readback(e.to_string()))?;
-    let bytes = buffer
-        .get_mapped_range(..)
-        .map_err(|e| Error::Readback(e.to_string()))?
-        .to_vec();
-    buffer.unmap();
-    Ok(bytes)
-}
-
-fn read_buffer(
-    device: &wgpu::Device,
-    queue: &wgpu::Queue,
-    buffer: &wgpu::Buffer,
-    size: u64,
-) -> Result<Vec<u8>> {
-    if size == 0 {
-        return Ok(Vec::new());
-    }
-    let staging = device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("tessera readback"),
-        size,
-        usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
-        mapped_at_creation: false,
-    });
-    let mut encoder = device.create_command_encoder(&Default::default());
-    encoder.copy_buffer_to_buffer(buffer, 0, &staging, 0, size);
-    queue.submit([encoder.finish()]);
-    map_read(device, &staging)
 }

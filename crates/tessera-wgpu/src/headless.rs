@@ -95,37 +95,12 @@ impl Gpu {
     /// Copies `size` bytes of `buffer` from `offset` (both multiples of 4) to the CPU.
     /// The buffer needs `COPY_SRC` usage.
     pub fn read_buffer(&self, buffer: &wgpu::Buffer, offset: u64, size: u64) -> Result<Vec<u8>> {
-        if size == 0 {
-            return Ok(Vec::new());
-        }
-        let staging = self.device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("tessera readback"),
-            size,
-            usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
-            mapped_at_creation: false,
-        });
-        let mut enc = self.device.create_command_encoder(&Default::default());
-        enc.copy_buffer_to_buffer(buffer, offset, &staging, 0, size);
-        self.queue.submit([enc.finish()]);
-        self.map_and_copy(&staging)
+        read_buffer(&self.device, &self.queue, buffer, offset, size)
     }
 
     /// Maps a `MAP_READ` buffer whose copies have been submitted and returns its bytes.
     pub fn map_and_copy(&self, staging: &wgpu::Buffer) -> Result<Vec<u8>> {
-        let (tx, rx) = std::sync::mpsc::channel();
-        staging.map_async(wgpu::MapMode::Read, .., move |r| {
-            let _ = tx.send(r);
-        });
-        self.wait()?;
-        rx.recv()
-            .map_err(|e| Error::Readback(e.to_string()))?
-            .map_err(|e| Error::Readback(e.to_string()))?;
-        let bytes = staging
-            .get_mapped_range(..)
-            .map_err(|e| Error::Readback(e.to_string()))?
-            .to_vec();
-        staging.unmap();
-        Ok(bytes)
+        map_read(&self.device, staging)
     }
 
     /// Reads a buffer of Pod values.
@@ -137,4 +112,49 @@ impl Gpu {
         let bytes = self.read_buffer(buffer, 0, (count * std::mem::size_of::<T>()) as u64)?;
         Ok(bytemuck::pod_collect_to_vec(&bytes))
     }
+}
+
+/// Copies `size` bytes of `buffer` from `offset` to the CPU on its own submission and
+/// waits for them.
+pub(crate) fn read_buffer(
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    buffer: &wgpu::Buffer,
+    offset: u64,
+    size: u64,
+) -> Result<Vec<u8>> {
+    if size == 0 {
+        return Ok(Vec::new());
+    }
+    let staging = device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("tessera readback"),
+        size,
+        usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+        mapped_at_creation: false,
+    });
+    let mut encoder = device.create_command_encoder(&Default::default());
+    encoder.copy_buffer_to_buffer(buffer, offset, &staging, 0, size);
+    queue.submit([encoder.finish()]);
+    map_read(device, &staging)
+}
+
+/// Maps a `MAP_READ` buffer whose copies have been submitted, waits, and returns its
+/// bytes (the buffer is unmapped again).
+pub(crate) fn map_read(device: &wgpu::Device, buffer: &wgpu::Buffer) -> Result<Vec<u8>> {
+    let (tx, rx) = std::sync::mpsc::channel();
+    buffer.map_async(wgpu::MapMode::Read, .., move |r| {
+        let _ = tx.send(r);
+    });
+    device
+        .poll(wgpu::PollType::wait_indefinitely())
+        .map_err(|e| Error::Readback(e.to_string()))?;
+    rx.recv()
+        .map_err(|e| Error::Readback(e.to_string()))?
+        .map_err(|e| Error::Readback(e.to_string()))?;
+    let bytes = buffer
+        .get_mapped_range(..)
+        .map_err(|e| Error::Readback(e.to_string()))?
+        .to_vec();
+    buffer.unmap();
+    Ok(bytes)
 }

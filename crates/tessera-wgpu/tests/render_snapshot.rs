@@ -43,10 +43,9 @@ fn gpu() -> Gpu {
     gpu
 }
 
-/// `model` from the shipped teaset, tessellated on the CPU (map4p, threshold 1% of the
-/// bounding-box diagonal: coarse enough that the wireframe reads at this size) and
-/// uploaded, with the mesh's bounds.
-fn upload(gpu: &Gpu, model: &str) -> (MeshBuffers, (Vec3, Vec3)) {
+/// `model` from the shipped teaset and the parameters every snapshot uses: map4p,
+/// threshold 1% of the bounding-box diagonal.
+fn snapshot_model(model: &str) -> (BezierModel, AdaptiveParams) {
     let path = Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("../../assets/teaset")
         .join(model);
@@ -57,6 +56,14 @@ fn upload(gpu: &Gpu, model: &str) -> (MeshBuffers, (Vec3, Vec3)) {
         threshold: 0.01 * (max - min).length(),
         max_depth: AdaptiveParams::DEFAULT_MAX_DEPTH,
     };
+    (model, params)
+}
+
+/// `model` from the shipped teaset, tessellated on the CPU (map4p, threshold 1% of the
+/// bounding-box diagonal: coarse enough that the wireframe reads at this size) and
+/// uploaded, with the mesh's bounds.
+fn upload(gpu: &Gpu, model: &str) -> (MeshBuffers, (Vec3, Vec3)) {
+    let (model, params) = snapshot_model(model);
     let mesh = tessellate_adaptive(&PreparedBezier::new(&model), &params)
         .expect("tessellation succeeds")
         .mesh;
@@ -295,14 +302,7 @@ fn teacup_fails_against_teapot_snapshot() {
 #[test]
 fn teapot_tessellated_on_the_gpu_matches_the_wireframe_snapshot() {
     let gpu = gpu();
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/teaset/teapot");
-    let model = BezierModel::load(&path).expect("shipped model loads");
-    let (min, max) = model.bounds();
-    let params = AdaptiveParams {
-        test: EdgeTest::Map4p,
-        threshold: 0.01 * (max - min).length(),
-        max_depth: AdaptiveParams::DEFAULT_MAX_DEPTH,
-    };
+    let (model, params) = snapshot_model("teapot");
     let prepared = PreparedBezier::new(&model);
     let mut stage =
         tessera_wgpu::bezier::BezierStage::new(&gpu.device, &prepared, &params).expect("stage");
