@@ -16,6 +16,7 @@
 //! ```
 
 pub mod bezier;
+pub mod catmull_clark;
 pub mod error;
 pub mod gpu_types;
 pub mod io;

@@ -1,0 +1,220 @@
+//! Exact evaluation of each patch (OpenSubdiv's "Bfr" layer).
+//!
+//! A patch whose corners are all regular is one bicubic B-spline, stored in Bézier form.
+//! Otherwise its one-ring is subdivided: of its four children, those without an
+//! extraordinary corner are bicubic, the others are subdivided again, down to
+//! `depth` levels. The result is a small quadtree of Bézier pieces (three per level
+//! around each extraordinary vertex) ending in a [`CornerNode`] that holds the limit
+//! point and normal of the vertex and its one-ring, so that any parameter, however close
+//! to the vertex, can still be evaluated exactly by subdividing further on demand.
+//! Every dyadic parameter of depth ≤ `depth` lies in a Bézier piece or is the vertex
+//! itself, so the tessellator evaluates bicubics only.
+
+use glam::DVec3;
+
+use super::bicubic::{self, Net};
+use super::control_mesh::BoundaryRule;
+use super::local::{bspline_to_bezier, LocalMesh};
+use super::topology::PatchMesh;
+
+/// A node of a patch's quadtree.
+#[derive(Clone, Debug)]
+pub enum Node {
+    /// The surface over the node is this bicubic Bézier patch.
+    Bezier(Box<Net>),
+    /// Children in quadrant order `[0,½]², [½,1]×[0,½], [½,1]², [0,½]×[½,1]`.
+    Split([u32; 4]),
+    /// The deepest node at an extraordinary vertex.
+    Corner(Box<CornerNode>),
+}
+
+/// The node at an extraordinary vertex where the stored quadtree stops.
+#[derive(Clone, Debug)]
+pub struct CornerNode {
+    /// Which node corner (0..4, at `(0,0), (1,0), (1,1), (0,1)`) is the vertex.
+    pub corner: usize,
+    pub limit: DVec3,
+    pub normal: DVec3,
+    /// `|S(x) - limit| ≤ hull_radius` over the node (convex hull of the one-ring).
+    pub hull_radius: f64,
+    pub ring: LocalMesh,
+}
+
+/// The exact surface of one patch.
+#[derive(Clone, Debug)]
+pub struct PatchSurface {
+    /// Node 0 covers the whole patch.
+    pub nodes: Vec<Node>,
+    pub rule: BoundaryRule,
+}
+
+/// A point of the limit surface with its unit normal.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SurfacePoint {
+    pub position: DVec3,
+    pub normal: DVec3,
+}
+
+impl PatchSurface {
+    /// Builds the quadtree of patch `p`, subdividing at most `depth ≥ 1` times.
+    pub fn build(mesh: &PatchMesh, p: usize, depth: u32) -> Self {
+        let ring = LocalMesh::gather(&mesh.points, &mesh.quads, &mesh.point_quads, p);
+        let mut s = PatchSurface {
+            nodes: Vec::new(),
+            rule: mesh.boundary,
+        };
+        s.add(ring, 0, depth.max(1));
+        s
+    }
+
+    fn add(&mut self, ring: LocalMesh, level: u32, depth: u32) -> u32 {
+        let id = self.nodes.len() as u32;
+        if let Some(net) = ring.regular_net(self.rule) {
+            self.nodes
+                .push(Node::Bezier(Box::new(bspline_to_bezier(&net))));
+            return id;
+        }
+        let corner = ring.irregular_corner(self.rule).unwrap_or(0);
+        if level >= depth && ring.irregular_corner(self.rule).is_some() && level > 0 {
+            let limit = ring.limit_point(corner, self.rule);
+            self.nodes.push(Node::Corner(Box::new(CornerNode {
+                corner,
+                limit,
+                normal: ring.corner_normal(corner, self.rule),
+                hull_radius: ring.hull_radius(limit),
+                ring,
+            })));
+            return id;
+        }
+        self.nodes.push(Node::Split([0; 4]));
+        let children = ring.children(self.rule);
+        let mut ids = [0u32; 4];
+        for (c, child) in children.into_iter().enumerate() {
+            ids[c] = self.add(child, level + 1, depth);
+        }
+        self.nodes[id as usize] = Node::Split(ids);
+        id
+    }
+
+    /// Bézier pieces plus corner nodes: what the quadtree stores.
+    pub fn piece_count(&self) -> usize {
+        self.nodes
+            .iter()
+            .filter(|n| !matches!(n, Node::Split(_)))
+            .count()
+    }
+
+    /// Whether the patch is one bicubic.
+    pub fn is_regular(&self) -> bool {
+        matches!(self.nodes[0], Node::Bezier(_))
+    }
+
+    /// Exact position and normal at `(u, v) ∈ [0,1]²`.
+    pub fn eval(&self, u: f64, v: f64) -> SurfacePoint {
+        let (mut node, mut u, mut v) = (0usize, u.clamp(0.0, 1.0), v.clamp(0.0, 1.0));
+        loop {
+            match &self.nodes[node] {
+                Node::Bezier(net) => return eval_net(net, u, v),
+                Node::Split(children) => {
+                    let (c, cu, cv) = quadrant(u, v);
+                    node = children[c] as usize;
+                    (u, v) = (cu, cv);
+                }
+                Node::Corner(corner) => return eval_corner(corner, self.rule, u, v),
+            }
+        }
+    }
+}
+
+/// The quadrant of `(u, v)` and the coordinates inside it.
+pub fn quadrant(u: f64, v: f64) -> (usize, f64, f64) {
+    let (right, top) = (u >= 0.5, v >= 0.5);
+    let c = match (right, top) {
+        (false, false) => 0,
+        (true, false) => 1,
+        (true, true) => 2,
+        (false, true) => 3,
+    };
+    let f = |t: f64, hi: bool| if hi { 2.0 * t - 1.0 } else { 2.0 * t };
+    (c, f(u, right), f(v, top))
+}
+
+/// Position and unit normal of a Bézier net. Where the derivatives are parallel (a
+/// collapsed edge) the normal is taken a little inside.
+pub fn eval_net(net: &Net, u: f64, v: f64) -> SurfacePoint {
+    let (p, pu, pv) = bicubic::eval(net, u, v);
+    let mut n = pu.cross(pv);
+    if n.length_squared()
+        <= 1e-24 * (pu.length_squared() * pv.length_squared()).max(f64::MIN_POSITIVE)
+    {
+        let (_, qu, qv) = bicubic::eval(net, u + (0.5 - u) * 1e-4, v + (0.5 - v) * 1e-4);
+        n = qu.cross(qv);
+    }
+    SurfacePoint {
+        position: p,
+        normal: n.normalize_or_zero(),
+    }
+}
+
+/// Evaluation inside a corner node: the vertex itself, or further subdivision of its
+/// one-ring until `(u, v)` falls in a regular child.
+fn eval_corner(node: &CornerNode, rule: BoundaryRule, u: f64, v: f64) -> SurfacePoint {
+    let at_vertex = |u: f64, v: f64, c: usize| {
+        let (cu, cv) = [(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)][c];
+        u == cu && v == cv
+    };
+    if at_vertex(u, v, node.corner) {
+        return SurfacePoint {
+            position: node.limit,
+            normal: node.normal,
+        };
+    }
+    let (mut ring, mut u, mut v) = (node.ring.children(rule), u, v);
+    // Each step halves the distance to the vertex; f64 runs out after ~1000 halvings,
+    // long before which the point is in a regular child.
+    for _ in 0..1100 {
+        let (c, cu, cv) = quadrant(u, v);
+        let child = &ring[c];
+        if let Some(net) = child.regular_net(rule) {
+            return eval_net(&bspline_to_bezier(&net), cu, cv);
+        }
+        (u, v) = (cu, cv);
+        if at_vertex(u, v, node.corner) {
+            break;
+        }
+        ring = child.children(rule);
+    }
+    SurfacePoint {
+        position: node.limit,
+        normal: node.normal,
+    }
+}
+
+/// All patches of a mesh, built once (the part a GPU stage would upload).
+#[derive(Clone, Debug)]
+pub struct SurfaceModel {
+    pub mesh: PatchMesh,
+    /// One per patch; holes get an empty surface.
+    pub patches: Vec<PatchSurface>,
+    pub depth: u32,
+}
+
+impl SurfaceModel {
+    /// Builds every patch's quadtree to `depth` levels (`1..=TREE_DEPTH`).
+    pub fn new(mesh: PatchMesh, depth: u32) -> Self {
+        let depth = depth.clamp(1, super::TREE_DEPTH);
+        let patches = (0..mesh.patch_count())
+            .map(|p| PatchSurface::build(&mesh, p, depth))
+            .collect();
+        SurfaceModel {
+            mesh,
+            patches,
+            depth,
+        }
+    }
+
+    /// Exact point of patch `p` at `(u, v)`.
+    pub fn eval(&self, p: usize, u: f64, v: f64) -> SurfacePoint {
+        self.patches[p].eval(u, v)
+    }
+}

@@ -1,0 +1,292 @@
+//! Topology (OpenSubdiv's "Far" layer): validation of the control mesh, the first
+//! Catmull-Clark step, and the patches with their connectivity.
+//!
+//! # Patch structure
+//!
+//! One Catmull-Clark step turns a face with `n` sides into `n` quads. Every quad of
+//! that first level is one **patch**, so a control face `f` owns the patches
+//! `first_patch[f] .. first_patch[f] + n`, one per corner `k`. Patch `first_patch[f] + k`
+//! has its corners at `[V(f[k]), E(f[k], f[k+1]), F(f), E(f[k-1], f[k])]` (vertex
+//! point, edge point, face point, edge point) at parameters `(0,0), (1,0), (1,1), (0,1)`.
+//! So `(u, v)` of that patch is the point of the control face reached by going `u` of
+//! the way from its corner `k` towards the middle of the edge `(k, k+1)` and `v` of the way
+//! towards the middle of the edge `(k-1, k)`, on the subdivided surface. For a quad face
+//! with corners `(0,0), (1,0), (1,1), (0,1)` in face coordinates `(s, t)`: corner 0 gives
+//! `(s, t) = (u, v)/2`, corner 1 `(1 - v/2, u/2)`, corner 2 `(1 - u/2, 1 - v/2)`,
+//! corner 3 `(v/2, 1 - u/2)`.
+//!
+//! A patch can have two extraordinary corners: `V(f[k])` when that vertex's valence is
+//! not 4 and `F(f)` when `f` is not a quad. The exact evaluation ([`super::patch`])
+//! subdivides such patches further, so nothing here needs a second global step.
+
+use std::collections::HashMap;
+
+use glam::DVec3;
+
+use super::control_mesh::{BoundaryRule, ControlMesh};
+use super::refine::{edge_key, refine};
+use crate::error::{Error, Result};
+
+/// The largest vertex valence (and face size) accepted. The evaluation has no limit of
+/// its own; this bounds the work per patch and is the range the tests cover.
+pub const MAX_VALENCE: usize = 64;
+
+/// A validated mesh after its first Catmull-Clark step: all quads, one patch each.
+#[derive(Clone, Debug)]
+pub struct PatchMesh {
+    pub boundary: BoundaryRule,
+    /// Level-1 points: `[vertex points] [edge points] [face points]` of the control mesh.
+    pub points: Vec<DVec3>,
+    /// Level-1 quads, one per patch, counter-clockwise. Holes included (see `hole`).
+    pub quads: Vec<[u32; 4]>,
+    /// The control face of each quad and its corner in that face.
+    pub face_of: Vec<(u32, u8)>,
+    /// First quad of each control face.
+    pub first_patch: Vec<u32>,
+    /// Quads of faces tagged `hole`: they shape their neighbours, but are not tessellated.
+    pub hole: Vec<bool>,
+    /// Quads around each level-1 point.
+    pub point_quads: Vec<Vec<u32>>,
+    /// Level-1 edges, numbered: `(min, max)` point pair to edge id.
+    pub edges: HashMap<(u32, u32), u32>,
+    /// Per quad: the ids of its edges `(q[k], q[k+1])`.
+    pub quad_edges: Vec<[u32; 4]>,
+    /// How many edges each level-1 edge has: 1 on an open boundary.
+    pub edge_uses: Vec<u8>,
+    /// Control vertices no face uses (ignored).
+    pub unreferenced_vertices: usize,
+}
+
+impl PatchMesh {
+    /// Validates `mesh` and makes its first subdivision level.
+    pub fn new(mesh: &ControlMesh) -> Result<Self> {
+        let unreferenced_vertices = validate(mesh)?;
+        let level1 = refine(&mesh.positions, &mesh.faces, mesh.boundary);
+        let mut face_of = Vec::with_capacity(level1.quads.len());
+        let mut hole = Vec::with_capacity(level1.quads.len());
+        for (f, face) in mesh.faces.iter().enumerate() {
+            for k in 0..face.len() {
+                face_of.push((f as u32, k as u8));
+                hole.push(mesh.holes.get(f).copied().unwrap_or(false));
+            }
+        }
+        let mut point_quads = vec![Vec::new(); level1.points.len()];
+        let mut edges = HashMap::new();
+        let mut quad_edges = Vec::with_capacity(level1.quads.len());
+        let mut edge_uses: Vec<u8> = Vec::new();
+        for (q, quad) in level1.quads.iter().enumerate() {
+            let mut ids = [0u32; 4];
+            for k in 0..4 {
+                point_quads[quad[k] as usize].push(q as u32);
+                let next = edges.len() as u32;
+                let id = *edges
+                    .entry(edge_key(quad[k], quad[(k + 1) % 4]))
+                    .or_insert(next);
+                if id as usize == edge_uses.len() {
+                    edge_uses.push(0);
+                }
+                edge_uses[id as usize] += 1;
+                ids[k] = id;
+            }
+            quad_edges.push(ids);
+        }
+        Ok(PatchMesh {
+            boundary: mesh.boundary,
+            points: level1.points,
+            quads: level1.quads,
+            face_of,
+            first_patch: level1.face_start,
+            hole,
+            point_quads,
+            edges,
+            quad_edges,
+            edge_uses,
+            unreferenced_vertices,
+        })
+    }
+
+    pub fn patch_count(&self) -> usize {
+        self.quads.len()
+    }
+
+    /// Patches that are tessellated (not holes).
+    pub fn surface_patches(&self) -> impl Iterator<Item = usize> + '_ {
+        (0..self.quads.len()).filter(|&p| !self.hole[p])
+    }
+}
+
+/// Checks what Catmull-Clark subdivision needs: faces of at least 3 distinct vertices,
+/// every edge used by at most two faces in opposite directions, every vertex a single
+/// fan of faces, valences in `3..=MAX_VALENCE` (2 allowed on a boundary). Returns the
+/// number of vertices no face uses.
+pub fn validate(mesh: &ControlMesh) -> Result<usize> {
+    let file = &mesh.source;
+    let line_of = |f: usize| mesh.face_lines.get(f).copied().unwrap_or(0);
+    let face_err = |f: usize, msg: String| {
+        let line = line_of(f);
+        if line > 0 {
+            Error::parse(file, line, msg)
+        } else {
+            Error::input(file, format!("face {f}: {msg}"))
+        }
+    };
+    let nv = mesh.positions.len();
+    for (i, p) in mesh.positions.iter().enumerate() {
+        if !p.is_finite() {
+            return Err(Error::input(
+                file,
+                format!("vertex {} is not finite ({p})", i + 1),
+            ));
+        }
+    }
+    // Directed edge -> face using it.
+    let mut directed: HashMap<(u32, u32), usize> = HashMap::new();
+    let mut undirected: HashMap<(u32, u32), u32> = HashMap::new();
+    for (f, face) in mesh.faces.iter().enumerate() {
+        if face.len() < 3 {
+            return Err(face_err(
+                f,
+                format!("face has {} vertices, at least 3 are needed", face.len()),
+            ));
+        }
+        if face.len() > MAX_VALENCE {
+            return Err(face_err(
+                f,
+                format!(
+                    "face has {} vertices; at most {MAX_VALENCE} are supported",
+                    face.len()
+                ),
+            ));
+        }
+        for (k, &v) in face.iter().enumerate() {
+            if v as usize >= nv {
+                return Err(face_err(
+                    f,
+                    format!("vertex index {} out of range ({nv} vertices)", v + 1),
+                ));
+            }
+            if face[..k].contains(&v) {
+                let distinct = {
+                    let mut d = face.clone();
+                    d.sort_unstable();
+                    d.dedup();
+                    d.len()
+                };
+                return Err(face_err(
+                    f,
+                    if distinct < 3 {
+                        format!("face has only {distinct} distinct vertices")
+                    } else {
+                        format!("face uses vertex {} twice", v + 1)
+                    },
+                ));
+            }
+        }
+        let n = face.len();
+        for k in 0..n {
+            let (a, b) = (face[k], face[(k + 1) % n]);
+            let uses = undirected.entry(edge_key(a, b)).or_insert(0);
+            *uses += 1;
+            if *uses > 2 {
+                return Err(face_err(
+                    f,
+                    format!(
+                        "non-manifold edge {}-{}: used by more than two faces",
+                        a + 1,
+                        b + 1
+                    ),
+                ));
+            }
+            if let Some(&g) = directed.get(&(a, b)) {
+                return Err(face_err(
+                    f,
+                    format!(
+                        "edge {}-{} runs the same way in this face and in the face at line {}: inconsistent orientation",
+                        a + 1,
+                        b + 1,
+                        line_of(g)
+                    ),
+                ));
+            }
+            directed.insert((a, b), f);
+        }
+    }
+
+    // Each vertex: its faces must form one fan (linked through shared edges), and its
+    // valence must be supported.
+    let mut vertex_faces: Vec<Vec<usize>> = vec![Vec::new(); nv];
+    for (f, face) in mesh.faces.iter().enumerate() {
+        for &v in face {
+            vertex_faces[v as usize].push(f);
+        }
+    }
+    let mut unreferenced = 0;
+    for (v, faces) in vertex_faces.iter().enumerate() {
+        if faces.is_empty() {
+            unreferenced += 1;
+            continue;
+        }
+        let v = v as u32;
+        // Walk the fan from one face across edges at v; the walk must reach every face.
+        let prev_of = |f: usize| {
+            let face = &mesh.faces[f];
+            let k = face.iter().position(|&w| w == v).expect("face holds v");
+            let n = face.len();
+            (face[(k + n - 1) % n], face[(k + 1) % n])
+        };
+        let mut seen = vec![false; faces.len()];
+        let mut stack = vec![0usize];
+        seen[0] = true;
+        while let Some(i) = stack.pop() {
+            let (prev, next) = prev_of(faces[i]);
+            for (j, &g) in faces.iter().enumerate() {
+                if !seen[j] {
+                    let (gp, gn) = prev_of(g);
+                    if gp == next || gn == prev {
+                        seen[j] = true;
+                        stack.push(j);
+                    }
+                }
+            }
+        }
+        let first_face = faces[0];
+        if seen.iter().any(|s| !s) {
+            return Err(face_err(
+                first_face,
+                format!(
+                    "non-manifold vertex {}: its faces form separate fans",
+                    v + 1
+                ),
+            ));
+        }
+        let boundary_edges = faces
+            .iter()
+            .flat_map(|&f| {
+                let (p, n) = prev_of(f);
+                [p, n]
+            })
+            .filter(|&w| undirected[&edge_key(v, w)] == 1)
+            .count();
+        let valence = faces.len() + usize::from(boundary_edges > 0);
+        let interior = boundary_edges == 0;
+        if valence > MAX_VALENCE {
+            return Err(face_err(
+                first_face,
+                format!(
+                    "vertex {} has valence {valence}; at most {MAX_VALENCE} is supported",
+                    v + 1
+                ),
+            ));
+        }
+        if interior && valence < 3 {
+            return Err(face_err(
+                first_face,
+                format!(
+                    "interior vertex {} has valence {valence}; Catmull-Clark needs at least 3",
+                    v + 1
+                ),
+            ));
+        }
+    }
+    Ok(unreferenced)
+}

@@ -1,0 +1,64 @@
+//! The peer of the adaptive method: the limit surface sampled on an `n × n` grid per
+//! patch (any `n`, not only powers of two), two triangles per cell split along the
+//! shorter diagonal, vertices shared across patch edges through the canonical keys.
+
+use std::collections::HashMap;
+
+use glam::DVec3;
+
+use super::adaptive::{out_vertex, CcTessellation};
+use super::keys::point_key;
+use super::patch::SurfaceModel;
+use super::triangulate::{triangulate, PolyVertex};
+use crate::error::{Error, Result};
+
+/// The largest grid accepted (keys hold 15 bits per coordinate).
+pub const MAX_SEGMENTS: u32 = 1 << 12;
+
+/// Uniform tessellation with `n` segments per patch side (`n = 2^L` is "level L").
+pub fn tessellate_uniform(model: &SurfaceModel, n: u32) -> Result<CcTessellation> {
+    if n == 0 || n > MAX_SEGMENTS {
+        return Err(Error::Param(format!(
+            "segments per patch side must be in 1..={MAX_SEGMENTS}, got {n}"
+        )));
+    }
+    let mesh = &model.mesh;
+    let mut keys: HashMap<u64, u32> = HashMap::new();
+    let mut out = CcTessellation::default();
+    let mut grid = vec![0u32; ((n + 1) * (n + 1)) as usize];
+    for p in mesh.surface_patches() {
+        for j in 0..=n {
+            for i in 0..=n {
+                let key = point_key(mesh, p, i, j, n);
+                let vertices = &mut out.mesh.vertices;
+                let id = *keys.entry(key).or_insert_with(|| {
+                    let (u, v) = (i as f64 / n as f64, j as f64 / n as f64);
+                    vertices.push(out_vertex(model.eval(p, u, v), p, u, v));
+                    vertices.len() as u32 - 1
+                });
+                grid[(j * (n + 1) + i) as usize] = id;
+            }
+        }
+        let vertices = &out.mesh.vertices;
+        let position = |id: u32| DVec3::from(vertices[id as usize].position.map(f64::from));
+        for j in 0..n {
+            for i in 0..n {
+                let corner = |a: u32, b: u32| PolyVertex {
+                    i: a as i64,
+                    j: b as i64,
+                    id: grid[(b * (n + 1) + a) as usize],
+                };
+                let cell = vec![
+                    corner(i, j),
+                    corner(i + 1, j),
+                    corner(i + 1, j + 1),
+                    corner(i, j + 1),
+                ];
+                triangulate(cell, position, &mut out.mesh.indices);
+            }
+        }
+        out.leaves += (n * n) as usize;
+    }
+    out.evaluations = out.mesh.vertices.len() as u64;
+    Ok(out)
+}

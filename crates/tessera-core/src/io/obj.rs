@@ -1,0 +1,257 @@
+//! Wavefront OBJ control meshes with OpenSubdiv tag lines.
+//!
+//! Read: `v x y z`, `vt`, `vn` (counted so that face references can be checked), and
+//! `f` with `v`, `v/vt`, `v//vn` or `v/vt/vn` references, 1-based or negative (relative
+//! to the vertices read so far), polygons of any size. Tag lines
+//! `t <name> <nint>/<nfloat>/<nstring> <ints> <floats> <strings>` (0-based indices):
+//! `interpolateboundary` (1 edge-and-corner, 2 edge-only) and `hole` are applied; every
+//! other tag (creases, corners, ...) is ignored with a warning in
+//! [`ControlMesh::warnings`]. Other OBJ statements (`o`, `g`, `s`, `usemtl`, ...) carry
+//! nothing a surface needs.
+
+use std::collections::BTreeMap;
+use std::path::Path;
+
+use glam::DVec3;
+
+use crate::catmull_clark::{BoundaryRule, ControlMesh};
+use crate::error::{Error, Result};
+
+/// Reads an OBJ control mesh from disk.
+pub fn load_obj(path: &Path) -> Result<ControlMesh> {
+    let bytes = std::fs::read(path).map_err(|source| Error::Io {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    parse_obj(path, &bytes)
+}
+
+/// Parses OBJ text; `path` names the file in errors and warnings.
+pub fn parse_obj(path: &Path, bytes: &[u8]) -> Result<ControlMesh> {
+    if bytes.is_empty() {
+        return Err(Error::input(path, "empty file"));
+    }
+    if bytes.contains(&0) {
+        return Err(Error::input(path, "not a text file (contains NUL bytes)"));
+    }
+    let text = std::str::from_utf8(bytes).map_err(|e| {
+        Error::input(
+            path,
+            format!(
+                "not a text file (invalid UTF-8 at byte {})",
+                e.valid_up_to()
+            ),
+        )
+    })?;
+
+    let mut mesh = ControlMesh {
+        source: path.to_path_buf(),
+        ..ControlMesh::default()
+    };
+    let (mut texcoords, mut normals) = (0usize, 0usize);
+    // Tags to apply once all faces are known: (line, name, ints).
+    let mut tags: Vec<(usize, String, Vec<i64>)> = Vec::new();
+    let mut ignored: BTreeMap<String, (usize, usize)> = BTreeMap::new();
+
+    for (i, raw) in text.lines().enumerate() {
+        let line = i + 1;
+        let content = raw.split('#').next().unwrap_or("").trim();
+        let mut words = content.split_whitespace();
+        let Some(keyword) = words.next() else {
+            continue;
+        };
+        let err = |msg: String| Error::parse(path, line, msg);
+        match keyword {
+            "v" => {
+                let mut xyz = [0f64; 3];
+                for (k, c) in xyz.iter_mut().enumerate() {
+                    let w = words
+                        .next()
+                        .ok_or_else(|| err(format!("vertex has {k} coordinates, expected 3")))?;
+                    *c = parse_finite(w).map_err(err)?;
+                }
+                mesh.positions.push(DVec3::from_array(xyz));
+            }
+            "vt" => texcoords += 1,
+            "vn" => normals += 1,
+            "f" => {
+                let mut face = Vec::new();
+                for w in words {
+                    face.push(
+                        parse_reference(w, mesh.positions.len(), texcoords, normals)
+                            .map_err(err)?,
+                    );
+                }
+                if face.len() < 3 {
+                    return Err(err(format!(
+                        "face has {} vertices, at least 3 are needed",
+                        face.len()
+                    )));
+                }
+                mesh.faces.push(face);
+                mesh.face_lines.push(line);
+            }
+            "t" => {
+                let name = words
+                    .next()
+                    .ok_or_else(|| err("tag without a name".into()))?;
+                let counts = words.next().ok_or_else(|| {
+                    err(format!(
+                        "tag {name:?} without its nint/nfloat/nstring counts"
+                    ))
+                })?;
+                let counts: Vec<usize> = counts
+                    .split('/')
+                    .map(|c| c.parse::<usize>())
+                    .collect::<Result<_, _>>()
+                    .ok()
+                    .filter(|c: &Vec<usize>| c.len() == 3)
+                    .ok_or_else(|| {
+                        err(format!(
+                            "tag {name:?}: counts {counts:?} are not nint/nfloat/nstring"
+                        ))
+                    })?;
+                let rest: Vec<&str> = words.collect();
+                if rest.len() < counts[0] + counts[1] + counts[2] {
+                    return Err(err(format!(
+                        "tag {name:?} announces {} values but has {}",
+                        counts[0] + counts[1] + counts[2],
+                        rest.len()
+                    )));
+                }
+                let ints = rest[..counts[0]]
+                    .iter()
+                    .map(|w| {
+                        w.parse::<i64>()
+                            .map_err(|_| err(format!("tag {name:?}: {w:?} is not an integer")))
+                    })
+                    .collect::<Result<Vec<_>>>()?;
+                tags.push((line, name.to_string(), ints));
+            }
+            "vp" | "o" | "g" | "s" | "mtllib" | "usemtl" | "l" | "p" | "cstype" | "deg" => {}
+            other => {
+                let e = ignored
+                    .entry(format!("unknown statement {other:?}"))
+                    .or_insert((line, 0));
+                e.1 += 1;
+            }
+        }
+    }
+
+    if mesh.faces.is_empty() {
+        return Err(Error::input(path, "no faces"));
+    }
+    let nv = mesh.positions.len();
+    for (face, &line) in mesh.faces.iter_mut().zip(&mesh.face_lines) {
+        for v in face.iter_mut() {
+            // References were checked against the vertices read before the face; forward
+            // references (positive indices past that) are resolved here.
+            if *v as usize >= nv {
+                return Err(Error::parse(
+                    path,
+                    line,
+                    format!(
+                        "vertex index {} out of range (the file has {nv} vertices)",
+                        *v + 1
+                    ),
+                ));
+            }
+        }
+    }
+    mesh.holes = vec![false; mesh.faces.len()];
+
+    for (line, name, ints) in tags {
+        let err = |msg: String| Error::parse(path, line, msg);
+        match name.as_str() {
+            "interpolateboundary" => match ints.first() {
+                Some(1) => mesh.boundary = BoundaryRule::EdgeAndCorner,
+                Some(2) => mesh.boundary = BoundaryRule::EdgeOnly,
+                Some(0) => mesh.warnings.push(format!(
+                    "{}:{line}: interpolateboundary 0 (no boundary interpolation) is not supported; boundaries use the edge-and-corner rule",
+                    path.display()
+                )),
+                other => return Err(err(format!("interpolateboundary {other:?}: expected 0, 1 or 2"))),
+            },
+            "hole" => {
+                for &f in &ints {
+                    let slot = usize::try_from(f)
+                        .ok()
+                        .and_then(|f| mesh.holes.get_mut(f))
+                        .ok_or_else(|| err(format!("hole face {f} out of range ({} faces)", mesh.faces.len())))?;
+                    *slot = true;
+                }
+            }
+            other => {
+                let e = ignored.entry(format!("tag {other:?}")).or_insert((line, 0));
+                e.1 += 1;
+            }
+        }
+    }
+    for (what, (line, count)) in ignored {
+        let hint = if what.contains("crease") || what.contains("corner") {
+            " (sharpness is not supported yet: the surface is tessellated smooth)"
+        } else {
+            ""
+        };
+        mesh.warnings.push(format!(
+            "{}:{line}: {what} ignored ({count} line{}){hint}",
+            path.display(),
+            if count == 1 { "" } else { "s" }
+        ));
+    }
+    Ok(mesh)
+}
+
+fn parse_finite(w: &str) -> Result<f64, String> {
+    let x: f64 = w.parse().map_err(|_| format!("{w:?} is not a number"))?;
+    if x.is_finite() {
+        Ok(x)
+    } else {
+        Err(format!("coordinate {w:?} is not finite"))
+    }
+}
+
+/// One `f` reference (`v`, `v/vt`, `v//vn`, `v/vt/vn`) to a 0-based vertex index.
+fn parse_reference(
+    w: &str,
+    positions: usize,
+    texcoords: usize,
+    normals: usize,
+) -> Result<u32, String> {
+    let mut parts = w.split('/');
+    let v = parts.next().unwrap_or("");
+    let index = resolve(v, positions, "vertex", true)?;
+    if let Some(vt) = parts.next() {
+        if !vt.is_empty() {
+            resolve(vt, texcoords, "texture coordinate", false)?;
+        }
+    }
+    if let Some(vn) = parts.next() {
+        if !vn.is_empty() {
+            resolve(vn, normals, "normal", false)?;
+        }
+    }
+    if parts.next().is_some() {
+        return Err(format!("face reference {w:?} has more than 3 parts"));
+    }
+    Ok(index)
+}
+
+/// A 1-based or negative OBJ index to 0-based. Positive vertex indices may point forward
+/// (checked when the file is read); everything else must exist already.
+fn resolve(s: &str, count: usize, what: &str, forward_ok: bool) -> Result<u32, String> {
+    let i: i64 = s
+        .parse()
+        .map_err(|_| format!("{what} index {s:?} is not an integer"))?;
+    let resolved = match i {
+        0 => return Err(format!("{what} index 0 (OBJ indices start at 1)")),
+        i if i < 0 => count as i64 + i,
+        i => i - 1,
+    };
+    if resolved < 0 || (!forward_ok && resolved >= count as i64) {
+        return Err(format!(
+            "{what} index {i} out of range ({count} defined so far)"
+        ));
+    }
+    u32::try_from(resolved).map_err(|_| format!("{what} index {i} too large"))
+}
