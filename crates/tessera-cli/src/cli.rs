@@ -45,21 +45,36 @@ pub enum Backend {
 
 #[derive(Args, Debug)]
 pub struct TessellateArgs {
-    /// Input surface: a Newell teaset file (Bézier patches).
+    /// Input surface: a Newell teaset file (Bézier patches) or a Catmull-Clark control
+    /// mesh (.obj).
     pub input: PathBuf,
-    /// Tessellation method (Bézier inputs default to map4p).
+    /// Tessellation method (Bézier inputs default to map4p, Catmull-Clark meshes to
+    /// adaptive).
     #[arg(long, value_enum)]
     pub method: Option<Method>,
+    /// Catmull-Clark adaptive: the largest distance allowed between the output and the
+    /// limit surface, in model units (guaranteed, not sampled).
+    #[arg(long, conflicts_with = "tolerance_rel")]
+    pub tolerance: Option<f64>,
+    /// Catmull-Clark adaptive: the tolerance as a fraction of the bounding-box diagonal
+    /// (default 0.001).
+    #[arg(long)]
+    pub tolerance_rel: Option<f64>,
+    /// Catmull-Clark uniform: 2^LEVEL segments per patch side (same as --segments 2^LEVEL).
+    #[arg(long, conflicts_with = "segments")]
+    pub level: Option<u32>,
     /// Edge-test threshold in model units (map tests: displacement difference; flat: chord
     /// deviation). Default: 0.002 of the bounding-box diagonal.
     #[arg(long)]
     pub threshold: Option<f32>,
-    /// Levels of recursive edge bisection (at most 2^D segments per coarse edge).
-    #[arg(long, default_value_t = 6)]
-    pub max_depth: u32,
-    /// Segments per patch side for `--method uniform`.
-    #[arg(long, default_value_t = 8)]
-    pub segments: u32,
+    /// Bézier: levels of recursive edge bisection (at most 2^D segments per coarse edge;
+    /// default 6). Catmull-Clark: midpoint splits after a patch's first split (default
+    /// and most 10).
+    #[arg(long)]
+    pub max_depth: Option<u32>,
+    /// Segments per patch side for `--method uniform` (default 8).
+    #[arg(long)]
+    pub segments: Option<u32>,
     /// Search the threshold (or the uniform segment count) for this many triangles (±2%).
     #[arg(long, conflicts_with = "threshold")]
     pub target_triangles: Option<usize>,
@@ -75,9 +90,10 @@ pub struct TessellateArgs {
     /// Measure the error against the exact surface (max, mean, p99).
     #[arg(long)]
     pub measure: bool,
-    /// Surface samples per patch side for --measure.
-    #[arg(long, default_value_t = tessera_core::measure::DEFAULT_SAMPLES_PER_SIDE)]
-    pub measure_samples: usize,
+    /// Surface samples per patch side for --measure (default 64 for Bézier patches, 32
+    /// for Catmull-Clark patches; at least 32).
+    #[arg(long)]
+    pub measure_samples: Option<usize>,
 }
 
 #[derive(Args, Debug)]

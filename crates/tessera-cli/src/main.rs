@@ -3,6 +3,7 @@
 //! Every failure prints one line (`error: FILE:LINE: problem`) and exits non-zero; no
 //! output file is left behind.
 
+mod catmull_clark;
 mod cli;
 mod gpu;
 mod render;

@@ -70,20 +70,19 @@ pub fn run(cli: Cli) -> Result<(), Error> {
 }
 
 pub fn load(input: &Path) -> Result<BezierModel, CoreError> {
-    let ext = input
-        .extension()
-        .and_then(|e| e.to_str())
-        .map(str::to_ascii_lowercase);
-    if matches!(ext.as_deref(), Some("obj" | "off" | "gltf" | "glb")) {
+    if is_control_mesh(input) {
         return Err(CoreError::Input {
             file: input.to_path_buf(),
-            msg: "Catmull-Clark control meshes are not supported by this build yet; give a Newell teaset file".into(),
+            msg: "Catmull-Clark control meshes are tessellated on the CPU only so far (`tessera tessellate`); render takes a Newell teaset file".into(),
         });
     }
     BezierModel::load(input)
 }
 
 fn info(input: &Path) -> Result<(), Error> {
+    if is_control_mesh(input) {
+        return crate::catmull_clark::info(input);
+    }
     let model = load(input)?;
     let t = &model.topology;
     let (lo, hi) = model.bounds();
@@ -111,7 +110,31 @@ fn info(input: &Path) -> Result<(), Error> {
     Ok(())
 }
 
+/// Catmull-Clark control meshes are recognised by extension.
+pub fn is_control_mesh(input: &Path) -> bool {
+    let ext = input
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase);
+    matches!(ext.as_deref(), Some("obj" | "gltf" | "glb"))
+}
+
 fn tessellate(args: TessellateArgs) -> Result<(), Error> {
+    if is_control_mesh(&args.input) {
+        return crate::catmull_clark::tessellate(args);
+    }
+    if args.tolerance.is_some() || args.tolerance_rel.is_some() || args.level.is_some() {
+        return Err(CoreError::Param(
+            "--tolerance, --tolerance-rel and --level are Catmull-Clark options; Bézier inputs take --threshold and --segments".into(),
+        )
+        .into());
+    }
+    let max_depth = args.max_depth.unwrap_or(6);
+    let segments = args.segments.unwrap_or(8);
+    let measure_samples = args
+        .measure_samples
+        .unwrap_or(tessera_core::measure::DEFAULT_SAMPLES_PER_SIDE)
+        .max(32);
     let t_total = Instant::now();
     let mut timings = Timings::default();
     // Reject bad output paths before doing any work.
@@ -172,7 +195,7 @@ fn tessellate(args: TessellateArgs) -> Result<(), Error> {
             let mut params = AdaptiveParams {
                 test,
                 threshold: args.threshold.unwrap_or(DEFAULT_THRESHOLD_REL * diag),
-                max_depth: args.max_depth,
+                max_depth,
             };
             params.validate()?;
             if let Some(n) = target {
@@ -194,7 +217,7 @@ fn tessellate(args: TessellateArgs) -> Result<(), Error> {
             let base = AdaptiveParams {
                 test,
                 threshold: args.threshold.unwrap_or(DEFAULT_THRESHOLD_REL * diag),
-                max_depth: args.max_depth,
+                max_depth,
             };
             base.validate()?;
             match target {
@@ -221,9 +244,9 @@ fn tessellate(args: TessellateArgs) -> Result<(), Error> {
             (t, None, Some(segments))
         }
         (None, None) => (
-            tessellate_uniform(&model, &prep, args.segments)?,
+            tessellate_uniform(&model, &prep, segments)?,
             None,
-            Some(args.segments),
+            Some(segments),
         ),
     };
     timings.tessellate = if gpu.is_some() {
@@ -235,7 +258,7 @@ fn tessellate(args: TessellateArgs) -> Result<(), Error> {
 
     let error = if args.measure {
         let t = Instant::now();
-        let samples = bezier_surface_samples(&model, args.measure_samples.max(32));
+        let samples = bezier_surface_samples(&model, measure_samples);
         let e = measure_error(&samples, &out.mesh);
         timings.measure = ms(t);
         Some(e)
@@ -264,7 +287,7 @@ fn tessellate(args: TessellateArgs) -> Result<(), Error> {
         backend: if gpu.is_some() { "gpu" } else { "cpu" },
         adapter,
         threshold,
-        max_depth: test.map(|_| args.max_depth),
+        max_depth: test.map(|_| max_depth),
         segments,
         target_triangles: args.target_triangles,
         triangles: out.mesh.triangle_count(),
@@ -275,7 +298,7 @@ fn tessellate(args: TessellateArgs) -> Result<(), Error> {
         upload_bytes_per_patch: upload as f64 / model.patches.len() as f64,
         timings_ms: timings,
         error,
-        measure_samples: args.measure.then_some(args.measure_samples.max(32)),
+        measure_samples: args.measure.then_some(measure_samples),
     };
     print_summary(&stats);
     if let Some(path) = &args.stats {

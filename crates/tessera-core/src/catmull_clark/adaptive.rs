@@ -233,6 +233,16 @@ fn cell_bound(surface: &PatchSurface, b: [f64; 4], corners: impl FnOnce() -> [DV
     d + d_side + 0.25 * twist.length()
 }
 
+/// The flatness bound of the box `[u0, u1] × [v0, v1]` of patch `p`: a guaranteed upper
+/// bound on the distance between the surface and any triangulation of the box's
+/// polygon (module docs).
+pub fn flatness_bound(model: &SurfaceModel, p: usize, b: [f64; 4]) -> f64 {
+    cell_bound(&model.patches[p], b, || {
+        [(b[0], b[2]), (b[1], b[2]), (b[1], b[3]), (b[0], b[3])]
+            .map(|(u, v)| model.eval(p, u, v).position)
+    })
+}
+
 /// Recursive marking of one cell; `leaf` receives each leaf and its bound.
 fn mark(
     eval: &mut Evaluator,

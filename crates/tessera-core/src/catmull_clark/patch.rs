@@ -213,6 +213,21 @@ impl SurfaceModel {
         }
     }
 
+    /// Bytes of the quadtrees in single precision: a Bézier piece is 16 points (192 B),
+    /// a split 4 child indices (16 B), a corner node its limit point, normal and hull
+    /// radius (32 B). What a GPU stage would upload once.
+    pub fn upload_bytes(&self) -> usize {
+        self.patches
+            .iter()
+            .flat_map(|p| &p.nodes)
+            .map(|n| match n {
+                Node::Bezier(_) => 192,
+                Node::Split(_) => 16,
+                Node::Corner(_) => 32,
+            })
+            .sum()
+    }
+
     /// Exact point of patch `p` at `(u, v)`.
     pub fn eval(&self, p: usize, u: f64, v: f64) -> SurfacePoint {
         self.patches[p].eval(u, v)

@@ -1,0 +1,274 @@
+//! `tessera tessellate` and `tessera info` for Catmull-Clark control meshes (CPU reference).
+
+use std::path::Path;
+use std::time::Instant;
+
+use serde::Serialize;
+use tessera_core::catmull_clark::{
+    surface_samples, tessellate_adaptive, tessellate_uniform, CcParams, PatchMesh, SurfaceModel,
+    MAX_DEPTH, TREE_DEPTH,
+};
+use tessera_core::io::export::{write_atomically, write_mesh, MeshFormat};
+use tessera_core::io::load_control_mesh;
+use tessera_core::measure::{measure_error, ErrorStats};
+use tessera_core::Error as CoreError;
+use tessera_wgpu::Error;
+
+use crate::cli::{Backend, Method, TessellateArgs};
+
+/// Default tolerance as a fraction of the bounding-box diagonal.
+pub const DEFAULT_TOLERANCE_REL: f64 = 1e-3;
+/// Default surface samples per patch side for `--measure` (SPEC §3: at least 32).
+pub const DEFAULT_MEASURE_SAMPLES: usize = 32;
+
+#[derive(Serialize, Default)]
+struct Timings {
+    load: f64,
+    prepare: f64,
+    tessellate: f64,
+    measure: f64,
+    write: f64,
+    total: f64,
+}
+
+#[derive(Serialize)]
+struct Stats {
+    input: String,
+    method: &'static str,
+    backend: &'static str,
+    boundary: tessera_core::catmull_clark::BoundaryRule,
+    tolerance: Option<f64>,
+    max_depth: Option<u32>,
+    segments: Option<u32>,
+    triangles: usize,
+    vertices: usize,
+    patches: usize,
+    /// Patches with an extraordinary corner (evaluated through their quadtree).
+    irregular_patches: usize,
+    evaluations: u64,
+    /// Size of the patch quadtrees in f32 (what a GPU stage uploads).
+    upload_bytes: usize,
+    leaves: usize,
+    /// Adaptive: the largest guaranteed bound of any leaf (≤ tolerance when `unmet` is 0).
+    guaranteed_error: Option<f64>,
+    /// Adaptive: leaves stopped by --max-depth above the tolerance.
+    unmet: Option<usize>,
+    warnings: Vec<String>,
+    timings_ms: Timings,
+    #[serde(flatten)]
+    error: Option<ErrorStats>,
+    measure_samples: Option<usize>,
+}
+
+fn ms(t: Instant) -> f64 {
+    t.elapsed().as_secs_f64() * 1e3
+}
+
+pub fn tessellate(args: TessellateArgs) -> Result<(), Error> {
+    let t_total = Instant::now();
+    let mut timings = Timings::default();
+    if let Some(o) = &args.output {
+        MeshFormat::from_path(o)?;
+    }
+    let method = args.method.unwrap_or(Method::Adaptive);
+    if !matches!(method, Method::Adaptive | Method::Uniform) {
+        return Err(CoreError::Param(
+            "Catmull-Clark meshes take --method adaptive or uniform; map2p, map4p, map8p and flat are Bézier methods".into(),
+        )
+        .into());
+    }
+    if args.backend == Some(Backend::Gpu) {
+        return Err(CoreError::Param(
+            "the Catmull-Clark kernels do not exist yet; use --backend cpu".into(),
+        )
+        .into());
+    }
+    if args.threshold.is_some() || args.target_triangles.is_some() {
+        return Err(CoreError::Param(
+            "--threshold and --target-triangles are Bézier options; Catmull-Clark meshes take --tolerance or --tolerance-rel".into(),
+        )
+        .into());
+    }
+    if method == Method::Uniform && (args.tolerance.is_some() || args.tolerance_rel.is_some()) {
+        return Err(CoreError::Param(
+            "--method uniform takes --level or --segments, not a tolerance".into(),
+        )
+        .into());
+    }
+    if method == Method::Adaptive && (args.level.is_some() || args.segments.is_some()) {
+        return Err(
+            CoreError::Param("--level and --segments are for --method uniform".into()).into(),
+        );
+    }
+    let max_depth = args.max_depth.unwrap_or(MAX_DEPTH);
+    if max_depth > MAX_DEPTH {
+        return Err(CoreError::Param(format!(
+            "--max-depth {max_depth}: at most {MAX_DEPTH} for Catmull-Clark meshes"
+        ))
+        .into());
+    }
+
+    let t = Instant::now();
+    let control = load_control_mesh(&args.input)?;
+    for w in &control.warnings {
+        eprintln!("warning: {w}");
+    }
+    timings.load = ms(t);
+    let t = Instant::now();
+    let model = SurfaceModel::new(PatchMesh::new(&control)?, TREE_DEPTH);
+    timings.prepare = ms(t);
+    let diag = control.bbox_diag();
+
+    let t = Instant::now();
+    let (out, tolerance, segments) = match method {
+        Method::Uniform => {
+            let n = match args.level {
+                Some(l) if l > 12 => {
+                    return Err(CoreError::Param(format!("--level {l}: at most 12")).into())
+                }
+                Some(l) => 1 << l,
+                None => args.segments.unwrap_or(8),
+            };
+            (tessellate_uniform(&model, n)?, None, Some(n))
+        }
+        _ => {
+            let tolerance = match (args.tolerance, args.tolerance_rel) {
+                (Some(t), _) => t,
+                (None, r) => {
+                    let r = r.unwrap_or(DEFAULT_TOLERANCE_REL);
+                    if !(r.is_finite() && r > 0.0) {
+                        return Err(CoreError::Param(format!(
+                            "tolerance must be a positive number, got {r}"
+                        ))
+                        .into());
+                    }
+                    r * diag
+                }
+            };
+            let params = CcParams {
+                tolerance,
+                max_depth,
+            };
+            (tessellate_adaptive(&model, &params)?, Some(tolerance), None)
+        }
+    };
+    timings.tessellate = ms(t);
+    let mut warnings = control.warnings.clone();
+    if out.unmet > 0 {
+        let w = format!(
+            "{} leaves reached --max-depth {max_depth} above the tolerance: the bound there is {:.3e}",
+            out.unmet, out.max_bound
+        );
+        eprintln!("warning: {w}");
+        warnings.push(w);
+    }
+
+    let measure_samples = args
+        .measure_samples
+        .unwrap_or(DEFAULT_MEASURE_SAMPLES)
+        .max(32);
+    let error = if args.measure {
+        let t = Instant::now();
+        let samples = surface_samples(&model, measure_samples);
+        let e = measure_error(&samples, &out.mesh);
+        timings.measure = ms(t);
+        Some(e)
+    } else {
+        None
+    };
+
+    let t = Instant::now();
+    if let Some(o) = &args.output {
+        write_mesh(o, &out.mesh)?;
+    }
+    timings.write = ms(t);
+    timings.total = ms(t_total);
+
+    let stats = Stats {
+        input: args.input.display().to_string(),
+        method: if method == Method::Uniform {
+            "uniform"
+        } else {
+            "adaptive"
+        },
+        backend: "cpu",
+        boundary: model.mesh.boundary,
+        tolerance,
+        max_depth: tolerance.map(|_| max_depth),
+        segments,
+        triangles: out.mesh.triangle_count(),
+        vertices: out.mesh.vertices.len(),
+        patches: model.mesh.surface_patches().count(),
+        irregular_patches: model.patches.iter().filter(|p| !p.is_regular()).count(),
+        evaluations: out.evaluations,
+        upload_bytes: model.upload_bytes(),
+        leaves: out.leaves,
+        guaranteed_error: tolerance.map(|_| out.max_bound),
+        unmet: tolerance.map(|_| out.unmet),
+        warnings,
+        timings_ms: timings,
+        error,
+        measure_samples: args.measure.then_some(measure_samples),
+    };
+    let mut line = format!(
+        "{}: {} (cpu) {} triangles, {} vertices, {} patches ({} irregular), {} evaluations, tessellate {:.2} ms",
+        stats.input,
+        stats.method,
+        stats.triangles,
+        stats.vertices,
+        stats.patches,
+        stats.irregular_patches,
+        stats.evaluations,
+        stats.timings_ms.tessellate
+    );
+    if let Some(t) = tolerance {
+        line += &format!(", tolerance {t:.6} (guaranteed bound {:.6})", out.max_bound);
+    }
+    if let Some(n) = segments {
+        line += &format!(", segments {n}");
+    }
+    println!("{line}");
+    if let Some(e) = &stats.error {
+        println!(
+            "error vs exact surface: max {:.6} ({:.3e} of diagonal {:.4}), mean {:.6}, p99 {:.6} over {} samples",
+            e.max_error, e.max_error_rel, e.bbox_diag, e.mean_error, e.p99_error, e.samples
+        );
+    }
+    if let Some(path) = &args.stats {
+        let json = serde_json::to_string_pretty(&stats).expect("stats serialize");
+        write_atomically(path, |w| writeln!(w, "{json}"))?;
+    }
+    Ok(())
+}
+
+pub fn info(input: &Path) -> Result<(), Error> {
+    let control = load_control_mesh(input)?;
+    let mesh = PatchMesh::new(&control)?;
+    let mut sizes = std::collections::BTreeMap::new();
+    for f in &control.faces {
+        *sizes.entry(f.len()).or_insert(0usize) += 1;
+    }
+    let sizes: Vec<String> = sizes.iter().map(|(k, n)| format!("{k}:{n}")).collect();
+    println!(
+        "{}: Catmull-Clark control mesh, {} vertices ({} unused), {} faces (sizes {}), {} holes",
+        input.display(),
+        control.positions.len(),
+        mesh.unreferenced_vertices,
+        control.faces.len(),
+        sizes.join(" "),
+        control.holes.iter().filter(|&&h| h).count()
+    );
+    let boundary_edges = mesh.edge_uses.iter().filter(|&&u| u == 1).count();
+    println!(
+        "  patches: {} (one per face corner), boundary rule {:?}, {} boundary edges after one step",
+        mesh.patch_count(),
+        mesh.boundary,
+        boundary_edges
+    );
+    let (lo, hi) = control.bounds();
+    println!("  bounds: {lo} .. {hi} (diagonal {})", (hi - lo).length());
+    for w in &control.warnings {
+        println!("  warning: {w}");
+    }
+    Ok(())
+}
