@@ -51,3 +51,17 @@ pub fn parabolic_cylinder() -> BezierModel {
         [x, y, zc[(x * 3.0).round() as usize]]
     })
 }
+
+/// A shipped Catmull-Clark control mesh.
+pub fn control_mesh(rel: &str) -> tessera_core::catmull_clark::ControlMesh {
+    tessera_core::io::load_control_mesh(&asset(rel)).expect("shipped mesh loads")
+}
+
+/// A shipped Catmull-Clark mesh with its patches built.
+pub fn cc_model(rel: &str) -> tessera_core::catmull_clark::SurfaceModel {
+    use tessera_core::catmull_clark::{PatchMesh, SurfaceModel, TREE_DEPTH};
+    SurfaceModel::new(
+        PatchMesh::new(&control_mesh(rel)).expect("valid"),
+        TREE_DEPTH,
+    )
+}

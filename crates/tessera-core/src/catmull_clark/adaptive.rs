@@ -136,14 +136,84 @@ impl Evaluator<'_> {
 const QUADRANT: [(f64, f64); 4] = [(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)];
 
 /// What of a patch's quadtree covers a parameter box.
-struct Cover<'a> {
+struct Cover {
     /// Bézier pieces clipped to the box, with the part of the box they cover.
     pieces: Vec<(Net, [f64; 4])>,
-    corners: Vec<(&'a CornerNode, [f64; 4])>,
+    /// Squares around an extraordinary vertex: limit point, hull radius, overlap.
+    corners: Vec<(DVec3, f64, [f64; 4])>,
+}
+
+/// Intersection of two boxes `[u0, u1, v0, v1]`, if of positive area.
+fn overlap(b: [f64; 4], ou: f64, ov: f64, s: f64) -> Option<[f64; 4]> {
+    let i = [
+        b[0].max(ou),
+        b[1].min(ou + s),
+        b[2].max(ov),
+        b[3].min(ov + s),
+    ];
+    (i[0] < i[1] && i[2] < i[3]).then_some(i)
+}
+
+/// Adds a Bézier piece over `[ou, ou+s] × [ov, ov+s]`, clipped to `b`.
+fn push_piece(out: &mut Cover, net: &Net, b: [f64; 4], (ou, ov, s): (f64, f64, f64)) {
+    let Some(i) = overlap(b, ou, ov, s) else {
+        return;
+    };
+    let local = |a: f64, o: f64| (a - o) / s;
+    let clipped = bicubic::clip(
+        net,
+        (local(i[0], ou), local(i[1], ou)),
+        (local(i[2], ov), local(i[3], ov)),
+    );
+    out.pieces.push((clipped, i));
+}
+
+/// The stored quadtree ends at `TREE_DEPTH`; a box much smaller than that corner
+/// square gets its one-ring subdivided further here, until the innermost square is
+/// below 1/64 of the box, so that its hull radius does not dominate the bound.
+fn expand_corner(
+    out: &mut Cover,
+    cn: &CornerNode,
+    rule: super::BoundaryRule,
+    b: [f64; 4],
+    square: (f64, f64, f64),
+) {
+    let (mut ou, mut ov, mut s) = square;
+    let mut ring = std::borrow::Cow::Borrowed(&cn.ring);
+    let mut hull = cn.hull_radius;
+    let target = (b[1] - b[0]).min(b[3] - b[2]) / 64.0;
+    for _ in 0..40 {
+        if s <= target {
+            break;
+        }
+        let children = ring.children(rule);
+        let h = 0.5 * s;
+        let mut next = None;
+        for (c, child) in children.into_iter().enumerate() {
+            let (cu, cv) = (ou + QUADRANT[c].0 * h, ov + QUADRANT[c].1 * h);
+            if c == cn.corner {
+                next = Some((child, cu, cv));
+            } else if let Some(net) = child.regular_net(rule) {
+                push_piece(out, &super::local::bspline_to_bezier(&net), b, (cu, cv, h));
+            } else if let Some(i) = overlap(b, cu, cv, h) {
+                // Not expected (one extraordinary corner per child); stay sound anyway:
+                // the convex-hull bound holds around any centre.
+                let c = child.points[0];
+                out.corners.push((c, child.hull_radius(c), i));
+            }
+        }
+        let (child, cu, cv) = next.expect("the vertex is in one child");
+        hull = child.hull_radius(cn.limit);
+        ring = std::borrow::Cow::Owned(child);
+        (ou, ov, s) = (cu, cv, h);
+    }
+    if let Some(i) = overlap(b, ou, ov, s) {
+        out.corners.push((cn.limit, hull, i));
+    }
 }
 
 /// The quadtree nodes over `[u0, u1] × [v0, v1]` (overlaps of positive area).
-fn cover(surface: &PatchSurface, b: [f64; 4]) -> Cover<'_> {
+fn cover(surface: &PatchSurface, b: [f64; 4]) -> Cover {
     let mut out = Cover {
         pieces: Vec::new(),
         corners: Vec::new(),
@@ -175,7 +245,7 @@ fn cover(surface: &PatchSurface, b: [f64; 4]) -> Cover<'_> {
                     stack.push((child, ou + QUADRANT[c].0 * h, ov + QUADRANT[c].1 * h, h));
                 }
             }
-            Node::Corner(cn) => out.corners.push((cn, i)),
+            Node::Corner(cn) => expand_corner(&mut out, cn, surface.rule, b, (ou, ov, s)),
         }
     }
     out
@@ -218,11 +288,11 @@ fn cell_bound(surface: &PatchSurface, b: [f64; 4], corners: impl FnOnce() -> [DV
             }
         }
     }
-    for (cn, i) in &cover.corners {
-        let e = cn.hull_radius
+    for (limit, hull, i) in &cover.corners {
+        let e = hull
             + [(i[0], i[2]), (i[1], i[2]), (i[1], i[3]), (i[0], i[3])]
                 .iter()
-                .map(|&(u, v)| (cn.limit - bil(u, v)).length())
+                .map(|&(u, v)| (*limit - bil(u, v)).length())
                 .fold(0.0, f64::max);
         d = d.max(e);
         if i[0] == b[0] || i[1] == b[1] || i[2] == b[2] || i[3] == b[3] {

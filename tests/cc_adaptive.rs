@@ -1,0 +1,238 @@
+//! The adaptive Catmull-Clark tessellation: the guaranteed bound holds when measured,
+//! the output is watertight, and the bound of a cell is never below its true error.
+
+use glam::DVec3;
+use tessera_core::catmull_clark::adaptive::flatness_bound;
+use tessera_core::catmull_clark::triangulate::{triangulate, PolyVertex};
+use tessera_core::catmull_clark::{
+    surface_samples, tessellate_adaptive, tessellate_uniform, CcParams, CcTessellation,
+    SurfaceModel,
+};
+use tessera_core::measure::{closest_point_on_triangle, measure_error};
+use tessera_core::watertight::check_watertight;
+use tessera_tests::{cc_model, control_mesh};
+
+fn diag(rel: &str) -> f64 {
+    control_mesh(rel).bbox_diag()
+}
+
+fn adaptive(model: &SurfaceModel, tolerance: f64) -> CcTessellation {
+    tessellate_adaptive(
+        model,
+        &CcParams {
+            tolerance,
+            max_depth: 10,
+        },
+    )
+    .unwrap()
+}
+
+#[test]
+fn measured_error_never_exceeds_the_tolerance() {
+    let meshes = [
+        "opensubdiv/catmark_cube.obj",
+        "opensubdiv/catmark_torus.obj",
+        "opensubdiv/catmark_edgecorner.obj",
+        "opensubdiv/catmark_edgeonly.obj",
+        "opensubdiv/catmark_nonquads.obj",
+        "opensubdiv/catmark_hole_test1.obj",
+        "opensubdiv/catmark_xord_boundary.obj",
+        "opensubdiv/catmark_pole8.obj",
+        "catmull_clark/blub_control_mesh.obj",
+    ];
+    for name in meshes {
+        let model = cc_model(name);
+        let samples = surface_samples(&model, 32);
+        for rel in [1e-2, 3e-3, 1e-3] {
+            let tol = rel * diag(name);
+            let out = adaptive(&model, tol);
+            assert_eq!(out.unmet, 0, "{name} {rel}");
+            assert!(out.max_bound <= tol, "{name} {rel}");
+            let e = measure_error(&samples, &out.mesh);
+            assert!(
+                e.max_error <= tol,
+                "{name} at {rel}: measured {} > {tol}",
+                e.max_error
+            );
+            // And the tolerance is used, not ignored by over-refining everything.
+            assert!(
+                e.max_error >= 0.1 * tol,
+                "{name} at {rel}: {} ≪ {tol}",
+                e.max_error
+            );
+        }
+    }
+}
+
+#[test]
+fn the_bound_of_a_cell_is_above_its_true_error() {
+    // Cells anywhere, the extraordinary corners included, split into two triangles:
+    // the bound must exceed the distance of every sampled surface point to them.
+    for name in [
+        "catmull_clark/spot_control_mesh.obj",
+        "opensubdiv/catmark_edgeonly.obj",
+    ] {
+        let model = cc_model(name);
+        let mut checked = 0;
+        for p in (0..model.mesh.patch_count()).step_by(7) {
+            for (u0, v0, s) in [
+                (0.0, 0.0, 1.0),
+                (0.0, 0.0, 0.25),
+                (0.5, 0.0, 0.5),
+                (0.0, 0.0, 1.0 / 3.0),
+                (0.25, 0.125, 0.125),
+            ] {
+                let b = [u0, u0 + s, v0, v0 + s];
+                let bound = flatness_bound(&model, p, b);
+                let c = [(b[0], b[2]), (b[1], b[2]), (b[1], b[3]), (b[0], b[3])]
+                    .map(|(u, v)| model.eval(p, u, v).position);
+                let mut worst = 0f64;
+                for j in 0..=24 {
+                    for i in 0..=24 {
+                        let (u, v) = (u0 + s * i as f64 / 24.0, v0 + s * j as f64 / 24.0);
+                        let x = model.eval(p, u, v).position;
+                        let d = [
+                            [c[0], c[1], c[2]],
+                            [c[0], c[2], c[3]],
+                            [c[0], c[1], c[3]],
+                            [c[1], c[2], c[3]],
+                        ]
+                        .iter()
+                        .map(|t| (x - closest_point_on_triangle(x, t[0], t[1], t[2])).length())
+                        .fold(f64::INFINITY, f64::min);
+                        worst = worst.max(d);
+                    }
+                }
+                assert!(
+                    worst <= bound * (1.0 + 1e-9),
+                    "{name} patch {p} {b:?}: {worst} > bound {bound}"
+                );
+                checked += 1;
+            }
+        }
+        assert!(checked > 50);
+    }
+}
+
+/// Boundary curves of the surface, densely sampled (for the watertightness check).
+fn open_boundary(model: &SurfaceModel) -> Vec<Vec<DVec3>> {
+    let mesh = &model.mesh;
+    let mut lines = Vec::new();
+    for p in mesh.surface_patches() {
+        for k in 0..4 {
+            let e = mesh.quad_edges[p][k] as usize;
+            let across_hole = mesh.edge_uses[e] == 2
+                && (0..mesh.patch_count())
+                    .any(|q| q != p && mesh.hole[q] && mesh.quad_edges[q].contains(&(e as u32)));
+            if mesh.edge_uses[e] == 1 || across_hole {
+                lines.push(
+                    (0..=256)
+                        .map(|i| {
+                            let t = i as f64 / 256.0;
+                            let (u, v) = [(t, 0.0), (1.0, t), (1.0 - t, 1.0), (0.0, 1.0 - t)][k];
+                            model.eval(p, u, v).position
+                        })
+                        .collect(),
+                );
+            }
+        }
+    }
+    lines
+}
+
+#[test]
+fn output_is_watertight_and_the_check_catches_planted_cracks() {
+    for (name, rel) in [
+        ("opensubdiv/catmark_cube.obj", 1e-3),
+        ("catmull_clark/spot_control_mesh.obj", 2e-3),
+        ("opensubdiv/catmark_torus.obj", 1e-3),
+        ("opensubdiv/catmark_edgecorner.obj", 1e-3),
+        ("opensubdiv/catmark_hole_test1.obj", 1e-3),
+        ("opensubdiv/catmark_nonquads.obj", 3e-3),
+    ] {
+        let model = cc_model(name);
+        let tol = 1e-6 * diag(name);
+        let boundary = open_boundary(&model);
+        for out in [
+            adaptive(&model, rel * diag(name)),
+            tessellate_uniform(&model, 5).unwrap(),
+        ] {
+            let positions: Vec<_> = out.mesh.positions().collect();
+            let r = check_watertight(&positions, &out.mesh.indices, &boundary, tol);
+            assert!(r.is_watertight(), "{name}: {r:?}");
+            assert_eq!(r.boundary_edges > 0, !boundary.is_empty(), "{name}");
+        }
+    }
+    // Test the tester: a copied vertex (a crack by index) and a removed triangle (a hole).
+    let model = cc_model("opensubdiv/catmark_cube.obj");
+    let out = adaptive(&model, 1e-3 * diag("opensubdiv/catmark_cube.obj"));
+    let mut positions: Vec<_> = out.mesh.positions().collect();
+    let mut indices = out.mesh.indices.clone();
+    positions.push(positions[indices[0] as usize]);
+    indices[0] = positions.len() as u32 - 1;
+    let r = check_watertight(&positions, &indices, &[], 1e-6);
+    assert!(r.cracks_by_index > 0 && r.duplicate_vertices > 0, "{r:?}");
+    let mut indices = out.mesh.indices.clone();
+    indices.truncate(indices.len() - 3);
+    let r = check_watertight(&positions, &indices, &[], 1e-6);
+    assert!(r.cracks_by_position > 0, "{r:?}");
+}
+
+#[test]
+fn output_is_deterministic_and_faces_outwards() {
+    let model = cc_model("catmull_clark/spot_control_mesh.obj");
+    let tol = 3e-3 * diag("catmull_clark/spot_control_mesh.obj");
+    let (a, b) = (adaptive(&model, tol), adaptive(&model, tol));
+    assert_eq!(a.mesh, b.mesh);
+    // Triangles wind counter-clockwise around the evaluated normals.
+    let v = &a.mesh.vertices;
+    let mut agree = 0;
+    for t in a.mesh.triangles() {
+        let [p, q, r] = t.map(|i| DVec3::from(v[i as usize].position.map(f64::from)));
+        let n: DVec3 = t
+            .iter()
+            .map(|&i| DVec3::from(v[i as usize].normal.map(f64::from)))
+            .sum();
+        if (q - p).cross(r - p).dot(n) > 0.0 {
+            agree += 1;
+        }
+    }
+    assert_eq!(agree, a.mesh.triangle_count());
+}
+
+#[test]
+fn polygons_with_points_on_every_side_triangulate_without_slivers() {
+    // Corners of a 4×4 square with 3, 1, 0 and 2 points on its sides.
+    let pts: Vec<(i64, i64)> = vec![
+        (0, 0),
+        (1, 0),
+        (2, 0),
+        (3, 0),
+        (4, 0),
+        (4, 2),
+        (4, 4),
+        (0, 4),
+        (0, 3),
+        (0, 1),
+    ];
+    let poly: Vec<PolyVertex> = pts
+        .iter()
+        .enumerate()
+        .map(|(k, &(i, j))| PolyVertex { i, j, id: k as u32 })
+        .collect();
+    let mut out = Vec::new();
+    triangulate(
+        poly,
+        |id| DVec3::new(pts[id as usize].0 as f64, pts[id as usize].1 as f64, 0.0),
+        &mut out,
+    );
+    assert_eq!(out.len() / 3, pts.len() - 2);
+    let mut area = 0;
+    for t in out.chunks(3) {
+        let [a, b, c] = [t[0], t[1], t[2]].map(|k| pts[k as usize]);
+        let cross = (b.0 - a.0) * (c.1 - a.1) - (b.1 - a.1) * (c.0 - a.0);
+        assert!(cross > 0, "degenerate or flipped {t:?}");
+        area += cross;
+    }
+    assert_eq!(area, 2 * 16, "the triangles tile the square");
+}

@@ -1,0 +1,175 @@
+//! The OBJ reader: every reference form, OpenSubdiv tags, and bad input reported with
+//! file, line and problem.
+
+use std::path::Path;
+
+use tessera_core::catmull_clark::{BoundaryRule, PatchMesh};
+use tessera_core::io::obj::parse_obj;
+use tessera_tests::control_mesh;
+
+fn parse(text: &str) -> Result<tessera_core::catmull_clark::ControlMesh, String> {
+    parse_obj(Path::new("test.obj"), text.as_bytes()).map_err(|e| e.to_string())
+}
+
+/// Parses and validates; the error text when either fails.
+fn check(text: &str) -> Result<(), String> {
+    let mesh = parse(text)?;
+    PatchMesh::new(&mesh).map(|_| ()).map_err(|e| e.to_string())
+}
+
+const SQUARE: &str = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\n";
+
+#[test]
+fn reads_every_face_reference_form_and_negative_indices() {
+    let text = format!(
+        "{SQUARE}vt 0 0\nvt 1 0\nvt 1 1\nvn 0 0 1\nv 2 0 0\nv 2 1 0\n\
+         f 1/1 2/2 3/3 4/1\nf 2//1 5//1 6//1 3//1\nf -4/1/1 -2/2/1 -1/3/1\n"
+    );
+    let mesh = parse(&text).unwrap();
+    assert_eq!(
+        mesh.faces,
+        vec![vec![0, 1, 2, 3], vec![1, 4, 5, 2], vec![2, 4, 5]]
+    );
+    assert_eq!(mesh.face_lines, vec![11, 12, 13]);
+    // A pentagon and comments, groups and materials are fine.
+    let pent = "# c\no x\ng y\nusemtl m\ns 1\nv 0 0 0\nv 1 0 0\nv 1.5 1 0\nv 0.5 2 0\nv -0.5 1 0\nf 1 2 3 4 5 # tail\n";
+    assert_eq!(parse(pent).unwrap().faces, vec![vec![0, 1, 2, 3, 4]]);
+}
+
+#[test]
+fn applies_boundary_and_hole_tags_and_warns_about_the_rest() {
+    let m = control_mesh("opensubdiv/catmark_edgeonly.obj");
+    assert_eq!(m.boundary, BoundaryRule::EdgeOnly);
+    assert!(
+        m.warnings
+            .iter()
+            .any(|w| w.contains("\"corner\"") && w.contains("6 lines")),
+        "{:?}",
+        m.warnings
+    );
+    assert_eq!(
+        control_mesh("opensubdiv/catmark_edgecorner.obj").boundary,
+        BoundaryRule::EdgeAndCorner
+    );
+    // No tag: the SPEC's default, edge-and-corner.
+    assert_eq!(
+        control_mesh("opensubdiv/catmark_flap.obj").boundary,
+        BoundaryRule::EdgeAndCorner
+    );
+    let holes = control_mesh("opensubdiv/catmark_hole_test1.obj");
+    assert_eq!(holes.holes, vec![false, true, false, false, false, false]);
+    let car = control_mesh("opensubdiv/catmark_car.obj");
+    let crease = car
+        .warnings
+        .iter()
+        .find(|w| w.contains("\"crease\""))
+        .expect("crease warning");
+    assert!(
+        crease.contains("catmark_car.obj:") && crease.contains("tessellated smooth"),
+        "{crease}"
+    );
+    assert!(control_mesh("opensubdiv/catmark_cube.obj")
+        .warnings
+        .is_empty());
+}
+
+#[test]
+fn hole_faces_make_no_patches() {
+    let m = control_mesh("opensubdiv/catmark_hole_test1.obj");
+    let mesh = PatchMesh::new(&m).unwrap();
+    let holes = m.holes.iter().filter(|&&h| h).count();
+    assert_eq!(
+        mesh.surface_patches().count(),
+        mesh.patch_count() - 4 * holes
+    );
+}
+
+#[test]
+fn bad_input_names_file_line_and_problem() {
+    let cases: Vec<(String, &str)> = vec![
+        (String::new(), "test.obj: empty file"),
+        ("v 0 0 0\0\n".into(), "test.obj: not a text file"),
+        ("\u{0}\u{1}binary".into(), "not a text file"),
+        (
+            format!("{SQUARE}f 1 2 3 9\n"),
+            "test.obj:5: vertex index 9 out of range",
+        ),
+        (format!("{SQUARE}f 1 2 0 3\n"), "test.obj:5: vertex index 0"),
+        (
+            format!("{SQUARE}f 1 2 -7\n"),
+            "test.obj:5: vertex index -7 out of range",
+        ),
+        (
+            format!("{SQUARE}f 1/5 2 3\n"),
+            "test.obj:5: texture coordinate index 5 out of range",
+        ),
+        (
+            "v 0 0 nan\nv 1 0 0\nv 0 1 0\nf 1 2 3\n".into(),
+            "test.obj:1: coordinate \"nan\" is not finite",
+        ),
+        (
+            "v 0 0 inf\n".into(),
+            "test.obj:1: coordinate \"inf\" is not finite",
+        ),
+        ("v 0 0\n".into(), "test.obj:1: vertex has 2 coordinates"),
+        ("v 0 0 x\n".into(), "test.obj:1: \"x\" is not a number"),
+        (
+            format!("{SQUARE}f 1 2\n"),
+            "test.obj:5: face has 2 vertices",
+        ),
+        (
+            format!("{SQUARE}f 1 2 1\n"),
+            "test.obj:5: face has only 2 distinct vertices",
+        ),
+        (
+            format!("{SQUARE}f 1 2 3 2\n"),
+            "test.obj:5: face uses vertex 2 twice",
+        ),
+        (SQUARE.into(), "test.obj: no faces"),
+        (
+            format!("{SQUARE}f 1 2 3 4\nt interpolateboundary 1/0/0\n"),
+            "test.obj:6: tag \"interpolateboundary\" announces 1 values but has 0",
+        ),
+        (
+            format!("{SQUARE}f 1 2 3 4\nt hole 1/0/0 3\n"),
+            "test.obj:6: hole face 3 out of range",
+        ),
+        // Three faces on the edge 1-2.
+        (
+            format!("{SQUARE}v 0 -1 0\nv 0 0 1\nf 1 2 3\nf 2 1 5\nf 1 2 6\n"),
+            "non-manifold edge 1-2",
+        ),
+        // Two faces meeting only at a vertex.
+        (
+            "v 0 0 0\nv 1 0 0\nv 0 1 0\nv -1 0 0\nv 0 -1 0\nf 1 2 3\nf 1 4 5\n".into(),
+            "non-manifold vertex 1",
+        ),
+        (
+            format!("{SQUARE}f 1 2 3 4\nf 1 2 3\n"),
+            "inconsistent orientation",
+        ),
+    ];
+    for (text, expect) in &cases {
+        let err = check(text).expect_err(expect);
+        assert!(err.contains(expect), "expected {expect:?}, got {err:?}");
+        assert_eq!(err.lines().count(), 1, "{err}");
+    }
+}
+
+#[test]
+fn valence_limits_are_errors() {
+    // OpenSubdiv's pole with valence 360.
+    let m = control_mesh("opensubdiv/catmark_pole360.obj");
+    let err = PatchMesh::new(&m).unwrap_err().to_string();
+    assert!(
+        err.contains("catmark_pole360.obj:") && err.contains("valence 360; at most 64"),
+        "{err}"
+    );
+    // Valence 64 is accepted.
+    assert!(PatchMesh::new(&control_mesh("opensubdiv/catmark_pole64.obj")).is_ok());
+    // An interior vertex of valence 2 (two quads glued along two edges) is not.
+    let text = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 2 0 0\nv 2 1 0\n\
+                f 1 2 3 4\nf 2 5 6 3\nf 4 3 6 5 2 1\n";
+    let err = check(text).unwrap_err();
+    assert!(err.contains("valence 2"), "{err}");
+}
