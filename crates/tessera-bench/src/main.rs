@@ -2,6 +2,7 @@
 //! with uniform tessellation at equal measured max error. Writes `OUT/bezier_cpu.json`
 //! and `OUT/bezier_cpu.md`. Medians of repeated runs; no assertions.
 
+mod cc;
 mod gpu;
 
 use std::path::{Path, PathBuf};
@@ -84,17 +85,21 @@ fn main() {
         .unwrap_or_else(|| PathBuf::from("bench"));
     let quick = args.iter().any(|a| a == "--quick");
     let assets = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/teaset");
-    // `--only gpu` / `--only cpu`: one half of the bench.
     let only = args
         .iter()
         .position(|a| a == "--only")
         .and_then(|i| args.get(i + 1))
         .cloned();
     std::fs::create_dir_all(&out_dir).expect("create bench output folder");
-    if only.as_deref() != Some("cpu") {
+    // `--only gpu|cpu|cc`: one part of the bench (cpu is the Bézier CPU table).
+    let part = |name: &str| only.as_deref().is_none_or(|o| o == name);
+    if part("gpu") {
         gpu::run(&assets, &out_dir, quick);
     }
-    if only.as_deref() == Some("gpu") {
+    if part("cc") {
+        cc::run(&assets.join(".."), &out_dir, quick);
+    }
+    if !part("cpu") {
         return;
     }
     let repeats = if quick { 3 } else { 7 };

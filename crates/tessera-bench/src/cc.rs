@@ -1,0 +1,177 @@
+//! Catmull-Clark: adaptive (Lai–Cheng, guaranteed bound) against uniform tessellation
+//! at equal measured max error, any segment count per patch. Writes
+//! `OUT/catmull_clark_cpu.{json,md}`.
+
+use std::path::Path;
+use std::time::Instant;
+
+use serde::Serialize;
+use tessera_core::catmull_clark::{
+    surface_samples, tessellate_adaptive, tessellate_uniform, CcParams, CcTessellation, PatchMesh,
+    SurfaceModel, MAX_DEPTH, TREE_DEPTH,
+};
+use tessera_core::io::load_control_mesh;
+use tessera_core::measure::{measure_error, ErrorStats};
+
+#[derive(Serialize)]
+struct Row {
+    model: String,
+    /// Detailed models carry the ≤ 0.5× target; every model the ≤ 1.25× one.
+    detailed: bool,
+    patches: usize,
+    tolerance_rel: f64,
+    tolerance: f64,
+    triangles: usize,
+    guaranteed_error: f64,
+    max_error: f64,
+    mean_error: f64,
+    time_ms: f64,
+    /// Fewest triangles of a uniform grid (n × n per patch, any n) whose measured max
+    /// error is at or under this row's.
+    uniform_segments: u32,
+    uniform_triangles: usize,
+    uniform_max_error: f64,
+    uniform_time_ms: f64,
+    ratio_to_uniform: f64,
+    /// The same against uniform at max error ≤ the tolerance (what a user asking for ε
+    /// would pick with a uniform grid, knowing its error).
+    uniform_triangles_at_tolerance: usize,
+    ratio_at_tolerance: f64,
+}
+
+/// (file, detailed)
+const MODELS: [(&str, bool); 10] = [
+    ("opensubdiv/catmark_car.obj", true),
+    ("opensubdiv/catmark_bishop.obj", true),
+    ("opensubdiv/catmark_rook.obj", true),
+    ("catmull_clark/spot_control_mesh.obj", true),
+    ("catmull_clark/blub_control_mesh.obj", true),
+    ("catmull_clark/penguin_control_mesh.obj", true),
+    ("opensubdiv/catmark_cube.obj", false),
+    ("opensubdiv/catmark_torus.obj", false),
+    ("opensubdiv/catmark_pyramid.obj", false),
+    ("opensubdiv/catmark_xord_interior.obj", false),
+];
+
+fn median_ms(repeats: usize, mut f: impl FnMut() -> CcTessellation) -> (f64, CcTessellation) {
+    let mut times = Vec::new();
+    let mut last = None;
+    for _ in 0..repeats {
+        let t = Instant::now();
+        last = Some(f());
+        times.push(t.elapsed().as_secs_f64() * 1e3);
+    }
+    times.sort_by(f64::total_cmp);
+    (times[times.len() / 2], last.expect("repeats ≥ 1"))
+}
+
+pub fn run(assets: &Path, out_dir: &Path, quick: bool) {
+    let tolerances: &[f64] = if quick { &[3e-3] } else { &[3e-3, 1e-3, 3e-4] };
+    let repeats = if quick { 1 } else { 3 };
+    let mut rows = Vec::new();
+    for (file, detailed) in MODELS {
+        let path = assets.join(file);
+        let control = load_control_mesh(&path).expect("shipped mesh");
+        let model = SurfaceModel::new(PatchMesh::new(&control).expect("valid mesh"), TREE_DEPTH);
+        let diag = control.bbox_diag();
+        let samples = surface_samples(&model, 32);
+        // Uniform error by segment count, measured once per n as needed.
+        let mut uniform: Vec<(usize, ErrorStats, f64)> = Vec::new();
+        let mut uniform_at = |n: u32| -> (usize, ErrorStats, f64) {
+            while uniform.len() < n as usize {
+                let k = uniform.len() as u32 + 1;
+                let (ms, t) =
+                    median_ms(repeats, || tessellate_uniform(&model, k).expect("uniform"));
+                uniform.push((
+                    t.mesh.triangle_count(),
+                    measure_error(&samples, &t.mesh),
+                    ms,
+                ));
+            }
+            uniform[n as usize - 1]
+        };
+        for &rel in tolerances {
+            let tolerance = rel * diag;
+            let params = CcParams {
+                tolerance,
+                max_depth: MAX_DEPTH,
+            };
+            let (ms, out) = median_ms(repeats, || {
+                tessellate_adaptive(&model, &params).expect("adaptive")
+            });
+            let e = measure_error(&samples, &out.mesh);
+            let mut n = 1;
+            while uniform_at(n).1.max_error > e.max_error && n < 256 {
+                n += 1;
+            }
+            let (ut, ue, ums) = uniform_at(n);
+            let mut m = 1;
+            while uniform_at(m).1.max_error > tolerance && m < 256 {
+                m += 1;
+            }
+            let ut_tol = uniform_at(m).0;
+            let row = Row {
+                model: Path::new(file)
+                    .file_stem()
+                    .unwrap()
+                    .to_string_lossy()
+                    .into(),
+                detailed,
+                patches: model.mesh.surface_patches().count(),
+                tolerance_rel: rel,
+                tolerance,
+                triangles: out.mesh.triangle_count(),
+                guaranteed_error: out.max_bound,
+                max_error: e.max_error,
+                mean_error: e.mean_error,
+                time_ms: ms,
+                uniform_segments: n,
+                uniform_triangles: ut,
+                uniform_max_error: ue.max_error,
+                uniform_time_ms: ums,
+                ratio_to_uniform: out.mesh.triangle_count() as f64 / ut as f64,
+                uniform_triangles_at_tolerance: ut_tol,
+                ratio_at_tolerance: out.mesh.triangle_count() as f64 / ut_tol as f64,
+            };
+            eprintln!(
+                "cc {} {rel:e}: {} tris (max {:.3e}), uniform n={n} {} tris (max {:.3e}): {:.3}×",
+                row.model,
+                row.triangles,
+                row.max_error,
+                row.uniform_triangles,
+                row.uniform_max_error,
+                row.ratio_to_uniform
+            );
+            rows.push(row);
+        }
+    }
+    let json = serde_json::to_string_pretty(&rows).expect("rows serialize");
+    std::fs::write(out_dir.join("catmull_clark_cpu.json"), json).expect("write json");
+    std::fs::write(out_dir.join("catmull_clark_cpu.md"), table(&rows)).expect("write md");
+}
+
+fn table(rows: &[Row]) -> String {
+    let mut s = String::from(
+        "| model | patches | ε (of diagonal) | adaptive tris | guaranteed | measured max | mean | time ms | uniform n | uniform tris | uniform max | **ratio** | ratio at ε |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
+    );
+    for r in rows {
+        s += &format!(
+            "| {}{} | {} | {:.0e} | {} | {:.2e} | {:.2e} | {:.2e} | {:.1} | {} | {} | {:.2e} | **{:.2}** | {:.2} |\n",
+            r.model,
+            if r.detailed { "" } else { " (simple)" },
+            r.patches,
+            r.tolerance_rel,
+            r.triangles,
+            r.guaranteed_error,
+            r.max_error,
+            r.mean_error,
+            r.time_ms,
+            r.uniform_segments,
+            r.uniform_triangles,
+            r.uniform_max_error,
+            r.ratio_to_uniform,
+            r.ratio_at_tolerance
+        );
+    }
+    s
+}
