@@ -258,3 +258,128 @@ fn render_rejects_bad_arguments_without_writing() {
         assert!(!path.exists(), "{out} written despite the error");
     }
 }
+
+fn asset(rel: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../assets")
+        .join(rel)
+}
+
+#[test]
+fn catmull_clark_adaptive_and_uniform_write_ply_and_stats() {
+    let (ply, stats) = (tmp("cc.ply"), tmp("cc.json"));
+    let st = tessera()
+        .args(["tessellate"])
+        .arg(asset("catmull_clark/blub_control_mesh.obj"))
+        .args([
+            "--tolerance-rel",
+            "0.003",
+            "--measure",
+            "--backend",
+            "cpu",
+            "-o",
+        ])
+        .arg(&ply)
+        .arg("--stats")
+        .arg(&stats)
+        .output()
+        .unwrap();
+    assert!(
+        st.status.success(),
+        "{}",
+        String::from_utf8_lossy(&st.stderr)
+    );
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&stats).unwrap()).unwrap();
+    for key in [
+        "triangles",
+        "vertices",
+        "patches",
+        "evaluations",
+        "upload_bytes",
+        "timings_ms",
+        "max_error",
+        "mean_error",
+        "bbox_diag",
+        "guaranteed_error",
+    ] {
+        assert!(json.get(key).is_some(), "stats lack {key}: {json}");
+    }
+    let tol = json["tolerance"].as_f64().unwrap();
+    assert!(json["max_error"].as_f64().unwrap() <= tol);
+    assert!(json["guaranteed_error"].as_f64().unwrap() <= tol);
+    assert_eq!(json["unmet"], 0);
+    let text = std::fs::read_to_string(&ply).unwrap();
+    assert!(text.contains(&format!("element face {}", json["triangles"])));
+    assert!(text.contains("property float nx") && text.contains("property uint patch"));
+
+    // --level L is the 2^L grid per patch: 2·4^L triangles per patch.
+    let st = tessera()
+        .args(["tessellate"])
+        .arg(asset("opensubdiv/catmark_cube.obj"))
+        .args(["--method", "uniform", "--level", "2", "--stats"])
+        .arg(&stats)
+        .output()
+        .unwrap();
+    assert!(st.status.success());
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&stats).unwrap()).unwrap();
+    assert_eq!(json["triangles"], 24 * 2 * 16);
+    // Unsupported tags are warned about on stderr, never silently ignored.
+    let st = tessera()
+        .args(["tessellate"])
+        .arg(asset("opensubdiv/catmark_tent_creases0.obj"))
+        .output()
+        .unwrap();
+    assert!(st.status.success());
+    assert!(
+        String::from_utf8_lossy(&st.stderr).contains("warning:")
+            && String::from_utf8_lossy(&st.stderr).contains("crease")
+    );
+}
+
+fn expect_cc_failure(content: &[u8], expect: &str) {
+    let input = tmp("bad_mesh.obj");
+    std::fs::write(&input, content).unwrap();
+    let out = tmp("bad_mesh_out.ply");
+    let _ = std::fs::remove_file(&out);
+    let r = tessera()
+        .arg("tessellate")
+        .arg(&input)
+        .arg("-o")
+        .arg(&out)
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&r.stderr);
+    assert!(!r.status.success(), "accepted bad input {expect}");
+    assert_eq!(stderr.trim().lines().count(), 1, "one line: {stderr}");
+    assert!(
+        stderr.contains(input.to_str().unwrap()) && stderr.contains(expect),
+        "{stderr}"
+    );
+    assert!(!stderr.contains("panicked"));
+    assert!(!out.exists(), "left an output file behind");
+}
+
+#[test]
+fn bad_control_meshes_fail_with_one_line() {
+    let sq = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\n";
+    expect_cc_failure(b"", "empty file");
+    expect_cc_failure(b"\x7fELF\x02\x01\x01\x00\x00", "not a text file");
+    expect_cc_failure(
+        format!("{sq}f 1 2 3 7\n").as_bytes(),
+        ":5: vertex index 7 out of range",
+    );
+    expect_cc_failure(format!("{sq}f 1 0 3\n").as_bytes(), ":5: vertex index 0");
+    expect_cc_failure(
+        b"v 0 nan 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n",
+        ":1: coordinate \"nan\" is not finite",
+    );
+    expect_cc_failure(format!("{sq}f 1 2\n").as_bytes(), ":5: face has 2 vertices");
+    expect_cc_failure(
+        format!("{sq}v 0 -1 0\nv 0 0 1\nf 1 2 3\nf 2 1 5\nf 1 2 6\n").as_bytes(),
+        ":9: non-manifold edge 1-2",
+    );
+    let pole = std::fs::read(asset("opensubdiv/catmark_pole360.obj")).unwrap();
+    expect_cc_failure(&pole, "valence 360; at most 64");
+}
