@@ -173,3 +173,126 @@ fn valence_limits_are_errors() {
     let err = check(text).unwrap_err();
     assert!(err.contains("valence 2"), "{err}");
 }
+
+fn base64(data: &[u8]) -> String {
+    const A: &[u8] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+    let mut s = String::new();
+    for c in data.chunks(3) {
+        let n = (c[0] as u32) << 16
+            | (*c.get(1).unwrap_or(&0) as u32) << 8
+            | *c.get(2).unwrap_or(&0) as u32;
+        for k in 0..4 {
+            s.push(if k <= c.len() {
+                A[(n >> (18 - 6 * k) & 63) as usize] as char
+            } else {
+                '='
+            });
+        }
+    }
+    s
+}
+
+/// A cube as glTF exports it: 24 vertices (4 per face, split by normal), 12 triangles.
+fn split_cube() -> (Vec<u8>, usize, usize) {
+    let corners = |f: usize| -> [[f32; 3]; 4] {
+        let (axis, sign) = (f / 2, if f % 2 == 0 { 1.0 } else { -1.0 });
+        let (a, b) = ((axis + 1) % 3, (axis + 2) % 3);
+        let mut out = [[0f32; 3]; 4];
+        for (k, (s, t)) in [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)]
+            .into_iter()
+            .enumerate()
+        {
+            let mut p = [0f32; 3];
+            p[axis] = sign;
+            p[a] = s;
+            p[b] = t * sign;
+            out[k] = p;
+        }
+        out
+    };
+    let mut bin = Vec::new();
+    for f in 0..6 {
+        for p in corners(f) {
+            for c in p {
+                bin.extend_from_slice(&c.to_le_bytes());
+            }
+        }
+    }
+    let pos_len = bin.len();
+    for f in 0..6u16 {
+        for i in [0, 1, 2, 0, 2, 3] {
+            bin.extend_from_slice(&(4 * f + i).to_le_bytes());
+        }
+    }
+    (bin, pos_len, 36)
+}
+
+fn gltf_json(uri: Option<&str>, bin_len: usize, pos_len: usize, count: usize) -> String {
+    let uri = uri.map(|u| format!(r#""uri":"{u}","#)).unwrap_or_default();
+    format!(
+        r#"{{"asset":{{"version":"2.0"}},"scene":0,"scenes":[{{"nodes":[0]}}],
+        "nodes":[{{"mesh":0,"translation":[10,0,0]}}],
+        "meshes":[{{"primitives":[{{"attributes":{{"POSITION":0}},"indices":1}}]}}],
+        "buffers":[{{{uri}"byteLength":{bin_len}}}],
+        "bufferViews":[{{"buffer":0,"byteOffset":0,"byteLength":{pos_len}}},{{"buffer":0,"byteOffset":{pos_len},"byteLength":{}}}],
+        "accessors":[{{"bufferView":0,"componentType":5126,"count":24,"type":"VEC3","min":[-1,-1,-1],"max":[1,1,1]}},
+                     {{"bufferView":1,"componentType":5123,"count":{count},"type":"SCALAR"}}]}}"#,
+        bin_len - pos_len
+    )
+}
+
+#[test]
+fn gltf_and_glb_triangle_meshes_are_welded_by_position() {
+    use tessera_core::io::gltf::parse_gltf;
+    let (bin, pos_len, count) = split_cube();
+    let uri = format!("data:application/octet-stream;base64,{}", base64(&bin));
+    let gltf = gltf_json(Some(&uri), bin.len(), pos_len, count);
+    // GLB: header, JSON chunk padded with spaces, BIN chunk padded with zeros.
+    let mut json = gltf_json(None, bin.len(), pos_len, count).into_bytes();
+    while json.len() % 4 != 0 {
+        json.push(b' ');
+    }
+    let mut bin_padded = bin.clone();
+    while bin_padded.len() % 4 != 0 {
+        bin_padded.push(0);
+    }
+    let mut glb = Vec::new();
+    glb.extend_from_slice(b"glTF");
+    glb.extend_from_slice(&2u32.to_le_bytes());
+    glb.extend_from_slice(&((12 + 8 + json.len() + 8 + bin_padded.len()) as u32).to_le_bytes());
+    glb.extend_from_slice(&(json.len() as u32).to_le_bytes());
+    glb.extend_from_slice(b"JSON");
+    glb.extend_from_slice(&json);
+    glb.extend_from_slice(&(bin_padded.len() as u32).to_le_bytes());
+    glb.extend_from_slice(b"BIN\0");
+    glb.extend_from_slice(&bin_padded);
+    for (name, bytes) in [("cube.gltf", gltf.into_bytes()), ("cube.glb", glb)] {
+        let mesh = parse_gltf(Path::new(name), &bytes).unwrap();
+        assert_eq!(mesh.positions.len(), 8, "{name}: welded");
+        assert_eq!(mesh.faces.len(), 12, "{name}");
+        // The node's translation is applied.
+        assert!(
+            mesh.positions.iter().all(|p| (p.x - 10.0).abs() == 1.0),
+            "{name}"
+        );
+        let patches = PatchMesh::new(&mesh).expect("closed and manifold once welded");
+        assert_eq!(
+            patches.edge_uses.iter().filter(|&&u| u == 1).count(),
+            0,
+            "{name}: no boundary"
+        );
+    }
+    // Bad glTF: one line naming the file.
+    for (bytes, expect) in [
+        (&b"{\"asset\":"[..], "not a valid glTF file"),
+        (&b""[..], "empty file"),
+    ] {
+        let err = parse_gltf(Path::new("bad.glb"), bytes)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            err.starts_with("bad.glb: ") && err.contains(expect) && err.lines().count() == 1,
+            "{err}"
+        );
+    }
+}

@@ -46,7 +46,7 @@ pub enum Backend {
 #[derive(Args, Debug)]
 pub struct TessellateArgs {
     /// Input surface: a Newell teaset file (Bézier patches) or a Catmull-Clark control
-    /// mesh (.obj).
+    /// mesh (.obj, .gltf, .glb).
     pub input: PathBuf,
     /// Tessellation method (Bézier inputs default to map4p, Catmull-Clark meshes to
     /// adaptive).

@@ -1,6 +1,7 @@
 //! Readers and writers of files.
 
 pub mod export;
+pub mod gltf;
 pub mod obj;
 pub mod teaset;
 
