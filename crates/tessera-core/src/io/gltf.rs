@@ -97,7 +97,7 @@ pub fn parse_gltf(path: &Path, bytes: &[u8]) -> Result<ControlMesh> {
                 Some(i) => i.into_u32().collect(),
                 None => (0..positions.len() as u32).collect(),
             };
-            if indices.len() % 3 != 0 {
+            if !indices.len().is_multiple_of(3) {
                 return Err(Error::input(
                     path,
                     format!(
