@@ -195,7 +195,7 @@ fn base64(data: &[u8]) -> String {
 /// A cube as glTF exports it: 24 vertices (4 per face, split by normal), 12 triangles.
 fn split_cube() -> (Vec<u8>, usize, usize) {
     let corners = |f: usize| -> [[f32; 3]; 4] {
-        let (axis, sign) = (f / 2, if f % 2 == 0 { 1.0 } else { -1.0 });
+        let (axis, sign) = (f / 2, if f.is_multiple_of(2) { 1.0 } else { -1.0 });
         let (a, b) = ((axis + 1) % 3, (axis + 2) % 3);
         let mut out = [[0f32; 3]; 4];
         for (k, (s, t)) in [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)]
@@ -249,11 +249,11 @@ fn gltf_and_glb_triangle_meshes_are_welded_by_position() {
     let gltf = gltf_json(Some(&uri), bin.len(), pos_len, count);
     // GLB: header, JSON chunk padded with spaces, BIN chunk padded with zeros.
     let mut json = gltf_json(None, bin.len(), pos_len, count).into_bytes();
-    while json.len() % 4 != 0 {
+    while !json.len().is_multiple_of(4) {
         json.push(b' ');
     }
     let mut bin_padded = bin.clone();
-    while bin_padded.len() % 4 != 0 {
+    while !bin_padded.len().is_multiple_of(4) {
         bin_padded.push(0);
     }
     let mut glb = Vec::new();
