@@ -74,8 +74,11 @@ impl PatchSurface {
                 .push(Node::Bezier(Box::new(bspline_to_bezier(&net))));
             return id;
         }
-        let corner = ring.irregular_corner(self.rule).unwrap_or(0);
-        if level >= depth && ring.irregular_corner(self.rule).is_some() && level > 0 {
+        if level >= depth {
+            // The extraordinary corner (0 if a regular-looking one-ring failed to give a
+            // net, which the validated topologies do not produce: the node stays sound,
+            // its bound is the convex hull around that corner's limit).
+            let corner = ring.irregular_corner(self.rule).unwrap_or(0);
             let limit = ring.limit_point(corner, self.rule);
             self.nodes.push(Node::Corner(Box::new(CornerNode {
                 corner,
