@@ -11,8 +11,9 @@
 //!
 //! The paper splits at midpoints only, so a patch gets `2^L` cells per side and
 //! loses up to 4× in triangles against a uniform grid of the right size. Here the first
-//! split of a patch is `k × k` for the `k ≤ 8` that gives the fewest leaves (tried in
-//! turn), and every later split is at midpoints as in the paper. Parameters are
+//! split of a patch is `ku × kv` (each ≤ 8; rectangles too, for patches that bend more
+//! one way) for the pair that gives the fewest leaves (tried in turn, skipping pairs
+//! that cannot win), and every later split is at midpoints as in the paper. Parameters are
 //! integers in units of `1 / (840 · 2^max_depth)` (840 = lcm(1..=8)), so keys stay exact.
 //!
 //! # Flatness test with a guaranteed bound
@@ -49,7 +50,7 @@ use crate::error::{Error, Result};
 use crate::gpu_types::OutVertex;
 use crate::mesh::Mesh;
 
-/// The largest first split of a patch (`k × k` cells).
+/// The largest first split of a patch along each side (`ku × kv` cells).
 pub const MAX_BASE_SPLIT: u32 = 8;
 /// lcm(1..=MAX_BASE_SPLIT): every first split divides it.
 const BASE_GRID: u32 = 840;
@@ -362,21 +363,30 @@ pub fn tessellate_adaptive(model: &SurfaceModel, params: &CcParams) -> Result<Cc
     let mut out = CcTessellation::default();
     let mut leaves: Vec<(usize, Cell)> = Vec::new();
 
-    // 1. Adaptive marking. The first split k×k is the one with the fewest leaves.
+    // 1. Adaptive marking. The first split ku×kv is the one with the fewest leaves.
     for p in mesh.surface_patches() {
-        let base_cells = |k: u32| {
-            let w = n / k;
-            (0..k * k).map(move |c| Cell {
-                i: (c % k) * w,
-                j: (c / k) * w,
+        let base_cells = |(ku, kv): (u32, u32)| {
+            let (w, h) = (n / ku, n / kv);
+            (0..ku * kv).map(move |c| Cell {
+                i: (c % ku) * w,
+                j: (c / ku) * h,
                 w,
-                h: w,
+                h,
             })
         };
-        let mut best = (usize::MAX, 1);
-        for k in 1..=MAX_BASE_SPLIT {
+        // Square splits first, then rectangles that could still beat the best so far
+        // (a split into ku·kv cells has at least that many leaves).
+        let mut best = (usize::MAX, (1, 1));
+        let squares = (1..=MAX_BASE_SPLIT).map(|k| (k, k));
+        let rectangles = (1..=MAX_BASE_SPLIT)
+            .flat_map(|ku| (1..=MAX_BASE_SPLIT).map(move |kv| (ku, kv)))
+            .filter(|(ku, kv)| ku != kv);
+        for split in squares.chain(rectangles) {
+            if (split.0 * split.1) as usize >= best.0 {
+                continue;
+            }
             let mut count = 0usize;
-            for cell in base_cells(k) {
+            for cell in base_cells(split) {
                 mark(
                     &mut eval,
                     p,
@@ -385,12 +395,12 @@ pub fn tessellate_adaptive(model: &SurfaceModel, params: &CcParams) -> Result<Cc
                     params.tolerance,
                     &mut |_, _| count += 1,
                 );
+                if count >= best.0 {
+                    break;
+                }
             }
             if count < best.0 {
-                best = (count, k);
-            }
-            if count == (k * k) as usize {
-                break; // every base cell passes: larger k only adds cells
+                best = (count, split);
             }
         }
         for cell in base_cells(best.1) {

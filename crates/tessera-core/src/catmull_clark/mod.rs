@@ -43,7 +43,7 @@ use glam::DVec3;
 /// 840 · 2^10 < 2^20).
 pub const MAX_DEPTH: u32 = 10;
 
-/// Levels of each patch's quadtree: the split depth plus 3 for the first `k × k` split,
+/// Levels of each patch's quadtree: the split depth plus 3 for the first `ku × kv` split,
 /// so that every leaf away from an extraordinary vertex lies in Bézier pieces.
 pub const TREE_DEPTH: u32 = MAX_DEPTH + 3;
 
