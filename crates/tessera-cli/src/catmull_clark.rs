@@ -8,28 +8,19 @@ use tessera_core::catmull_clark::{
     surface_samples, tessellate_adaptive, tessellate_uniform, CcParams, PatchMesh, SurfaceModel,
     MAX_DEPTH, TREE_DEPTH,
 };
-use tessera_core::io::export::{write_atomically, write_mesh, MeshFormat};
+use tessera_core::io::export::{write_atomically, MeshFormat};
 use tessera_core::io::load_control_mesh;
-use tessera_core::measure::{measure_error, ErrorStats};
+use tessera_core::measure::ErrorStats;
 use tessera_core::Error as CoreError;
 use tessera_wgpu::Error;
 
 use crate::cli::{Backend, Method, TessellateArgs};
+use crate::tessellate::{measure_and_write, ms, Timings};
 
 /// Default tolerance as a fraction of the bounding-box diagonal.
 pub const DEFAULT_TOLERANCE_REL: f64 = 1e-3;
 /// Default surface samples per patch side for `--measure` (SPEC §3: at least 32).
 pub const DEFAULT_MEASURE_SAMPLES: usize = 32;
-
-#[derive(Serialize, Default)]
-struct Timings {
-    load: f64,
-    prepare: f64,
-    tessellate: f64,
-    measure: f64,
-    write: f64,
-    total: f64,
-}
 
 #[derive(Serialize)]
 struct Stats {
@@ -58,10 +49,6 @@ struct Stats {
     #[serde(flatten)]
     error: Option<ErrorStats>,
     measure_samples: Option<usize>,
-}
-
-fn ms(t: Instant) -> f64 {
-    t.elapsed().as_secs_f64() * 1e3
 }
 
 pub fn tessellate(args: TessellateArgs) -> Result<(), Error> {
@@ -167,21 +154,13 @@ pub fn tessellate(args: TessellateArgs) -> Result<(), Error> {
         .measure_samples
         .unwrap_or(DEFAULT_MEASURE_SAMPLES)
         .max(32);
-    let error = if args.measure {
-        let t = Instant::now();
-        let samples = surface_samples(&model, measure_samples);
-        let e = measure_error(&samples, &out.mesh);
-        timings.measure = ms(t);
-        Some(e)
-    } else {
-        None
-    };
-
-    let t = Instant::now();
-    if let Some(o) = &args.output {
-        write_mesh(o, &out.mesh)?;
-    }
-    timings.write = ms(t);
+    let error = measure_and_write(
+        &out.mesh,
+        args.measure,
+        || surface_samples(&model, measure_samples),
+        args.output.as_deref(),
+        &mut timings,
+    )?;
     timings.total = ms(t_total);
 
     let stats = Stats {

@@ -3,6 +3,7 @@
 
 use std::time::Instant;
 
+use crate::tessellate::ms;
 use serde::Serialize;
 use tessera_core::bezier::{AdaptiveParams, PreparedBezier};
 use tessera_core::gpu_types::BezierStatus;
@@ -23,10 +24,6 @@ pub struct GpuTimings {
     pub tessellate: f64,
     /// Copying the mesh back (only for files and measurement; drawing needs none).
     pub readback: f64,
-}
-
-fn ms(t: Instant) -> f64 {
-    t.elapsed().as_secs_f64() * 1e3
 }
 
 pub fn open(timings: &mut GpuTimings) -> Result<Gpu> {

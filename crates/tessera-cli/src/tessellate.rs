@@ -20,17 +20,18 @@ use crate::gpu::GpuTimings;
 /// Default threshold as a fraction of the bounding-box diagonal.
 const DEFAULT_THRESHOLD_REL: f32 = 0.002;
 
+/// Per-stage times in ms, as `--stats` writes them (shared by both surface kinds).
 #[derive(Serialize, Default)]
-struct Timings {
-    load: f64,
-    prepare: f64,
-    tessellate: f64,
-    measure: f64,
-    write: f64,
-    total: f64,
+pub(crate) struct Timings {
+    pub load: f64,
+    pub prepare: f64,
+    pub tessellate: f64,
+    pub measure: f64,
+    pub write: f64,
+    pub total: f64,
     /// The GPU backend's stages (`tessellate` above is its timed run).
     #[serde(skip_serializing_if = "Option::is_none")]
-    gpu: Option<GpuTimings>,
+    pub gpu: Option<GpuTimings>,
 }
 
 #[derive(Serialize)]
@@ -57,8 +58,33 @@ struct Stats {
     measure_samples: Option<usize>,
 }
 
-fn ms(t: Instant) -> f64 {
+pub(crate) fn ms(t: Instant) -> f64 {
     t.elapsed().as_secs_f64() * 1e3
+}
+
+/// With `measure`, the error of `mesh` against `samples()`; then `mesh` written to
+/// `output` if given. Both timed into `timings`.
+pub(crate) fn measure_and_write(
+    mesh: &tessera_core::Mesh,
+    measure: bool,
+    samples: impl FnOnce() -> Vec<tessera_wgpu::glam::DVec3>,
+    output: Option<&Path>,
+    timings: &mut Timings,
+) -> Result<Option<ErrorStats>, CoreError> {
+    let error = if measure {
+        let t = Instant::now();
+        let e = measure_error(&samples(), mesh);
+        timings.measure = ms(t);
+        Some(e)
+    } else {
+        None
+    };
+    let t = Instant::now();
+    if let Some(o) = output {
+        write_mesh(o, mesh)?;
+    }
+    timings.write = ms(t);
+    Ok(error)
 }
 
 pub fn run(cli: Cli) -> Result<(), Error> {
@@ -256,21 +282,13 @@ fn tessellate(args: TessellateArgs) -> Result<(), Error> {
     };
     timings.gpu = gpu.as_ref().map(|_| gpu_timings);
 
-    let error = if args.measure {
-        let t = Instant::now();
-        let samples = bezier_surface_samples(&model, measure_samples);
-        let e = measure_error(&samples, &out.mesh);
-        timings.measure = ms(t);
-        Some(e)
-    } else {
-        None
-    };
-
-    let t = Instant::now();
-    if let Some(o) = &args.output {
-        write_mesh(o, &out.mesh)?;
-    }
-    timings.write = ms(t);
+    let error = measure_and_write(
+        &out.mesh,
+        args.measure,
+        || bezier_surface_samples(&model, measure_samples),
+        args.output.as_deref(),
+        &mut timings,
+    )?;
     timings.total = ms(t_total);
 
     let upload = match test {

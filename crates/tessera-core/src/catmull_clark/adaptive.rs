@@ -221,25 +221,11 @@ fn cover(surface: &PatchSurface, b: [f64; 4]) -> Cover {
     };
     let mut stack = vec![(0u32, 0.0, 0.0, 1.0)];
     while let Some((node, ou, ov, s)) = stack.pop() {
-        let i = [
-            b[0].max(ou),
-            b[1].min(ou + s),
-            b[2].max(ov),
-            b[3].min(ov + s),
-        ];
-        if i[0] >= i[1] || i[2] >= i[3] {
+        if overlap(b, ou, ov, s).is_none() {
             continue;
         }
         match &surface.nodes[node as usize] {
-            Node::Bezier(net) => {
-                let local = |a: f64, o: f64| (a - o) / s;
-                let clipped = bicubic::clip(
-                    net,
-                    (local(i[0], ou), local(i[1], ou)),
-                    (local(i[2], ov), local(i[3], ov)),
-                );
-                out.pieces.push((clipped, i));
-            }
+            Node::Bezier(net) => push_piece(&mut out, net, b, (ou, ov, s)),
             Node::Split(children) => {
                 for (c, &child) in children.iter().enumerate() {
                     let h = 0.5 * s;

@@ -16,10 +16,7 @@ use crate::error::{Error, Result};
 
 /// Reads a glTF or GLB file as a control mesh.
 pub fn load_gltf(path: &Path) -> Result<ControlMesh> {
-    let bytes = std::fs::read(path).map_err(|source| Error::Io {
-        path: path.to_path_buf(),
-        source,
-    })?;
+    let bytes = super::read_file(path)?;
     parse_gltf(path, &bytes)
 }
 
@@ -170,8 +167,7 @@ fn read_uri(path: &Path, uri: &str) -> Result<Vec<u8>> {
         return base64_decode(data)
             .ok_or_else(|| Error::input(path, "buffer data URI: invalid base64"));
     }
-    let file = path.parent().unwrap_or(Path::new(".")).join(uri);
-    std::fs::read(&file).map_err(|source| Error::Io { path: file, source })
+    super::read_file(&path.parent().unwrap_or(Path::new(".")).join(uri))
 }
 
 /// Standard base64 (with or without padding).

@@ -12,3 +12,24 @@ pub fn load_control_mesh(
 ) -> crate::Result<crate::catmull_clark::ControlMesh> {
     obj::load_obj(path)
 }
+
+/// Reads a whole input file; the error names it.
+pub(crate) fn read_file(path: &std::path::Path) -> crate::Result<Vec<u8>> {
+    std::fs::read(path).map_err(|source| crate::Error::Io {
+        path: path.to_path_buf(),
+        source,
+    })
+}
+
+/// The bytes of a text format as UTF-8, or an error saying it is not text.
+pub(crate) fn utf8_text<'a>(path: &std::path::Path, bytes: &'a [u8]) -> crate::Result<&'a str> {
+    std::str::from_utf8(bytes).map_err(|e| {
+        crate::Error::input(
+            path,
+            format!(
+                "not a text file (invalid UTF-8 at byte {})",
+                e.valid_up_to()
+            ),
+        )
+    })
+}

@@ -19,10 +19,7 @@ use crate::error::{Error, Result};
 
 /// Reads an OBJ control mesh from disk.
 pub fn load_obj(path: &Path) -> Result<ControlMesh> {
-    let bytes = std::fs::read(path).map_err(|source| Error::Io {
-        path: path.to_path_buf(),
-        source,
-    })?;
+    let bytes = super::read_file(path)?;
     parse_obj(path, &bytes)
 }
 
@@ -34,15 +31,7 @@ pub fn parse_obj(path: &Path, bytes: &[u8]) -> Result<ControlMesh> {
     if bytes.contains(&0) {
         return Err(Error::input(path, "not a text file (contains NUL bytes)"));
     }
-    let text = std::str::from_utf8(bytes).map_err(|e| {
-        Error::input(
-            path,
-            format!(
-                "not a text file (invalid UTF-8 at byte {})",
-                e.valid_up_to()
-            ),
-        )
-    })?;
+    let text = super::utf8_text(path, bytes)?;
 
     let mut mesh = ControlMesh {
         source: path.to_path_buf(),

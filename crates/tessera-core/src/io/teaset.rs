@@ -25,24 +25,13 @@ pub struct TeasetFile {
 
 /// Reads and validates a teaset file from disk.
 pub fn load_teaset(path: &Path) -> Result<TeasetFile> {
-    let bytes = std::fs::read(path).map_err(|source| Error::Io {
-        path: path.to_path_buf(),
-        source,
-    })?;
+    let bytes = super::read_file(path)?;
     parse_teaset(path, &bytes)
 }
 
 /// Parses teaset text; `path` only names the file in errors.
 pub fn parse_teaset(path: &Path, bytes: &[u8]) -> Result<TeasetFile> {
-    let text = std::str::from_utf8(bytes).map_err(|e| {
-        Error::input(
-            path,
-            format!(
-                "not a text file (invalid UTF-8 at byte {})",
-                e.valid_up_to()
-            ),
-        )
-    })?;
+    let text = super::utf8_text(path, bytes)?;
     // Non-blank lines with their 1-based line numbers.
     let lines: Vec<(usize, &str)> = text
         .lines()
