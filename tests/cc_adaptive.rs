@@ -131,7 +131,10 @@ fn the_bound_of_a_cell_is_above_its_true_error() {
         assert!(checked > 10, "{name}: {checked} cells");
     }
     eprintln!("tightest {tightest}");
-    assert!(tightest > 0.5, "the bound is never within 2× of the truth: {tightest}");
+    assert!(
+        tightest > 0.5,
+        "the bound is never within 2× of the truth: {tightest}"
+    );
 }
 
 /// Boundary curves of the surface, densely sampled (for the watertightness check).

@@ -201,14 +201,14 @@ fn push_piece(out: &mut Cover, net: &Net, b: [f64; 4], (ou, ov, s): (f64, f64, f
     out.pieces.push((clipped, i));
 }
 
-/// The stored quadtree ends at `TREE_DEPTH`; a box much smaller than that corner
-/// square gets its one-ring subdivided further here, until the innermost square is
-/// below 1/64 of the box, so that its hull radius does not dominate the bound.
+/// The stored quadtree ends at `TREE_DEPTH`; here the corner's one-ring is subdivided
+/// further until the innermost square is below 1/64 of the box and its hull radius
+/// below `max_hull` (40 levels at most), so that it does not dominate the bound.
 fn expand_corner(
     out: &mut Cover,
     cn: &CornerNode,
     rule: super::BoundaryRule,
-    b: [f64; 4],
+    (b, max_hull): ([f64; 4], f64),
     square: (f64, f64, f64),
 ) {
     let (mut ou, mut ov, mut s) = square;
@@ -216,7 +216,7 @@ fn expand_corner(
     let mut hull = cn.hull_radius;
     let target = (b[1] - b[0]).min(b[3] - b[2]) / 64.0;
     for _ in 0..40 {
-        if s <= target {
+        if s <= target && hull <= max_hull {
             break;
         }
         let children = ring.children(rule);
@@ -245,8 +245,9 @@ fn expand_corner(
     }
 }
 
-/// The quadtree nodes over `[u0, u1] × [v0, v1]` (overlaps of positive area).
-fn cover(surface: &PatchSurface, b: [f64; 4]) -> Cover {
+/// The quadtree nodes over `[u0, u1] × [v0, v1]` (overlaps of positive area), the
+/// squares at extraordinary vertices no wider than `max_hull`.
+fn cover(surface: &PatchSurface, b: [f64; 4], max_hull: f64) -> Cover {
     let mut out = Cover {
         pieces: Vec::new(),
         corners: Vec::new(),
@@ -264,7 +265,9 @@ fn cover(surface: &PatchSurface, b: [f64; 4]) -> Cover {
                     stack.push((child, ou + QUADRANT[c].0 * h, ov + QUADRANT[c].1 * h, h));
                 }
             }
-            Node::Corner(cn) => expand_corner(&mut out, cn, surface.rule, b, (ou, ov, s)),
+            Node::Corner(cn) => {
+                expand_corner(&mut out, cn, surface.rule, (b, max_hull), (ou, ov, s))
+            }
         }
     }
     out
@@ -274,8 +277,13 @@ fn cover(surface: &PatchSurface, b: [f64; 4]) -> Cover {
 /// v1]` of a patch to any triangulation of its polygon (module docs): the smaller of the
 /// parametric and the slab bound. `corners` evaluates the box corners.
 fn cell_bound(surface: &PatchSurface, b: [f64; 4], corners: impl FnOnce() -> [DVec3; 4]) -> f64 {
-    let cover = cover(surface, b);
     let corners = corners();
+    // The innermost square's radius enters the bound as is: keep it well below the
+    // cell's size.
+    let size = (corners[2] - corners[0])
+        .length()
+        .max((corners[3] - corners[1]).length());
+    let cover = cover(surface, b, 1e-4 * size);
     let parametric = if cover.corners.is_empty() {
         waldron_bound(&cover, b)
     } else {
