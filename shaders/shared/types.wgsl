@@ -98,3 +98,28 @@ struct BezierStatus {
 }
 
 @group(0) @binding(0) var<uniform> params: BezierParams;
+
+// Catmull-Clark (`tessera_core::gpu_types`, `tessera_core::catmull_clark::gpu_model`).
+const CC_NODE_BEZIER: u32 = 0u;
+const CC_NODE_SPLIT: u32 = 1u;
+const CC_NODE_CORNER: u32 = 2u;
+const CC_NO_ROOT: u32 = 0xffffffffu;
+const CC_PARAM_ONE: u32 = 0x80000000u;
+
+struct CcNode {
+    kind: u32,
+    index: u32,
+}
+
+struct CcCorner {
+    limit: array<f32, 3>,
+    corner: u32,
+    normal: array<f32, 3>,
+    hull_radius: f32,
+}
+
+struct CcPoint {
+    patch_id: u32,
+    u: u32,
+    v: u32,
+}

@@ -208,3 +208,44 @@ mod tests {
         assert_eq!(std::mem::size_of::<DrawIndexedIndirectArgs>(), 20);
     }
 }
+
+/// Catmull-Clark quadtree node kinds ([`CcNode::kind`]).
+pub const CC_NODE_BEZIER: u32 = 0;
+pub const CC_NODE_SPLIT: u32 = 1;
+pub const CC_NODE_CORNER: u32 = 2;
+/// A patch without a surface (a hole): its root is this.
+pub const CC_NO_ROOT: u32 = u32::MAX;
+/// Patch parameters are fixed point: `u = x / CC_PARAM_ONE`, so that the walk down the
+/// quadtree is exact integer arithmetic, the same on the GPU and in its CPU twin.
+pub const CC_PARAM_ONE: u32 = 1 << 31;
+
+/// A node of a patch's quadtree: a Bézier net (`index` into the nets), a split (`index`
+/// into the child quadruples) or the node at an extraordinary vertex (`index` into the
+/// corners).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq, Eq)]
+pub struct CcNode {
+    pub kind: u32,
+    pub index: u32,
+}
+
+/// The innermost node at an extraordinary vertex: the vertex's limit point and normal,
+/// which node corner it is (0..4), and the radius of a ball around the limit point that
+/// holds the surface over the node.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
+pub struct CcCorner {
+    pub limit: [f32; 3],
+    pub corner: u32,
+    pub normal: [f32; 3],
+    pub hull_radius: f32,
+}
+
+/// A point to evaluate: patch and fixed-point parameters (see [`CC_PARAM_ONE`]).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq, Eq, Hash)]
+pub struct CcPoint {
+    pub patch_id: u32,
+    pub u: u32,
+    pub v: u32,
+}

@@ -10,6 +10,7 @@
 //! | module | what |
 //! |---|---|
 //! | [`bezier`] | the Bézier (displacement-map) tessellation stage |
+//! | [`catmull_clark`] | the Catmull-Clark stage (in progress: upload and exact evaluation) |
 //! | [`output`] | [`MeshBuffers`]: the vertex, index and indirect-draw buffers a stage leaves |
 //! | [`render`] | a lit (optionally wireframe) renderer for the stage's output |
 //! | [`headless`] | device creation without a window, readback |
@@ -25,6 +26,7 @@ pub use glam;
 pub use image;
 
 pub mod bezier;
+pub mod catmull_clark;
 pub mod error;
 pub mod headless;
 pub mod image_out;

@@ -31,7 +31,15 @@ pub const SOURCES: &[(&str, &str)] = &[
         "shared/refine.wgsl",
         include_str!("../../../shaders/shared/refine.wgsl"),
     ),
+    (
+        "shared/cc_patch.wgsl",
+        include_str!("../../../shaders/shared/cc_patch.wgsl"),
+    ),
     ("scan.wgsl", include_str!("../../../shaders/scan.wgsl")),
+    (
+        "cc_vertex_eval.wgsl",
+        include_str!("../../../shaders/cc_vertex_eval.wgsl"),
+    ),
     (
         "bezier_edge_decide.wgsl",
         include_str!("../../../shaders/bezier_edge_decide.wgsl"),

@@ -157,6 +157,37 @@ fn shared_structs_match_their_rust_twins() {
             ),
         ],
     );
+    let (cc, _) = parse("cc_vertex_eval.wgsl");
+    check(
+        &cc,
+        "CcNode",
+        size_of::<CcNode>(),
+        &[
+            ("kind", offset_of!(CcNode, kind)),
+            ("index", offset_of!(CcNode, index)),
+        ],
+    );
+    check(
+        &cc,
+        "CcCorner",
+        size_of::<CcCorner>(),
+        &[
+            ("limit", offset_of!(CcCorner, limit)),
+            ("corner", offset_of!(CcCorner, corner)),
+            ("normal", offset_of!(CcCorner, normal)),
+            ("hull_radius", offset_of!(CcCorner, hull_radius)),
+        ],
+    );
+    check(
+        &cc,
+        "CcPoint",
+        size_of::<CcPoint>(),
+        &[
+            ("patch_id", offset_of!(CcPoint, patch_id)),
+            ("u", offset_of!(CcPoint, u)),
+            ("v", offset_of!(CcPoint, v)),
+        ],
+    );
     let (wgsl_size, members) = layout(&finish, "BezierParams");
     assert_eq!(wgsl_size as usize, size_of::<BezierParams>());
     let names: Vec<&str> = members.iter().map(|(n, _)| n.as_str()).collect();

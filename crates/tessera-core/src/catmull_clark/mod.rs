@@ -21,6 +21,7 @@
 pub mod adaptive;
 pub mod bicubic;
 pub mod control_mesh;
+pub mod gpu_model;
 pub mod keys;
 pub mod local;
 pub mod patch;
@@ -43,9 +44,11 @@ use glam::DVec3;
 /// 840 · 2^10 < 2^20).
 pub const MAX_DEPTH: u32 = 10;
 
-/// Levels of each patch's quadtree: the split depth plus 3 for the first `ku × kv` split,
-/// so that every leaf away from an extraordinary vertex lies in Bézier pieces.
-pub const TREE_DEPTH: u32 = MAX_DEPTH + 3;
+/// Levels of each patch's quadtree. Every point of the adaptive grid (units of
+/// `1 / (840 · 2^MAX_DEPTH)`, above `2^-20`) and of any uniform grid (up to 4096 segments)
+/// then lies in a stored Bézier piece or is the extraordinary vertex itself, so
+/// evaluation never subdivides on demand (and the GPU, which cannot, evaluates them all).
+pub const TREE_DEPTH: u32 = MAX_DEPTH + 11;
 
 /// Loads a control mesh (OBJ, glTF or GLB by extension), validates it and builds its
 /// patches ([`TREE_DEPTH`] levels).

@@ -216,19 +216,21 @@ impl SurfaceModel {
         }
     }
 
-    /// Bytes of the quadtrees in single precision: a Bézier piece is 16 points (192 B),
-    /// a split 4 child indices (16 B), a corner node its limit point, normal and hull
-    /// radius (32 B). What a GPU stage would upload once.
+    /// Bytes of the quadtrees as the GPU reads them ([`super::gpu_model::CcGpuModel`]):
+    /// a root per patch (4 B), a node per node (8 B), and a Bézier net (192 B), a split's
+    /// four children (16 B) or a corner (32 B) each.
     pub fn upload_bytes(&self) -> usize {
-        self.patches
-            .iter()
-            .flat_map(|p| &p.nodes)
-            .map(|n| match n {
-                Node::Bezier(_) => 192,
-                Node::Split(_) => 16,
-                Node::Corner(_) => 32,
-            })
-            .sum()
+        4 * self.patches.len()
+            + self
+                .patches
+                .iter()
+                .flat_map(|p| &p.nodes)
+                .map(|n| match n {
+                    Node::Bezier(_) => 8 + 192,
+                    Node::Split(_) => 8 + 16,
+                    Node::Corner(_) => 8 + 32,
+                })
+                .sum::<usize>()
     }
 
     /// Exact point of patch `p` at `(u, v)`.

@@ -1,0 +1,117 @@
+// Exact evaluation of a Catmull-Clark patch from its flattened quadtree: walk down in
+// fixed point to the Bézier piece holding the point, evaluate the bicubic there.
+// Twin of `tessera_core::catmull_clark::gpu_model::cc_eval`.
+
+#include "shared/types.wgsl"
+
+@group(0) @binding(20) var<storage, read> cc_roots: array<u32>;
+@group(0) @binding(21) var<storage, read> cc_nodes: array<CcNode>;
+@group(0) @binding(22) var<storage, read> cc_splits: array<vec4u>;
+@group(0) @binding(23) var<storage, read> cc_nets: array<GpuPatch>;
+@group(0) @binding(24) var<storage, read> cc_corners: array<CcCorner>;
+
+struct CcSample {
+    position: vec3f,
+    normal: vec3f,
+}
+
+fn cc_bernstein(t: f32) -> vec4f {
+    let s = 1.0 - t;
+    return vec4f(s * s * s, 3.0 * s * s * t, 3.0 * s * t * t, t * t * t);
+}
+
+fn cc_bernstein_d(t: f32) -> vec4f {
+    let s = 1.0 - t;
+    return vec4f(-3.0 * s * s, 3.0 * s * s - 6.0 * s * t, 6.0 * s * t - 3.0 * t * t, 3.0 * t * t);
+}
+
+struct CcDerivs {
+    p: vec3f,
+    pu: vec3f,
+    pv: vec3f,
+}
+
+// Point 0 of a net is absolute, points 1..16 offsets from it (exact shape in f32 for the
+// tiny pieces at extraordinary vertices): the offsets' Bézier sum, then the origin added.
+fn cc_net_eval(k: u32, u: f32, v: f32) -> CcDerivs {
+    let bu = cc_bernstein(u);
+    let bv = cc_bernstein(v);
+    let du = cc_bernstein_d(u);
+    let dv = cc_bernstein_d(v);
+    var d = CcDerivs(vec3f(0.0), vec3f(0.0), vec3f(0.0));
+    for (var j = 0u; j < 4u; j++) {
+        for (var i = 0u; i < 4u; i++) {
+            let o = 3u * (4u * j + i);
+            if o == 0u {
+                continue;
+            }
+            let c = vec3f(cc_nets[k].cp[o], cc_nets[k].cp[o + 1u], cc_nets[k].cp[o + 2u]);
+            d.p += (bu[i] * bv[j]) * c;
+            d.pu += (du[i] * bv[j]) * c;
+            d.pv += (bu[i] * dv[j]) * c;
+        }
+    }
+    d.p += vec3f(cc_nets[k].cp[0], cc_nets[k].cp[1], cc_nets[k].cp[2]);
+    return d;
+}
+
+fn cc_normalize_or_zero(n: vec3f) -> vec3f {
+    let l = length(n);
+    if l > 0.0 {
+        return n / l;
+    }
+    return vec3f(0.0);
+}
+
+// Position and unit normal on a net; where the derivatives are parallel (a collapsed
+// edge) the normal is taken a little inside.
+fn cc_net_point(k: u32, u: f32, v: f32) -> CcSample {
+    let d = cc_net_eval(k, u, v);
+    var n = cross(d.pu, d.pv);
+    if dot(n, n) <= 1e-12 * dot(d.pu, d.pu) * dot(d.pv, d.pv) {
+        let e = cc_net_eval(k, u + (0.5 - u) * 1e-4, v + (0.5 - v) * 1e-4);
+        n = cross(e.pu, e.pv);
+    }
+    return CcSample(d.p, cc_normalize_or_zero(n));
+}
+
+fn cc_eval(point: CcPoint) -> CcSample {
+    var node = cc_roots[point.patch_id];
+    var x = point.u;
+    var y = point.v;
+    var size = CC_PARAM_ONE;
+    // The stored depth bounds the walk; the cap only guards against a corrupt upload.
+    for (var level = 0u; level < 64u; level++) {
+        let nd = cc_nodes[node];
+        if nd.kind == CC_NODE_SPLIT {
+            let half = size >> 1u;
+            let right = x >= half;
+            let top = y >= half;
+            var c = 0u;
+            if right && !top {
+                c = 1u;
+            } else if right && top {
+                c = 2u;
+            } else if top {
+                c = 3u;
+            }
+            if right {
+                x -= half;
+            }
+            if top {
+                y -= half;
+            }
+            size = half;
+            node = cc_splits[nd.index][c];
+        } else if nd.kind == CC_NODE_BEZIER {
+            return cc_net_point(nd.index, f32(x) / f32(size), f32(y) / f32(size));
+        } else {
+            let c = cc_corners[nd.index];
+            return CcSample(
+                vec3f(c.limit[0], c.limit[1], c.limit[2]),
+                vec3f(c.normal[0], c.normal[1], c.normal[2]),
+            );
+        }
+    }
+    return CcSample(vec3f(0.0), vec3f(0.0));
+}
