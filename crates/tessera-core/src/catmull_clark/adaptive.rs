@@ -366,7 +366,13 @@ fn slab_bound(cover: &Cover, b: [f64; 4], c: &[DVec3; 4]) -> Option<f64> {
         if !at_corner {
             return None;
         }
-        hull = hull.max(*r);
+        // The square is within `r` of its limit point, which is a polygon vertex (the
+        // box corner there); `near` keeps the bound sound if it were not.
+        let near = c
+            .iter()
+            .map(|q| (*q - *limit).length())
+            .fold(f64::INFINITY, f64::min);
+        hull = hull.max(r + near);
         lo = lo.min(n.dot(*limit) - r);
         hi = hi.max(n.dot(*limit) + r);
     }
