@@ -123,3 +123,6 @@ struct CcPoint {
     u: u32,
     v: u32,
 }
+
+const CC_HASH_MAX_PROBES: u32 = 64u;
+const CC_NO_SLOT: u32 = 0xffffffffu;

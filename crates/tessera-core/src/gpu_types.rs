@@ -249,3 +249,33 @@ pub struct CcPoint {
     pub u: u32,
     pub v: u32,
 }
+
+/// Probes an insertion into the vertex hash makes before it reports an overflow.
+pub const CC_HASH_MAX_PROBES: u32 = 64;
+/// An item whose key found no slot (the table overflowed).
+pub const CC_NO_SLOT: u32 = u32::MAX;
+
+/// A slot of the vertex hash. Every field is stored bit-inverted so that an all-zero
+/// buffer is an empty table (`clear_buffer` is all the reset there is): a word is
+/// taken when non-zero, and `first` (the smallest item that inserted the key) is kept
+/// with `atomicMax` of `!item`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable, PartialEq, Eq)]
+pub struct CcHashSlot {
+    pub key_hi: u32,
+    pub key_lo: u32,
+    pub first: u32,
+}
+
+/// What the vertex-hash kernels report back.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable, PartialEq, Eq)]
+pub struct CcHashStatus {
+    /// Items to insert (written by the host or an earlier kernel).
+    pub items: u32,
+    /// Non-zero when some key found no slot within [`CC_HASH_MAX_PROBES`].
+    pub overflow: u32,
+    /// Distinct keys, in order of first occurrence.
+    pub unique: u32,
+    pub pad: u32,
+}

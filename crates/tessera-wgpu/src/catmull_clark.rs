@@ -1,7 +1,9 @@
-//! The Catmull-Clark stage on the GPU (issue 5, in progress): the patches' quadtrees
-//! uploaded once ([`CcModelBuffers`]), and the kernel that evaluates surface points
-//! exactly ([`CcVertexEval`], `shaders/cc_vertex_eval.wgsl`, CPU twin
-//! [`tessera_core::catmull_clark::gpu_model::vertex_eval`]).
+//! The Catmull-Clark stage on the GPU (in progress): the patches' quadtrees uploaded
+//! once ([`CcModelBuffers`]), the kernel that evaluates surface points exactly
+//! ([`CcVertexEval`], `shaders/cc_vertex_eval.wgsl`, CPU twin
+//! [`tessera_core::catmull_clark::gpu_model::vertex_eval`]), and the global vertex hash
+//! ([`CcVertexHash`], `shaders/cc_hash_*.wgsl`, twin
+//! [`tessera_core::catmull_clark::vertex_hash`]).
 //!
 //! ```no_run
 //! # fn demo(device: &wgpu::Device, queue: &wgpu::Queue, model: &tessera_core::catmull_clark::SurfaceModel,
@@ -17,10 +19,12 @@
 //! ```
 
 use tessera_core::catmull_clark::gpu_model::CcGpuModel;
+use tessera_core::gpu_types::{CcHashSlot, CcHashStatus};
 use wgpu::util::DeviceExt;
 
 use crate::error::{Error, Result};
-use crate::kernel::Kernel;
+use crate::kernel::{storage, Kernel};
+use crate::scan::{PrefixSum, ScanKernels};
 
 /// The flattened quadtrees on the GPU (bindings 20–24 of the Catmull-Clark kernels).
 pub struct CcModelBuffers {
@@ -138,5 +142,141 @@ impl CcVertexEval {
             timestamp_writes: None,
         });
         self.kernel.dispatch(&mut pass, &bind, max_points, 64);
+    }
+}
+
+/// The vertex-hash kernels (`cc_hash_insert.wgsl`, `cc_hash_number.wgsl`) and the scan.
+pub struct CcHashKernels {
+    insert: Kernel,
+    mark_first: Kernel,
+    assign: Kernel,
+    scan: ScanKernels,
+}
+
+impl CcHashKernels {
+    pub fn new(device: &wgpu::Device) -> Self {
+        CcHashKernels {
+            insert: Kernel::new(device, "cc_hash_insert.wgsl", "main"),
+            mark_first: Kernel::new(device, "cc_hash_number.wgsl", "mark_first"),
+            assign: Kernel::new(device, "cc_hash_number.wgsl", "assign"),
+            scan: ScanKernels::new(device),
+        }
+    }
+}
+
+/// The global vertex hash: canonical keys in, a vertex number per key and the distinct
+/// keys in order of first occurrence out (twin:
+/// [`tessera_core::catmull_clark::vertex_hash`]). The table overflowing is reported in
+/// the status and fixed by [`grow`](Self::grow) and a rerun, like every other buffer.
+pub struct CcVertexHash {
+    /// Slots (a power of two).
+    pub capacity: u32,
+    /// Items (keys) the item buffers hold.
+    pub item_capacity: u32,
+    pub table: wgpu::Buffer,
+    pub item_slot: wgpu::Buffer,
+    pub offsets: wgpu::Buffer,
+    /// Vertex number per item.
+    pub ids: wgpu::Buffer,
+    /// Distinct keys (`[hi, lo]`), in order of first occurrence.
+    pub unique_keys: wgpu::Buffer,
+    /// [`CcHashStatus`](tessera_core::gpu_types::CcHashStatus).
+    pub status: wgpu::Buffer,
+    prefix: PrefixSum,
+}
+
+impl CcVertexHash {
+    /// Buffers for `item_capacity` keys and a table of at least `capacity` slots.
+    pub fn new(
+        device: &wgpu::Device,
+        kernels: &CcHashKernels,
+        item_capacity: u32,
+        capacity: u32,
+    ) -> Self {
+        let capacity = capacity.max(1).next_power_of_two();
+        let items = item_capacity.max(1) as u64;
+        let slot_bytes = std::mem::size_of::<CcHashSlot>() as u64;
+        let offsets = storage(device, "tessera cc hash offsets", 4 * items);
+        let prefix = PrefixSum::new(device, &kernels.scan, &offsets, items as u32);
+        CcVertexHash {
+            capacity,
+            item_capacity: items as u32,
+            table: storage(
+                device,
+                "tessera cc hash table",
+                slot_bytes * capacity as u64,
+            ),
+            item_slot: storage(device, "tessera cc hash item slots", 4 * items),
+            offsets,
+            ids: storage(device, "tessera cc vertex ids", 4 * items),
+            unique_keys: storage(device, "tessera cc unique keys", 8 * items),
+            status: storage(
+                device,
+                "tessera cc hash status",
+                std::mem::size_of::<CcHashStatus>() as u64,
+            ),
+            prefix,
+        }
+    }
+
+    /// Writes the status for a run over the first `items` keys (at most the item
+    /// capacity).
+    pub fn start(&self, queue: &wgpu::Queue, items: u32) {
+        let status = CcHashStatus {
+            items: items.min(self.item_capacity),
+            ..Default::default()
+        };
+        queue.write_buffer(&self.status, 0, bytemuck::bytes_of(&status));
+    }
+
+    /// Records insertion and numbering of `keys` (`[hi, lo]` pairs) into `encoder`.
+    /// [`start`](Self::start) sets how many.
+    pub fn record(
+        &self,
+        device: &wgpu::Device,
+        encoder: &mut wgpu::CommandEncoder,
+        kernels: &CcHashKernels,
+        keys: &wgpu::Buffer,
+    ) {
+        encoder.clear_buffer(&self.table, 0, None);
+        let entries = [
+            (40, keys),
+            (41, &self.table),
+            (42, &self.item_slot),
+            (43, &self.status),
+            (44, &self.offsets),
+            (45, &self.ids),
+            (46, &self.unique_keys),
+        ];
+        let insert = kernels.insert.bind(device, &entries);
+        let mark = kernels.mark_first.bind(device, &entries);
+        let assign = kernels.assign.bind(device, &entries);
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some("tessera cc vertex hash"),
+            timestamp_writes: None,
+        });
+        let n = self.item_capacity;
+        kernels.insert.dispatch(&mut pass, &insert, n, 64);
+        kernels.mark_first.dispatch(&mut pass, &mark, n, 64);
+        self.prefix.record(&mut pass, &kernels.scan);
+        kernels.assign.dispatch(&mut pass, &assign, n, 64);
+    }
+
+    /// After an overflow: a table twice as large (and at least twice the items), same
+    /// item buffers. Errors past the device's buffer size limit.
+    pub fn grow(&mut self, device: &wgpu::Device) -> Result<()> {
+        let capacity = (2 * self.capacity).max((2 * self.item_capacity).next_power_of_two());
+        let bytes = capacity as u64 * std::mem::size_of::<CcHashSlot>() as u64;
+        let limit = device.limits().max_storage_buffer_binding_size;
+        if bytes > limit {
+            return Err(Error::OutputTooLarge {
+                what: "vertex hash",
+                bytes,
+                limit,
+            });
+        }
+        self.table = storage(device, "tessera cc hash table", bytes);
+        self.capacity = capacity;
+        Ok(())
     }
 }

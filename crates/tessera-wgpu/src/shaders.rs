@@ -35,7 +35,19 @@ pub const SOURCES: &[(&str, &str)] = &[
         "shared/cc_patch.wgsl",
         include_str!("../../../shaders/shared/cc_patch.wgsl"),
     ),
+    (
+        "shared/cc_hash.wgsl",
+        include_str!("../../../shaders/shared/cc_hash.wgsl"),
+    ),
     ("scan.wgsl", include_str!("../../../shaders/scan.wgsl")),
+    (
+        "cc_hash_insert.wgsl",
+        include_str!("../../../shaders/cc_hash_insert.wgsl"),
+    ),
+    (
+        "cc_hash_number.wgsl",
+        include_str!("../../../shaders/cc_hash_number.wgsl"),
+    ),
     (
         "cc_vertex_eval.wgsl",
         include_str!("../../../shaders/cc_vertex_eval.wgsl"),

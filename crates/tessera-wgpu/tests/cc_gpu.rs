@@ -2,9 +2,10 @@
 //! double-precision reference. Any wgpu validation error fails.
 
 use tessera_core::catmull_clark::gpu_model::{fixed_param, vertex_eval, CcGpuModel};
-use tessera_core::catmull_clark::{load_surface, SurfaceModel};
-use tessera_core::gpu_types::{CcPoint, OutVertex};
-use tessera_wgpu::catmull_clark::{CcModelBuffers, CcVertexEval};
+use tessera_core::catmull_clark::vertex_hash::{number_keys, split_key};
+use tessera_core::catmull_clark::{load_surface, tessellate_uniform, SurfaceModel};
+use tessera_core::gpu_types::{CcHashStatus, CcPoint, OutVertex};
+use tessera_wgpu::catmull_clark::{CcHashKernels, CcModelBuffers, CcVertexEval, CcVertexHash};
 use tessera_wgpu::headless::Gpu;
 use wgpu::util::DeviceExt;
 
@@ -150,4 +151,117 @@ fn moved_control_points_reupload_in_place_and_a_new_shape_is_refused() {
     let other = CcGpuModel::new(&model("opensubdiv/catmark_pyramid.obj"));
     assert!(buffers.update(&gpu.queue, &other).is_err());
     gpu.check().expect("no wgpu errors");
+}
+
+/// Keys of every grid point of every patch, patch after patch: each point on a patch
+/// edge or corner comes several times (once per patch around it).
+fn grid_keys(model: &SurfaceModel, n: u32) -> Vec<[u32; 2]> {
+    use tessera_core::catmull_clark::keys::point_key;
+    let mut keys = Vec::new();
+    for p in model.mesh.surface_patches() {
+        for j in 0..=n {
+            for i in 0..=n {
+                keys.push(split_key(point_key(&model.mesh, p, i, j, n)));
+            }
+        }
+    }
+    keys
+}
+
+/// Runs the hash on the GPU, growing and retrying on overflow; returns the ids, the
+/// distinct keys and how many times it grew.
+fn hash_on_gpu(gpu: &Gpu, keys: &[[u32; 2]], capacity: u32) -> (Vec<u32>, Vec<[u32; 2]>, u32) {
+    let device = &gpu.device;
+    let kernels = CcHashKernels::new(device);
+    let key_buf = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+        label: None,
+        contents: bytemuck::cast_slice(keys),
+        usage: wgpu::BufferUsages::STORAGE,
+    });
+    let mut hash = CcVertexHash::new(device, &kernels, keys.len() as u32, capacity);
+    let mut grew = 0;
+    loop {
+        hash.start(&gpu.queue, keys.len() as u32);
+        let mut encoder = device.create_command_encoder(&Default::default());
+        hash.record(device, &mut encoder, &kernels, &key_buf);
+        gpu.queue.submit([encoder.finish()]);
+        let status = gpu
+            .read_pod::<CcHashStatus>(&hash.status, 1)
+            .expect("status")[0];
+        gpu.check().expect("no wgpu errors");
+        if status.overflow == 0 {
+            let ids = gpu.read_pod::<u32>(&hash.ids, keys.len()).expect("ids");
+            let unique = gpu
+                .read_pod::<[u32; 2]>(&hash.unique_keys, status.unique as usize)
+                .expect("keys");
+            return (ids, unique, grew);
+        }
+        hash.grow(device).expect("grows");
+        grew += 1;
+    }
+}
+
+#[test]
+fn the_vertex_hash_numbers_like_its_twin_and_the_cpu_reference() {
+    let gpu = gpu();
+    for (name, n) in [
+        ("opensubdiv/catmark_cube.obj", 5),
+        ("catmull_clark/spot_control_mesh.obj", 3),
+    ] {
+        let model = model(name);
+        let keys = grid_keys(&model, n);
+        // The reference: the uniform tessellation shares vertices through the same keys.
+        let vertices = tessellate_uniform(&model, n)
+            .expect("uniform")
+            .mesh
+            .vertices
+            .len();
+        let (twin_ids, twin_keys) = number_keys(&keys, 2 * keys.len() as u32).expect("fits");
+        assert_eq!(twin_keys.len(), vertices, "{name}: distinct points");
+        let (ids, unique, grew) = hash_on_gpu(&gpu, &keys, 2 * keys.len() as u32);
+        assert_eq!(grew, 0);
+        assert_eq!(ids, twin_ids, "{name}: vertex numbers");
+        assert_eq!(unique, twin_keys, "{name}: distinct keys in order");
+        // Every item's number names its own key.
+        for (k, id) in keys.iter().zip(&ids) {
+            assert_eq!(unique[*id as usize], *k);
+        }
+        // A second run gives the same buffers, whatever the timing.
+        let again = hash_on_gpu(&gpu, &keys, 2 * keys.len() as u32);
+        assert_eq!((again.0, again.1), (ids, unique));
+    }
+}
+
+#[test]
+fn a_tiny_hash_overflows_then_grows_to_the_same_numbering() {
+    let gpu = gpu();
+    let model = model("opensubdiv/catmark_cube.obj");
+    let keys = grid_keys(&model, 4);
+    assert!(
+        number_keys(&keys, 8).is_none(),
+        "the twin reports the overflow too"
+    );
+    let (twin_ids, twin_keys) = number_keys(&keys, 4096).expect("fits");
+    let (ids, unique, grew) = hash_on_gpu(&gpu, &keys, 8);
+    assert!(
+        grew >= 1,
+        "8 slots for {} keys must overflow",
+        twin_keys.len()
+    );
+    assert_eq!(ids, twin_ids);
+    assert_eq!(unique, twin_keys);
+}
+
+#[test]
+fn the_hash_twin_catches_a_planted_collision() {
+    // Test the tester: two different keys with equal high words must stay apart, and a
+    // key differing in one bit must get its own number.
+    let keys = [[7, 1], [7, 2], [7, 1], [8, 1], [7, 2], [7, 3]];
+    let (ids, unique) =
+        number_keys(&keys, 2).map_or_else(|| number_keys(&keys, 16).expect("fits"), |r| r);
+    assert_eq!(ids, [0, 1, 0, 2, 1, 3]);
+    assert_eq!(unique, [[7, 1], [7, 2], [8, 1], [7, 3]]);
+    let gpu = gpu();
+    let (g_ids, g_unique, _) = hash_on_gpu(&gpu, &keys, 2);
+    assert_eq!((g_ids, g_unique), (ids.clone(), unique));
 }

@@ -188,6 +188,28 @@ fn shared_structs_match_their_rust_twins() {
             ("v", offset_of!(CcPoint, v)),
         ],
     );
+    let (hash, _) = parse("cc_hash_number.wgsl");
+    check(
+        &hash,
+        "CcHashSlot",
+        size_of::<CcHashSlot>(),
+        &[
+            ("key_hi", offset_of!(CcHashSlot, key_hi)),
+            ("key_lo", offset_of!(CcHashSlot, key_lo)),
+            ("first", offset_of!(CcHashSlot, first)),
+        ],
+    );
+    check(
+        &hash,
+        "CcHashStatus",
+        size_of::<CcHashStatus>(),
+        &[
+            ("items", offset_of!(CcHashStatus, items)),
+            ("overflow", offset_of!(CcHashStatus, overflow)),
+            ("unique", offset_of!(CcHashStatus, unique)),
+            ("pad", offset_of!(CcHashStatus, pad)),
+        ],
+    );
     let (wgsl_size, members) = layout(&finish, "BezierParams");
     assert_eq!(wgsl_size as usize, size_of::<BezierParams>());
     let names: Vec<&str> = members.iter().map(|(n, _)| n.as_str()).collect();

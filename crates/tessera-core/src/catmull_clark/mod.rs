@@ -29,6 +29,7 @@ pub mod refine;
 pub mod topology;
 pub mod triangulate;
 pub mod uniform;
+pub mod vertex_hash;
 
 use std::path::Path;
 
