@@ -8,6 +8,17 @@ fn tessera() -> Command {
     Command::new(env!("CARGO_BIN_EXE_tessera"))
 }
 
+/// Runs the command and asserts it succeeded, showing its stderr if not.
+fn run_ok(cmd: &mut Command) -> std::process::Output {
+    let out = cmd.output().unwrap();
+    assert!(
+        out.status.success(),
+        "{cmd:?}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    out
+}
+
 fn teapot() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/teaset/teapot")
 }
@@ -22,24 +33,19 @@ fn tmp(name: &str) -> PathBuf {
 fn writes_obj_ply_and_stats() {
     let (obj, ply, stats) = (tmp("t.obj"), tmp("t.ply"), tmp("s.json"));
     for out in [&obj, &ply] {
-        let st = tessera()
-            .args([
-                "tessellate",
-                teapot().to_str().unwrap(),
-                "--method",
-                "map4p",
-                "--measure",
-                "--stats",
-            ])
-            .arg(&stats)
-            .arg("-o")
-            .arg(out)
-            .output()
-            .unwrap();
-        assert!(
-            st.status.success(),
-            "{}",
-            String::from_utf8_lossy(&st.stderr)
+        run_ok(
+            tessera()
+                .args([
+                    "tessellate",
+                    teapot().to_str().unwrap(),
+                    "--method",
+                    "map4p",
+                    "--measure",
+                    "--stats",
+                ])
+                .arg(&stats)
+                .arg("-o")
+                .arg(out),
         );
     }
     let json = stats_with_spec_keys(&stats, &[]);
@@ -62,20 +68,19 @@ fn writes_obj_ply_and_stats() {
 fn target_triangles_lands_within_two_percent() {
     let stats = tmp("target.json");
     for method in ["map4p", "flat"] {
-        let st = tessera()
-            .args([
-                "tessellate",
-                teapot().to_str().unwrap(),
-                "--method",
-                method,
-                "--target-triangles",
-                "6000",
-                "--stats",
-            ])
-            .arg(&stats)
-            .output()
-            .unwrap();
-        assert!(st.status.success());
+        run_ok(
+            tessera()
+                .args([
+                    "tessellate",
+                    teapot().to_str().unwrap(),
+                    "--method",
+                    method,
+                    "--target-triangles",
+                    "6000",
+                    "--stats",
+                ])
+                .arg(&stats),
+        );
         let json: serde_json::Value =
             serde_json::from_str(&std::fs::read_to_string(&stats).unwrap()).unwrap();
         let n = json["triangles"].as_f64().unwrap();
@@ -192,23 +197,18 @@ fn bad_parameters_fail_cleanly() {
 fn gpu_and_cpu_backends_write_identical_files() {
     let (gpu, cpu, stats) = (tmp("gpu.ply"), tmp("cpu.ply"), tmp("gpu.json"));
     for (backend, out) in [("gpu", &gpu), ("cpu", &cpu)] {
-        let st = tessera()
-            .args([
-                "tessellate",
-                teapot().to_str().unwrap(),
-                "--method",
-                "map4p",
-            ])
-            .args(["--threshold", "0.02", "--backend", backend, "--stats"])
-            .arg(&stats)
-            .arg("-o")
-            .arg(out)
-            .output()
-            .unwrap();
-        assert!(
-            st.status.success(),
-            "{backend}: {}",
-            String::from_utf8_lossy(&st.stderr)
+        run_ok(
+            tessera()
+                .args([
+                    "tessellate",
+                    teapot().to_str().unwrap(),
+                    "--method",
+                    "map4p",
+                ])
+                .args(["--threshold", "0.02", "--backend", backend, "--stats"])
+                .arg(&stats)
+                .arg("-o")
+                .arg(out),
         );
         if backend == "gpu" {
             let s: serde_json::Value =
@@ -231,22 +231,17 @@ fn gpu_and_cpu_backends_write_identical_files() {
 #[test]
 fn render_writes_a_png_of_the_requested_size() {
     let png = tmp("teapot.png");
-    let st = tessera()
-        .args([
-            "render",
-            teapot().to_str().unwrap(),
-            "--size",
-            "96x64",
-            "--wireframe",
-            "-o",
-        ])
-        .arg(&png)
-        .output()
-        .unwrap();
-    assert!(
-        st.status.success(),
-        "{}",
-        String::from_utf8_lossy(&st.stderr)
+    run_ok(
+        tessera()
+            .args([
+                "render",
+                teapot().to_str().unwrap(),
+                "--size",
+                "96x64",
+                "--wireframe",
+                "-o",
+            ])
+            .arg(&png),
     );
     let bytes = std::fs::read(&png).unwrap();
     assert_eq!(&bytes[..8], b"\x89PNG\r\n\x1a\n");
@@ -281,26 +276,21 @@ fn asset(rel: &str) -> PathBuf {
 #[test]
 fn catmull_clark_adaptive_and_uniform_write_ply_and_stats() {
     let (ply, stats) = (tmp("cc.ply"), tmp("cc.json"));
-    let st = tessera()
-        .args(["tessellate"])
-        .arg(asset("catmull_clark/blub_control_mesh.obj"))
-        .args([
-            "--tolerance-rel",
-            "0.003",
-            "--measure",
-            "--backend",
-            "cpu",
-            "-o",
-        ])
-        .arg(&ply)
-        .arg("--stats")
-        .arg(&stats)
-        .output()
-        .unwrap();
-    assert!(
-        st.status.success(),
-        "{}",
-        String::from_utf8_lossy(&st.stderr)
+    run_ok(
+        tessera()
+            .args(["tessellate"])
+            .arg(asset("catmull_clark/blub_control_mesh.obj"))
+            .args([
+                "--tolerance-rel",
+                "0.003",
+                "--measure",
+                "--backend",
+                "cpu",
+                "-o",
+            ])
+            .arg(&ply)
+            .arg("--stats")
+            .arg(&stats),
     );
     let json = stats_with_spec_keys(&stats, &["guaranteed_error"]);
     let tol = json["tolerance"].as_f64().unwrap();
@@ -312,24 +302,22 @@ fn catmull_clark_adaptive_and_uniform_write_ply_and_stats() {
     assert!(text.contains("property float nx") && text.contains("property uint patch"));
 
     // --level L is the 2^L grid per patch: 2·4^L triangles per patch.
-    let st = tessera()
-        .args(["tessellate"])
-        .arg(asset("opensubdiv/catmark_cube.obj"))
-        .args(["--method", "uniform", "--level", "2", "--stats"])
-        .arg(&stats)
-        .output()
-        .unwrap();
-    assert!(st.status.success());
+    run_ok(
+        tessera()
+            .args(["tessellate"])
+            .arg(asset("opensubdiv/catmark_cube.obj"))
+            .args(["--method", "uniform", "--level", "2", "--stats"])
+            .arg(&stats),
+    );
     let json: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&stats).unwrap()).unwrap();
     assert_eq!(json["triangles"], 24 * 2 * 16);
     // Unsupported tags are warned about on stderr, never silently ignored.
-    let st = tessera()
-        .args(["tessellate"])
-        .arg(asset("opensubdiv/catmark_tent_creases0.obj"))
-        .output()
-        .unwrap();
-    assert!(st.status.success());
+    let st = run_ok(
+        tessera()
+            .args(["tessellate"])
+            .arg(asset("opensubdiv/catmark_tent_creases0.obj")),
+    );
     assert!(
         String::from_utf8_lossy(&st.stderr).contains("warning:")
             && String::from_utf8_lossy(&st.stderr).contains("crease")
