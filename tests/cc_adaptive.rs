@@ -3,7 +3,7 @@
 
 use glam::DVec3;
 use tessera_core::catmull_clark::adaptive::flatness_bound;
-use tessera_core::catmull_clark::triangulate::{triangulate, PolyVertex};
+use tessera_core::catmull_clark::triangulate::{self, PolyVertex};
 use tessera_core::catmull_clark::{
     surface_samples, tessellate_adaptive, tessellate_uniform, CcParams, CcTessellation,
     SurfaceModel,
@@ -225,37 +225,50 @@ fn output_is_deterministic_and_faces_outwards() {
 
 #[test]
 fn polygons_with_points_on_every_side_triangulate_without_slivers() {
-    // Corners of a 4×4 square with 3, 1, 0 and 2 points on its sides.
-    let pts: Vec<(i64, i64)> = vec![
-        (0, 0),
-        (1, 0),
-        (2, 0),
-        (3, 0),
-        (4, 0),
-        (4, 2),
-        (4, 4),
-        (0, 4),
-        (0, 3),
-        (0, 1),
-    ];
-    let poly: Vec<PolyVertex> = pts
-        .iter()
-        .enumerate()
-        .map(|(k, &(i, j))| PolyVertex { i, j, id: k as u32 })
-        .collect();
-    let mut out = Vec::new();
-    triangulate(
-        poly,
-        |id| DVec3::new(pts[id as usize].0 as f64, pts[id as usize].1 as f64, 0.0),
-        &mut out,
-    );
-    assert_eq!(out.len() / 3, pts.len() - 2);
-    let mut area = 0;
-    for t in out.chunks(3) {
-        let [a, b, c] = [t[0], t[1], t[2]].map(|k| pts[k as usize]);
-        let cross = (b.0 - a.0) * (c.1 - a.1) - (b.1 - a.1) * (c.0 - a.0);
-        assert!(cross > 0, "degenerate or flipped {t:?}");
-        area += cross;
+    // A 4×4 square with every combination of 0..=3 points on each side, zipped from
+    // either corner (the space positions are sheared one way or the other so that each
+    // diagonal is the shorter in turn): every triangle counter-clockwise with positive
+    // area, together tiling the square.
+    let mut zips = [0usize; 2];
+    for code in 0..4usize.pow(4) {
+        let counts: [usize; 4] = std::array::from_fn(|s| (code >> (2 * s)) & 3);
+        let corner = [(0i64, 0i64), (4, 0), (4, 4), (0, 4)];
+        let mut pts = Vec::new();
+        let mut corners = [0; 4];
+        for s in 0..4 {
+            corners[s] = pts.len();
+            let (a, b) = (corner[s], corner[(s + 1) % 4]);
+            pts.push(a);
+            // Points at distinct integer steps along the side.
+            for k in 1..=counts[s] as i64 {
+                pts.push((a.0 + (b.0 - a.0) * k / 4, a.1 + (b.1 - a.1) * k / 4));
+            }
+        }
+        let poly: Vec<PolyVertex> = pts
+            .iter()
+            .enumerate()
+            .map(|(k, &(i, j))| PolyVertex { i, j, id: k as u32 })
+            .collect();
+        for shear in [-0.5, 0.5] {
+            let position = |id: u32| {
+                let (i, j) = pts[id as usize];
+                DVec3::new(i as f64 + shear * j as f64, j as f64, 0.0)
+            };
+            let d02 = (position(corners[0] as u32) - position(corners[2] as u32)).length_squared();
+            let d13 = (position(corners[1] as u32) - position(corners[3] as u32)).length_squared();
+            zips[triangulate::zip_start(d02, d13)] += 1;
+            let mut out = Vec::new();
+            triangulate::triangulate(&poly, corners, position, &mut out);
+            assert_eq!(out.len() / 3, pts.len() - 2, "{counts:?}");
+            let mut area = 0;
+            for t in out.chunks(3) {
+                let [a, b, c] = [t[0], t[1], t[2]].map(|k| pts[k as usize]);
+                let cross = (b.0 - a.0) * (c.1 - a.1) - (b.1 - a.1) * (c.0 - a.0);
+                assert!(cross > 0, "{counts:?}: degenerate or flipped {t:?}");
+                area += cross;
+            }
+            assert_eq!(area, 2 * 16, "{counts:?}: the triangles tile the square");
+        }
     }
-    assert_eq!(area, 2 * 16, "the triangles tile the square");
+    assert!(zips[0] > 0 && zips[1] > 0, "both diagonals tried: {zips:?}");
 }

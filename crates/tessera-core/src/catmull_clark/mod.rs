@@ -20,6 +20,7 @@
 
 pub mod adaptive;
 pub mod bicubic;
+pub mod bound;
 pub mod control_mesh;
 pub mod gpu_model;
 pub mod keys;
@@ -50,6 +51,11 @@ pub const MAX_DEPTH: u32 = 10;
 /// then lies in a stored Bézier piece or is the extraordinary vertex itself, so
 /// evaluation never subdivides on demand (and the GPU, which cannot, evaluates them all).
 pub const TREE_DEPTH: u32 = MAX_DEPTH + 11;
+
+/// Depth of the chain of squares stored at each extraordinary vertex (three Bézier
+/// pieces per level): its innermost square, whose one-ring hull the flatness bound adds
+/// as a ball, is then `λ^40` of the patch (below 1e-6 of it even at valence 64).
+pub const CORNER_DEPTH: u32 = 40;
 
 /// Loads a control mesh (OBJ, glTF or GLB by extension), validates it and builds its
 /// patches ([`TREE_DEPTH`] levels).

@@ -7,6 +7,9 @@
 //! around each extraordinary vertex) ending in a [`CornerNode`] that holds the limit
 //! point and normal of the vertex and its one-ring, so that any parameter, however close
 //! to the vertex, can still be evaluated exactly by subdividing further on demand.
+//! Below `depth` only the squares at an extraordinary vertex are split further, down
+//! to [`CORNER_DEPTH`](super::CORNER_DEPTH), so that the innermost square, which the
+//! flatness bound treats as a ball around the limit point, is negligibly small.
 //! Every dyadic parameter of depth ≤ `depth` lies in a Bézier piece or is the vertex
 //! itself, so the tessellator evaluates bicubics only.
 
@@ -74,7 +77,19 @@ impl PatchSurface {
                 .push(Node::Bezier(Box::new(bspline_to_bezier(&net))));
             return id;
         }
-        if level >= depth {
+        // Below `depth`, only the chain of squares shrinking onto an extraordinary
+        // vertex goes on (three Bézier pieces per level), down to `CORNER_DEPTH`: the
+        // flatness bound then reads stored pieces only, on the CPU as on the GPU.
+        let chain_ends = level >= super::CORNER_DEPTH || {
+            level >= depth
+                && ring
+                    .children(self.rule)
+                    .iter()
+                    .filter(|c| c.regular_net(self.rule).is_none())
+                    .count()
+                    != 1
+        };
+        if chain_ends {
             // The extraordinary corner (0 if a regular-looking one-ring failed to give a
             // net, which the validated topologies do not produce: the node stays sound,
             // its bound is the convex hull around that corner's limit).

@@ -54,7 +54,7 @@ pub fn tessellate_uniform(model: &SurfaceModel, n: u32) -> Result<CcTessellation
                     corner(i + 1, j + 1),
                     corner(i, j + 1),
                 ];
-                triangulate(cell, position, &mut out.mesh.indices);
+                triangulate(&cell, [0, 1, 2, 3], position, &mut out.mesh.indices);
             }
         }
         out.leaves += (n * n) as usize;

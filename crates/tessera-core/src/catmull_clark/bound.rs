@@ -1,0 +1,489 @@
+//! The flatness bound: a guaranteed upper bound on the distance between the surface
+//! over a box of a patch and ANY triangulation of the box's polygon (its corners plus
+//! whatever points finer neighbours put on its sides). The adaptive tessellator splits
+//! a cell until this is at most ε. It is the smaller of two bounds.
+//!
+//! **Parametric.** The output over a leaf is the piecewise-linear interpolant `L S` of
+//! the surface at the polygon's vertices. Where the surface is C² over the cell,
+//! `|S - L S| ≤ M R² / 2` on every triangle, with `M` a bound on the second directional
+//! derivative and `R` the radius of a disc holding the triangle (Waldron 1998). In the
+//! cell's unit coordinates `R² ≤ ½`, so the bound is `M / 4`, `M` from the Bézier nets of
+//! the second derivatives of the pieces that cover the cell
+//! ([`bicubic::second_derivatives`]). A cell touching the innermost square around an
+//! extraordinary vertex has no bounded second derivative. There, with `B` the bilinear
+//! quad through its corners, `|S - L S| ≤ |S - B| + |B - L B| + |L (B - S)| ≤ D +
+//! |twist|/4 + D_side`, where `D` bounds `|S - B|` over the cell and `D_side` along its
+//! sides, from the control points of the Bézier pieces, and for the innermost square the
+//! convex-hull radius of its one-ring plus the distance from the limit point to `B` (the
+//! paper's `m_ε` argument: that square shrinks to the vertex).
+//!
+//! **Slab (geometric).** A parametric bound also counts how unevenly the parameter runs
+//! over the surface, which costs nothing in distance: near an extraordinary vertex it is
+//! 2–300× the true distance, and even on regular cells of the cube it doubles the
+//! triangle count. The slab bound measures distance only. Take the unit normal `n` of
+//! the corners' diagonals and project along it onto the plane `Π ⊥ n`:
+//! - `T`: the surface over the cell lies in a slab `lo ≤ n·x ≤ hi` (control points of
+//!   the pieces, the innermost square as a ball), `T = hi - lo`; so do the polygon's
+//!   triangles, whose vertices are surface points.
+//! - The projected surface keeps orientation: `n · (a × b) > 0` for every pair of
+//!   u- and v-derivative control vectors of every piece (so the Jacobian of the projection
+//!   is positive everywhere: Bernstein weights are non-negative).
+//! - Each side is monotone along its projected chord (its derivative control vectors have
+//!   positive dot product with the chord) and lies in a band of width `w` around the
+//!   chord's line (signed offsets of its control points); near a vertex it is only known
+//!   to lie within `h` (hull radius of the innermost square) of the vertex.
+//!
+//! Let `q` be the projection of a surface point `x` of the cell. By the degree of the
+//! projection (positive Jacobian), the image of the cell's boundary winds around `q` at
+//! least once. That image minus the projected polygon is a sum of loops, each a piece of
+//! a side between two consecutive polygon vertices and its chord; by monotonicity each
+//! loop lies within `δ = w + 4h` of its chord (the one at the vertex within `δ` of its
+//! two chords: a star-shaped region). So either the projected polygon winds around `q`,
+//! and then a point `y` of the triangles projects onto `q` (a piecewise-linear disc
+//! covers what its boundary winds around) with `|x - y| ≤ T`; or some loop winds around
+//! `q`, so `q` is within `δ` of a chord and `|x - y| ≤ sqrt(T² + δ²)` for a point `y`
+//! of that chord. Points of the innermost square are within `h` of the vertex. The bound
+//! is `max(sqrt(T² + δ²), h)`. It fails (and the parametric bound is used alone) only
+//! where the projection folds or a side doubles back.
+//!
+//! # How it reads the surface (the same way as the GPU)
+//!
+//! The box is given in **walk units**, `1 / (105 · 2^21)` of the patch side, in which every
+//! node of the stored quadtree down to level 21 and every cell of the adaptive grid has
+//! integer corners. The quadtree is walked from the root: a node partly inside the box is
+//! clipped (de Casteljau) or, if split, its children visited; a node wholly inside is
+//! taken as is, and its descendants (the chain of squares at an extraordinary vertex,
+//! [`CORNER_DEPTH`](super::CORNER_DEPTH) levels deep) inherit from it which sides of the
+//! box they lie on. Each piece is fed to [`BoundSum`], which keeps every running maximum
+//! the two bounds need. Points are taken relative to the box's first corner, so that
+//! single precision keeps the shape of small cells.
+//!
+//! This is the CPU twin of `shaders/shared/cc_bound.wgsl`, in double precision. Both add
+//! the same allowance for single-precision rounding (`ROUNDING` below), so the GPU and
+//! the CPU reach the same decisions except on bounds within ~1e-6 of the tolerance.
+
+use glam::{DVec2, DVec3};
+
+use super::bicubic::{self, Net};
+use super::patch::{Node, PatchSurface};
+
+/// The walk's unit: `WALK_ONE` units span the patch side.
+pub const WALK_ONE: u32 = 105 << 21;
+/// The walk's stack. The stored trees split only along chains toward extraordinary
+/// vertices (at most two per patch), so a few entries suffice; running out makes the
+/// bound infinite (sound: the cell is split).
+pub const WALK_STACK: usize = 16;
+
+/// Side bits of a piece: on the box's bottom (`v = v0`), right, top and left side.
+pub const SIDE_BOTTOM: u32 = 1;
+pub const SIDE_RIGHT: u32 = 2;
+pub const SIDE_TOP: u32 = 4;
+pub const SIDE_LEFT: u32 = 8;
+/// The sides a quadrant of a node shares with the node, in quadrant order.
+const QUADRANT_SIDES: [u32; 4] = [
+    SIDE_BOTTOM | SIDE_LEFT,
+    SIDE_BOTTOM | SIDE_RIGHT,
+    SIDE_RIGHT | SIDE_TOP,
+    SIDE_TOP | SIDE_LEFT,
+];
+
+/// Allowance for rounding in single precision, per unit of the largest relative and
+/// absolute coordinate.
+const ROUNDING_RELATIVE: f64 = 64.0 * f32::EPSILON as f64;
+const ROUNDING_ABSOLUTE: f64 = 8.0 * f32::EPSILON as f64;
+
+/// An orthonormal pair spanning the plane normal to the unit vector `n` (the formula of
+/// Duff et al. 2017; the kernel computes the same).
+pub fn orthonormal_pair(n: DVec3) -> (DVec3, DVec3) {
+    let sign = if n.z >= 0.0 { 1.0 } else { -1.0 };
+    let a = -1.0 / (sign + n.z);
+    let b = n.x * n.y * a;
+    (
+        DVec3::new(1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x),
+        DVec3::new(b, sign + n.y * n.y * a, -n.y),
+    )
+}
+
+/// The running maxima of both bounds over the pieces of a box.
+pub struct BoundSum {
+    /// Box corners relative to the first, counter-clockwise from `(u0, v0)`.
+    corners: [DVec3; 4],
+    scale_rel: f64,
+    scale_abs: f64,
+    // Parametric: second-derivative bounds (cells without a vertex), deviation from
+    // the bilinear quad over the box and along its sides (cells with one).
+    second: (f64, f64, f64),
+    dev: f64,
+    dev_side: f64,
+    has_vertex: bool,
+    // Slab.
+    slab: bool,
+    normal: DVec3,
+    plane: (DVec3, DVec3),
+    chords: [DVec2; 4],
+    lo: f64,
+    hi: f64,
+    hull: f64,
+    band: [(f64, f64); 4],
+}
+
+/// Side `s` of the box runs from corner `SIDES[s].0` to corner `SIDES[s].1`.
+const SIDES: [(usize, usize); 4] = [(0, 1), (1, 2), (3, 2), (0, 3)];
+
+impl BoundSum {
+    /// Starts a box with these corner positions (absolute).
+    pub fn new(corners: [DVec3; 4]) -> Self {
+        let scale_abs = corners
+            .iter()
+            .map(|p| p.abs().max_element())
+            .fold(0.0, f64::max);
+        let c = corners.map(|p| p - corners[0]);
+        let scale_rel = c.iter().map(|p| p.abs().max_element()).fold(0.0, f64::max);
+        let cross = (c[2] - c[0]).cross(c[3] - c[1]);
+        let len = cross.length();
+        let mut slab = len > 0.0;
+        let normal = if slab { cross / len } else { DVec3::Z };
+        let plane = orthonormal_pair(normal);
+        let mut chords = [DVec2::ZERO; 4];
+        for (s, &(a, b)) in SIDES.iter().enumerate() {
+            let d = project(plane, c[b] - c[a]);
+            let l = d.length();
+            if l > 0.0 {
+                chords[s] = d / l;
+            } else {
+                slab = false;
+            }
+        }
+        BoundSum {
+            corners: c,
+            scale_rel,
+            scale_abs,
+            second: (0.0, 0.0, 0.0),
+            dev: 0.0,
+            dev_side: 0.0,
+            has_vertex: false,
+            slab,
+            normal,
+            plane,
+            chords,
+            lo: f64::INFINITY,
+            hi: f64::NEG_INFINITY,
+            hull: 0.0,
+            band: [(0.0, 0.0); 4],
+        }
+    }
+
+    /// The bilinear quad through the corners at box coordinates `(u, v) ∈ [0, 1]²`.
+    fn bilinear(&self, u: f64, v: f64) -> DVec3 {
+        bicubic::bilinear(&self.corners, u, v)
+    }
+
+    /// A Bézier piece (points relative to the first corner) over `rect = [u0, u1, v0,
+    /// v1]` in box coordinates, lying on the box sides `sides`.
+    pub fn piece(&mut self, net: &Net, rect: [f64; 4], sides: u32) {
+        for p in net {
+            self.scale_rel = self.scale_rel.max(p.abs().max_element());
+        }
+        let (fu, fv) = (rect[1] - rect[0], rect[3] - rect[2]);
+        let (a, b, c) = bicubic::second_derivatives(net);
+        self.second.0 = self.second.0.max(a / (fu * fu));
+        self.second.1 = self.second.1.max(b / (fv * fv));
+        self.second.2 = self.second.2.max(c / (fu * fv));
+        for j in 0..4 {
+            for i in 0..4 {
+                let u = rect[0] + fu * i as f64 / 3.0;
+                let v = rect[2] + fv * j as f64 / 3.0;
+                let e = (net[4 * j + i] - self.bilinear(u, v)).length();
+                self.dev = self.dev.max(e);
+                let on_side = (i == 0 && sides & SIDE_LEFT != 0)
+                    || (i == 3 && sides & SIDE_RIGHT != 0)
+                    || (j == 0 && sides & SIDE_BOTTOM != 0)
+                    || (j == 3 && sides & SIDE_TOP != 0);
+                if on_side {
+                    self.dev_side = self.dev_side.max(e);
+                }
+            }
+        }
+        if self.slab {
+            self.slab = self.slab_piece(net, sides);
+        }
+    }
+
+    /// The slab part of a piece; false where its conditions fail.
+    fn slab_piece(&mut self, net: &Net, sides: u32) -> bool {
+        for p in net {
+            let h = self.normal.dot(*p);
+            self.lo = self.lo.min(h);
+            self.hi = self.hi.max(h);
+        }
+        for j in 0..4 {
+            for k in 0..3 {
+                let a = net[4 * j + k + 1] - net[4 * j + k];
+                for jj in 0..3 {
+                    for kk in 0..4 {
+                        let b = net[4 * (jj + 1) + kk] - net[4 * jj + kk];
+                        if self.normal.dot(a.cross(b)) <= 0.0 {
+                            return false;
+                        }
+                    }
+                }
+            }
+        }
+        for s in 0..4 {
+            if sides & (1 << s) == 0 {
+                continue;
+            }
+            let pts: [DVec3; 4] = std::array::from_fn(|t| match s {
+                0 => net[t],
+                1 => net[4 * t + 3],
+                2 => net[12 + t],
+                _ => net[4 * t],
+            });
+            let d = self.chords[s];
+            for t in 0..3 {
+                if project(self.plane, pts[t + 1] - pts[t]).dot(d) <= 0.0 {
+                    return false;
+                }
+            }
+            let start = self.corners[SIDES[s].0];
+            for p in pts {
+                let off = d.perp_dot(project(self.plane, p - start));
+                self.band[s] = (self.band[s].0.min(off), self.band[s].1.max(off));
+            }
+        }
+        true
+    }
+
+    /// The innermost square at an extraordinary vertex: its limit point (relative to the
+    /// first corner) and hull radius, over `rect` on the box sides `sides`.
+    pub fn vertex(&mut self, limit: DVec3, radius: f64, rect: [f64; 4], sides: u32) {
+        self.has_vertex = true;
+        self.scale_rel = self.scale_rel.max(limit.abs().max_element());
+        let mut e = 0f64;
+        for (u, v) in [
+            (rect[0], rect[2]),
+            (rect[1], rect[2]),
+            (rect[1], rect[3]),
+            (rect[0], rect[3]),
+        ] {
+            e = e.max((limit - self.bilinear(u, v)).length());
+        }
+        self.dev = self.dev.max(radius + e);
+        if sides != 0 {
+            self.dev_side = self.dev_side.max(radius + e);
+        }
+        let at_corner =
+            sides & (SIDE_LEFT | SIDE_RIGHT) != 0 && sides & (SIDE_BOTTOM | SIDE_TOP) != 0;
+        if !at_corner {
+            self.slab = false;
+        }
+        // The square is within `radius` of its limit point, which is a polygon vertex
+        // (the box corner there); `near` keeps the bound sound if it were not.
+        let near = self
+            .corners
+            .iter()
+            .map(|q| (*q - limit).length())
+            .fold(f64::INFINITY, f64::min);
+        self.hull = self.hull.max(radius + near);
+        let h = self.normal.dot(limit);
+        self.lo = self.lo.min(h - radius);
+        self.hi = self.hi.max(h + radius);
+    }
+
+    /// The bound: the smaller of the parametric and (where it holds) the slab bound, plus
+    /// the rounding allowance.
+    pub fn finish(&self) -> f64 {
+        let c = &self.corners;
+        let parametric = if self.has_vertex {
+            let twist = c[0] - c[1] + c[2] - c[3];
+            self.dev + self.dev_side + 0.25 * twist.length()
+        } else {
+            0.25 * bicubic::hessian_bound(self.second)
+        };
+        let mut bound = parametric;
+        if self.slab {
+            let width = self.band.iter().map(|(a, b)| b - a).fold(0.0, f64::max);
+            // Near the vertex a side is only known to lie within `hull` of it.
+            let delta = width + 4.0 * self.hull;
+            let thick = self.hi - self.lo;
+            bound = bound.min((thick * thick + delta * delta).sqrt().max(self.hull));
+        }
+        bound + ROUNDING_RELATIVE * self.scale_rel + ROUNDING_ABSOLUTE * self.scale_abs
+    }
+}
+
+fn project(plane: (DVec3, DVec3), p: DVec3) -> DVec2 {
+    DVec2::new(p.dot(plane.0), p.dot(plane.1))
+}
+
+/// A node on the walk's stack: either at integer walk coordinates `(x, y, size)` and not
+/// yet known to be inside the box, or inside it with its box rectangle and sides.
+#[derive(Clone, Copy)]
+struct WalkEntry {
+    node: u32,
+    x: u32,
+    y: u32,
+    size: u32,
+    inside: bool,
+    rect: [f64; 4],
+    sides: u32,
+}
+
+/// The flatness bound of the box `bx = [u0, u1, v0, v1]` (walk units) of a patch whose
+/// corner positions are `corners`.
+pub fn box_bound(surface: &PatchSurface, bx: [u32; 4], corners: [DVec3; 4]) -> f64 {
+    let mut walk = Walk {
+        surface,
+        bx,
+        origin: corners[0],
+        sum: BoundSum::new(corners),
+        stack: Vec::with_capacity(WALK_STACK),
+        overflow: false,
+    };
+    walk.enter(WalkEntry {
+        node: 0,
+        x: 0,
+        y: 0,
+        size: WALK_ONE,
+        inside: false,
+        rect: [0.0; 4],
+        sides: 0,
+    });
+    // Split nodes wait on the stack; pieces are summed as soon as they are reached.
+    while let Some(e) = walk.stack.pop() {
+        walk.split(e);
+    }
+    if walk.overflow {
+        return f64::INFINITY;
+    }
+    walk.sum.finish()
+}
+
+struct Walk<'a> {
+    surface: &'a PatchSurface,
+    bx: [u32; 4],
+    origin: DVec3,
+    sum: BoundSum,
+    stack: Vec<WalkEntry>,
+    overflow: bool,
+}
+
+impl Walk<'_> {
+    /// Reaches a node: a split node is pushed, a piece summed.
+    fn enter(&mut self, e: WalkEntry) {
+        if let Node::Split(_) = self.surface.nodes[e.node as usize] {
+            if self.stack.len() < WALK_STACK {
+                self.stack.push(e);
+            } else {
+                self.overflow = true;
+            }
+            return;
+        }
+        let Some((e, clip)) = self.place(e) else {
+            return;
+        };
+        match &self.surface.nodes[e.node as usize] {
+            Node::Bezier(net) => {
+                let mut rel = net.map(|p| p - self.origin);
+                if let Some((cu, cv)) = clip {
+                    rel = bicubic::clip(&rel, cu, cv);
+                }
+                self.sum.piece(&rel, e.rect, e.sides);
+            }
+            Node::Corner(c) => {
+                self.sum
+                    .vertex(c.limit - self.origin, c.hull_radius, e.rect, e.sides)
+            }
+            Node::Split(_) => unreachable!("split nodes are pushed"),
+        }
+    }
+
+    /// Where a node not yet known to be inside lies in the box: its rectangle and sides,
+    /// and for a node the box cuts, the part inside in the node's own coordinates.
+    /// `None` if it does not overlap the box.
+    #[allow(clippy::type_complexity)]
+    fn place(&self, mut e: WalkEntry) -> Option<(WalkEntry, Option<((f64, f64), (f64, f64))>)> {
+        if e.inside {
+            return Some((e, None));
+        }
+        let bx = self.bx;
+        let ov = [
+            bx[0].max(e.x),
+            bx[1].min(e.x + e.size),
+            bx[2].max(e.y),
+            bx[3].min(e.y + e.size),
+        ];
+        if ov[0] >= ov[1] || ov[2] >= ov[3] {
+            return None;
+        }
+        let whole = ov == [e.x, e.x + e.size, e.y, e.y + e.size];
+        let local = |a: u32, o: u32| (a - o) as f64 / e.size as f64;
+        let clip = (!whole).then(|| {
+            (
+                (local(ov[0], e.x), local(ov[1], e.x)),
+                (local(ov[2], e.y), local(ov[3], e.y)),
+            )
+        });
+        let (bw, bh) = ((bx[1] - bx[0]) as f64, (bx[3] - bx[2]) as f64);
+        e.rect = [
+            (ov[0] - bx[0]) as f64 / bw,
+            (ov[1] - bx[0]) as f64 / bw,
+            (ov[2] - bx[2]) as f64 / bh,
+            (ov[3] - bx[2]) as f64 / bh,
+        ];
+        e.sides = (ov[2] == bx[2]) as u32 * SIDE_BOTTOM
+            | (ov[1] == bx[1]) as u32 * SIDE_RIGHT
+            | (ov[3] == bx[3]) as u32 * SIDE_TOP
+            | (ov[0] == bx[0]) as u32 * SIDE_LEFT;
+        e.inside = true;
+        Some((e, clip))
+    }
+
+    /// A split node: its children entered, in walk coordinates while the box cuts the
+    /// node, by rectangle and inherited sides once it is wholly inside.
+    fn split(&mut self, e: WalkEntry) {
+        let Node::Split(children) = self.surface.nodes[e.node as usize] else {
+            unreachable!("only split nodes are pushed");
+        };
+        let Some((placed, clip)) = self.place(e) else {
+            return;
+        };
+        if clip.is_some() {
+            // Below level 21 nodes are never cut by a box of the grid.
+            if e.size % 2 != 0 {
+                self.overflow = true;
+                return;
+            }
+            let h = e.size / 2;
+            for (c, &child) in children.iter().enumerate() {
+                let (qx, qy) = quadrant_offset(c);
+                self.enter(WalkEntry {
+                    node: child,
+                    x: e.x + qx * h,
+                    y: e.y + qy * h,
+                    size: h,
+                    ..e
+                });
+            }
+            return;
+        }
+        let r = placed.rect;
+        let (hu, hv) = (0.5 * (r[1] - r[0]), 0.5 * (r[3] - r[2]));
+        for (c, &child) in children.iter().enumerate() {
+            let (qx, qy) = quadrant_offset(c);
+            let u0 = r[0] + qx as f64 * hu;
+            let v0 = r[2] + qy as f64 * hv;
+            self.enter(WalkEntry {
+                node: child,
+                rect: [u0, u0 + hu, v0, v0 + hv],
+                sides: placed.sides & QUADRANT_SIDES[c],
+                ..placed
+            });
+        }
+    }
+}
+
+/// Lower-left corner of quadrant `c` in units of half the parent.
+pub fn quadrant_offset(c: usize) -> (u32, u32) {
+    [(0, 0), (1, 0), (1, 1), (0, 1)][c]
+}
