@@ -84,9 +84,11 @@ fn cc_eval(point: CcPoint) -> CcSample {
     for (var level = 0u; level < 64u; level++) {
         let nd = cc_nodes[node];
         if nd.kind == CC_NODE_SPLIT {
+            // Past 2^-31 (the chains at extraordinary vertices) the point is a corner of
+            // the node and stays that corner of the child.
             let half = size >> 1u;
-            let right = x >= half;
-            let top = y >= half;
+            let right = select(x >= half, x >= 1u, size == 1u);
+            let top = select(y >= half, y >= 1u, size == 1u);
             var c = 0u;
             if right && !top {
                 c = 1u;
@@ -95,13 +97,15 @@ fn cc_eval(point: CcPoint) -> CcSample {
             } else if top {
                 c = 3u;
             }
-            if right {
-                x -= half;
+            if size > 1u {
+                if right {
+                    x -= half;
+                }
+                if top {
+                    y -= half;
+                }
+                size = half;
             }
-            if top {
-                y -= half;
-            }
-            size = half;
             node = cc_splits[nd.index][c];
         } else if nd.kind == CC_NODE_BEZIER {
             return cc_net_point(nd.index, f32(x) / f32(size), f32(y) / f32(size));

@@ -178,14 +178,17 @@ impl BoundSum {
         bicubic::bilinear(&self.corners, u, v)
     }
 
-    /// A Bézier piece (points relative to the first corner) over `rect = [u0, u1, v0,
-    /// v1]` in box coordinates, lying on the box sides `sides`.
-    pub fn piece(&mut self, net: &Net, rect: [f64; 4], sides: u32) {
-        for p in net {
+    /// A Bézier piece over `rect = [u0, u1, v0, v1]` in box coordinates, lying on the box
+    /// sides `sides`: its net is `shape + offset` relative to the first corner. Whatever
+    /// depends on differences of control points reads `shape` alone, which keeps the
+    /// tiny pieces at a vertex exact in single precision.
+    pub fn piece(&mut self, shape: &Net, offset: DVec3, rect: [f64; 4], sides: u32) {
+        let net = shape.map(|p| p + offset);
+        for p in &net {
             self.scale_rel = self.scale_rel.max(p.abs().max_element());
         }
         let (fu, fv) = (rect[1] - rect[0], rect[3] - rect[2]);
-        let (a, b, c) = bicubic::second_derivatives(net);
+        let (a, b, c) = bicubic::second_derivatives(shape);
         self.second.0 = self.second.0.max(a / (fu * fu));
         self.second.1 = self.second.1.max(b / (fv * fv));
         self.second.2 = self.second.2.max(c / (fu * fv));
@@ -205,12 +208,12 @@ impl BoundSum {
             }
         }
         if self.slab {
-            self.slab = self.slab_piece(net, sides);
+            self.slab = self.slab_piece(shape, &net, sides);
         }
     }
 
     /// The slab part of a piece; false where its conditions fail.
-    fn slab_piece(&mut self, net: &Net, sides: u32) -> bool {
+    fn slab_piece(&mut self, shape: &Net, net: &Net, sides: u32) -> bool {
         for p in net {
             let h = self.normal.dot(*p);
             self.lo = self.lo.min(h);
@@ -218,10 +221,10 @@ impl BoundSum {
         }
         for j in 0..4 {
             for k in 0..3 {
-                let a = net[4 * j + k + 1] - net[4 * j + k];
+                let a = shape[4 * j + k + 1] - shape[4 * j + k];
                 for jj in 0..3 {
                     for kk in 0..4 {
-                        let b = net[4 * (jj + 1) + kk] - net[4 * jj + kk];
+                        let b = shape[4 * (jj + 1) + kk] - shape[4 * jj + kk];
                         if self.normal.dot(a.cross(b)) <= 0.0 {
                             return false;
                         }
@@ -233,15 +236,18 @@ impl BoundSum {
             if sides & (1 << s) == 0 {
                 continue;
             }
-            let pts: [DVec3; 4] = std::array::from_fn(|t| match s {
-                0 => net[t],
-                1 => net[4 * t + 3],
-                2 => net[12 + t],
-                _ => net[4 * t],
-            });
+            let side = |n: &Net| -> [DVec3; 4] {
+                std::array::from_fn(|t| match s {
+                    0 => n[t],
+                    1 => n[4 * t + 3],
+                    2 => n[12 + t],
+                    _ => n[4 * t],
+                })
+            };
+            let (steps, pts) = (side(shape), side(net));
             let d = self.chords[s];
             for t in 0..3 {
-                if project(self.plane, pts[t + 1] - pts[t]).dot(d) <= 0.0 {
+                if project(self.plane, steps[t + 1] - steps[t]).dot(d) <= 0.0 {
                     return false;
                 }
             }
@@ -384,11 +390,13 @@ impl Walk<'_> {
         };
         match &self.surface.nodes[e.node as usize] {
             Node::Bezier(net) => {
-                let mut rel = net.map(|p| p - self.origin);
+                // As the GPU stores it: the first point, and the others relative to it.
+                let mut shape = net.map(|p| p - net[0]);
                 if let Some((cu, cv)) = clip {
-                    rel = bicubic::clip(&rel, cu, cv);
+                    shape = bicubic::clip(&shape, cu, cv);
                 }
-                self.sum.piece(&rel, e.rect, e.sides);
+                self.sum
+                    .piece(&shape, net[0] - self.origin, e.rect, e.sides);
             }
             Node::Corner(c) => {
                 self.sum

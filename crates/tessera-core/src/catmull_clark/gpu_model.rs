@@ -153,21 +153,29 @@ pub fn cc_eval(model: &CcGpuModel, point: CcPoint) -> (Vec3, Vec3) {
     loop {
         let nd = model.nodes[node as usize];
         if nd.kind == CC_NODE_SPLIT {
+            // Past 2^-31 (the chains at extraordinary vertices) the point is a corner of
+            // the node and stays that corner of the child.
             let half = size >> 1;
-            let (right, top) = (x >= half, y >= half);
+            let (right, top) = if size == 1 {
+                (x >= 1, y >= 1)
+            } else {
+                (x >= half, y >= half)
+            };
             let c = match (right, top) {
                 (false, false) => 0,
                 (true, false) => 1,
                 (true, true) => 2,
                 (false, true) => 3,
             };
-            if right {
-                x -= half;
+            if size > 1 {
+                if right {
+                    x -= half;
+                }
+                if top {
+                    y -= half;
+                }
+                size = half;
             }
-            if top {
-                y -= half;
-            }
-            size = half;
             node = model.splits[nd.index as usize][c];
         } else if nd.kind == CC_NODE_BEZIER {
             let (u, v) = (x as f32 / size as f32, y as f32 / size as f32);

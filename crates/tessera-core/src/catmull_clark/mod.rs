@@ -54,8 +54,9 @@ pub const TREE_DEPTH: u32 = MAX_DEPTH + 11;
 
 /// Depth of the chain of squares stored at each extraordinary vertex (three Bézier
 /// pieces per level): its innermost square, whose one-ring hull the flatness bound adds
-/// as a ball, is then `λ^40` of the patch (below 1e-6 of it even at valence 64).
-pub const CORNER_DEPTH: u32 = 40;
+/// as a ball, is then `λ^30` of the patch (below 3e-6 of it even at valence 64; deeper, double
+/// precision no longer resolves the pieces' derivatives).
+pub const CORNER_DEPTH: u32 = 30;
 
 /// Loads a control mesh (OBJ, glTF or GLB by extension), validates it and builds its
 /// patches ([`TREE_DEPTH`] levels).

@@ -1,0 +1,453 @@
+// The flatness bound of a box of a patch: a guaranteed upper bound on the distance from
+// the surface over it to any triangulation of its polygon, the smaller of a parametric
+// and a slab bound (proof and walk: `tessera_core::catmull_clark::bound`, the CPU twin,
+// in double precision; this file reads the same, function for function).
+
+#include "shared/cc_patch.wgsl"
+
+const CC_WALK_ONE: u32 = 220200960u; // 105 << 21
+const CC_WALK_STACK: u32 = 16u;
+const CC_SIDE_BOTTOM: u32 = 1u;
+const CC_SIDE_RIGHT: u32 = 2u;
+const CC_SIDE_TOP: u32 = 4u;
+const CC_SIDE_LEFT: u32 = 8u;
+const CC_F32_EPSILON: f32 = 1.1920929e-7;
+const CC_INFINITY: f32 = 3.4028235e38;
+
+// BoundSum, as private state of the invocation.
+var<private> bs_corners: array<vec3f, 4>;
+var<private> bs_scale_rel: f32;
+var<private> bs_scale_abs: f32;
+var<private> bs_second: vec3f;
+var<private> bs_dev: f32;
+var<private> bs_dev_side: f32;
+var<private> bs_has_vertex: bool;
+var<private> bs_slab: bool;
+var<private> bs_normal: vec3f;
+var<private> bs_e1: vec3f;
+var<private> bs_e2: vec3f;
+var<private> bs_chords: array<vec2f, 4>;
+var<private> bs_lo: f32;
+var<private> bs_hi: f32;
+var<private> bs_hull: f32;
+var<private> bs_band: array<vec2f, 4>;
+// The piece being summed: its shape (points relative to its first, stored point) and
+// that point relative to the box's first corner.
+var<private> bs_net: array<vec3f, 16>;
+var<private> bs_offset: vec3f;
+
+fn cc_max_abs(p: vec3f) -> f32 {
+    let a = abs(p);
+    return max(a.x, max(a.y, a.z));
+}
+
+// Side s runs from corner cc_side_start(s) to corner cc_side_end(s).
+fn cc_side_start(s: u32) -> u32 {
+    return select(0u, select(1u, 3u, s == 2u), s == 1u || s == 2u);
+}
+
+fn cc_side_end(s: u32) -> u32 {
+    return select(select(2u, 3u, s == 3u), 1u, s == 0u);
+}
+
+fn cc_project(p: vec3f) -> vec2f {
+    return vec2f(dot(p, bs_e1), dot(p, bs_e2));
+}
+
+fn cc_perp_dot(a: vec2f, b: vec2f) -> f32 {
+    return a.x * b.y - a.y * b.x;
+}
+
+fn bound_start(c: array<vec3f, 4>) {
+    bs_scale_abs = max(max(cc_max_abs(c[0]), cc_max_abs(c[1])), max(cc_max_abs(c[2]), cc_max_abs(c[3])));
+    for (var k = 0u; k < 4u; k++) {
+        bs_corners[k] = c[k] - c[0];
+    }
+    bs_scale_rel = max(max(cc_max_abs(bs_corners[0]), cc_max_abs(bs_corners[1])),
+        max(cc_max_abs(bs_corners[2]), cc_max_abs(bs_corners[3])));
+    let cr = cross(bs_corners[2] - bs_corners[0], bs_corners[3] - bs_corners[1]);
+    let len = length(cr);
+    bs_slab = len > 0.0;
+    bs_normal = vec3f(0.0, 0.0, 1.0);
+    if bs_slab {
+        bs_normal = cr / len;
+    }
+    // Orthonormal pair (Duff et al. 2017), as `bound::orthonormal_pair`.
+    let n = bs_normal;
+    let sgn = select(-1.0, 1.0, n.z >= 0.0);
+    let a = -1.0 / (sgn + n.z);
+    let b = n.x * n.y * a;
+    bs_e1 = vec3f(1.0 + sgn * n.x * n.x * a, sgn * b, -sgn * n.x);
+    bs_e2 = vec3f(b, sgn + n.y * n.y * a, -n.y);
+    for (var s = 0u; s < 4u; s++) {
+        let d = cc_project(bs_corners[cc_side_end(s)] - bs_corners[cc_side_start(s)]);
+        let l = length(d);
+        bs_chords[s] = vec2f(0.0);
+        if l > 0.0 {
+            bs_chords[s] = d / l;
+        } else {
+            bs_slab = false;
+        }
+        bs_band[s] = vec2f(0.0);
+    }
+    bs_second = vec3f(0.0);
+    bs_dev = 0.0;
+    bs_dev_side = 0.0;
+    bs_has_vertex = false;
+    bs_lo = CC_INFINITY;
+    bs_hi = -CC_INFINITY;
+    bs_hull = 0.0;
+}
+
+fn cc_bilinear(u: f32, v: f32) -> vec3f {
+    let c = bs_corners;
+    return (1.0 - v) * ((1.0 - u) * c[0] + u * c[1]) + v * ((1.0 - u) * c[3] + u * c[2]);
+}
+
+// `bicubic::second_derivatives` of bs_net.
+fn cc_second_derivatives() -> vec3f {
+    var r = vec3f(0.0);
+    for (var j = 0u; j < 4u; j++) {
+        for (var i = 0u; i < 2u; i++) {
+            let d = bs_net[4u * j + i] - 2.0 * bs_net[4u * j + i + 1u] + bs_net[4u * j + i + 2u];
+            r.x = max(r.x, 6.0 * length(d));
+        }
+    }
+    for (var j = 0u; j < 2u; j++) {
+        for (var i = 0u; i < 4u; i++) {
+            let d = bs_net[4u * j + i] - 2.0 * bs_net[4u * (j + 1u) + i] + bs_net[4u * (j + 2u) + i];
+            r.y = max(r.y, 6.0 * length(d));
+        }
+    }
+    for (var j = 0u; j < 3u; j++) {
+        for (var i = 0u; i < 3u; i++) {
+            let d = bs_net[4u * j + i] - bs_net[4u * j + i + 1u] - bs_net[4u * (j + 1u) + i]
+                + bs_net[4u * (j + 1u) + i + 1u];
+            r.z = max(r.z, 9.0 * length(d));
+        }
+    }
+    return r;
+}
+
+fn cc_hessian_bound(s: vec3f) -> f32 {
+    return 0.5 * (s.x + s.y) + sqrt(0.25 * (s.x - s.y) * (s.x - s.y) + s.z * s.z);
+}
+
+// Point t of side s of bs_net.
+fn cc_side_point(s: u32, t: u32) -> vec3f {
+    switch s {
+        case 0u: { return bs_net[t]; }
+        case 1u: { return bs_net[4u * t + 3u]; }
+        case 2u: { return bs_net[12u + t]; }
+        default: { return bs_net[4u * t]; }
+    }
+}
+
+fn cc_slab_piece(sides: u32) -> bool {
+    for (var k = 0u; k < 16u; k++) {
+        let h = dot(bs_normal, bs_net[k] + bs_offset);
+        bs_lo = min(bs_lo, h);
+        bs_hi = max(bs_hi, h);
+    }
+    for (var j = 0u; j < 4u; j++) {
+        for (var k = 0u; k < 3u; k++) {
+            let a = bs_net[4u * j + k + 1u] - bs_net[4u * j + k];
+            for (var jj = 0u; jj < 3u; jj++) {
+                for (var kk = 0u; kk < 4u; kk++) {
+                    let b = bs_net[4u * (jj + 1u) + kk] - bs_net[4u * jj + kk];
+                    if dot(bs_normal, cross(a, b)) <= 0.0 {
+                        return false;
+                    }
+                }
+            }
+        }
+    }
+    for (var s = 0u; s < 4u; s++) {
+        if (sides & (1u << s)) == 0u {
+            continue;
+        }
+        let d = bs_chords[s];
+        for (var t = 0u; t < 3u; t++) {
+            if dot(cc_project(cc_side_point(s, t + 1u) - cc_side_point(s, t)), d) <= 0.0 {
+                return false;
+            }
+        }
+        let start = bs_corners[cc_side_start(s)];
+        for (var t = 0u; t < 4u; t++) {
+            let off = cc_perp_dot(d, cc_project(cc_side_point(s, t) + bs_offset - start));
+            bs_band[s] = vec2f(min(bs_band[s].x, off), max(bs_band[s].y, off));
+        }
+    }
+    return true;
+}
+
+// A Bézier piece (bs_net, relative to the first corner) over `rect` in box coordinates.
+fn bound_piece(rect: vec4f, sides: u32) {
+    for (var k = 0u; k < 16u; k++) {
+        bs_scale_rel = max(bs_scale_rel, cc_max_abs(bs_net[k] + bs_offset));
+    }
+    let fu = rect.y - rect.x;
+    let fv = rect.w - rect.z;
+    let sd = cc_second_derivatives();
+    bs_second = vec3f(max(bs_second.x, sd.x / (fu * fu)), max(bs_second.y, sd.y / (fv * fv)),
+        max(bs_second.z, sd.z / (fu * fv)));
+    for (var j = 0u; j < 4u; j++) {
+        for (var i = 0u; i < 4u; i++) {
+            let u = rect.x + fu * f32(i) / 3.0;
+            let v = rect.z + fv * f32(j) / 3.0;
+            let e = length(bs_net[4u * j + i] + bs_offset - cc_bilinear(u, v));
+            bs_dev = max(bs_dev, e);
+            let on_side = (i == 0u && (sides & CC_SIDE_LEFT) != 0u)
+                || (i == 3u && (sides & CC_SIDE_RIGHT) != 0u)
+                || (j == 0u && (sides & CC_SIDE_BOTTOM) != 0u)
+                || (j == 3u && (sides & CC_SIDE_TOP) != 0u);
+            if on_side {
+                bs_dev_side = max(bs_dev_side, e);
+            }
+        }
+    }
+    if bs_slab {
+        bs_slab = cc_slab_piece(sides);
+    }
+}
+
+fn bound_vertex(limit: vec3f, radius: f32, rect: vec4f, sides: u32) {
+    bs_has_vertex = true;
+    bs_scale_rel = max(bs_scale_rel, cc_max_abs(limit));
+    var e = length(limit - cc_bilinear(rect.x, rect.z));
+    e = max(e, length(limit - cc_bilinear(rect.y, rect.z)));
+    e = max(e, length(limit - cc_bilinear(rect.y, rect.w)));
+    e = max(e, length(limit - cc_bilinear(rect.x, rect.w)));
+    bs_dev = max(bs_dev, radius + e);
+    if sides != 0u {
+        bs_dev_side = max(bs_dev_side, radius + e);
+    }
+    let at_corner = (sides & (CC_SIDE_LEFT | CC_SIDE_RIGHT)) != 0u
+        && (sides & (CC_SIDE_BOTTOM | CC_SIDE_TOP)) != 0u;
+    if !at_corner {
+        bs_slab = false;
+    }
+    var near = CC_INFINITY;
+    for (var k = 0u; k < 4u; k++) {
+        near = min(near, length(bs_corners[k] - limit));
+    }
+    bs_hull = max(bs_hull, radius + near);
+    let h = dot(bs_normal, limit);
+    bs_lo = min(bs_lo, h - radius);
+    bs_hi = max(bs_hi, h + radius);
+}
+
+fn bound_finish() -> f32 {
+    let c = bs_corners;
+    var bound = 0.25 * cc_hessian_bound(bs_second);
+    if bs_has_vertex {
+        let twist = c[0] - c[1] + c[2] - c[3];
+        bound = bs_dev + bs_dev_side + 0.25 * length(twist);
+    }
+    if bs_slab {
+        var width = 0.0;
+        for (var s = 0u; s < 4u; s++) {
+            width = max(width, bs_band[s].y - bs_band[s].x);
+        }
+        let delta = width + 4.0 * bs_hull;
+        let thick = bs_hi - bs_lo;
+        bound = min(bound, max(sqrt(thick * thick + delta * delta), bs_hull));
+    }
+    return bound + 64.0 * CC_F32_EPSILON * bs_scale_rel + 8.0 * CC_F32_EPSILON * bs_scale_abs;
+}
+
+// ---- The walk (`bound::box_bound`).
+
+struct CcWalkEntry {
+    node: u32,
+    x: u32,
+    y: u32,
+    size: u32,
+    inside: bool,
+    rect: vec4f,
+    sides: u32,
+}
+
+var<private> walk_box: vec4u;
+var<private> walk_origin: vec3f;
+var<private> walk_stack: array<CcWalkEntry, CC_WALK_STACK>;
+var<private> walk_len: u32;
+var<private> walk_overflow: bool;
+// Set by walk_place: whether the node is cut, and the part inside in node coordinates.
+var<private> walk_cut: bool;
+var<private> walk_clip: vec4f;
+
+// The lower-left corner of quadrant c in units of half the parent.
+fn cc_quadrant_offset(c: u32) -> vec2u {
+    return vec2u(select(0u, 1u, c == 1u || c == 2u), select(0u, 1u, c >= 2u));
+}
+
+fn cc_quadrant_sides(c: u32) -> u32 {
+    switch c {
+        case 0u: { return CC_SIDE_BOTTOM | CC_SIDE_LEFT; }
+        case 1u: { return CC_SIDE_BOTTOM | CC_SIDE_RIGHT; }
+        case 2u: { return CC_SIDE_RIGHT | CC_SIDE_TOP; }
+        default: { return CC_SIDE_TOP | CC_SIDE_LEFT; }
+    }
+}
+
+// `Walk::place`: false if the node does not overlap the box.
+fn walk_place(e: ptr<function, CcWalkEntry>) -> bool {
+    walk_cut = false;
+    if (*e).inside {
+        return true;
+    }
+    let bx = walk_box;
+    let ov = vec4u(max(bx.x, (*e).x), min(bx.y, (*e).x + (*e).size), max(bx.z, (*e).y),
+        min(bx.w, (*e).y + (*e).size));
+    if ov.x >= ov.y || ov.z >= ov.w {
+        return false;
+    }
+    walk_cut = !all(ov == vec4u((*e).x, (*e).x + (*e).size, (*e).y, (*e).y + (*e).size));
+    let s = f32((*e).size);
+    walk_clip = vec4f(f32(ov.x - (*e).x) / s, f32(ov.y - (*e).x) / s, f32(ov.z - (*e).y) / s,
+        f32(ov.w - (*e).y) / s);
+    let bw = f32(bx.y - bx.x);
+    let bh = f32(bx.w - bx.z);
+    (*e).rect = vec4f(f32(ov.x - bx.x) / bw, f32(ov.y - bx.x) / bw, f32(ov.z - bx.z) / bh,
+        f32(ov.w - bx.z) / bh);
+    (*e).sides = select(0u, CC_SIDE_BOTTOM, ov.z == bx.z) | select(0u, CC_SIDE_RIGHT, ov.y == bx.y)
+        | select(0u, CC_SIDE_TOP, ov.w == bx.w) | select(0u, CC_SIDE_LEFT, ov.x == bx.x);
+    (*e).inside = true;
+    return true;
+}
+
+fn cc_lerp(p: vec3f, q: vec3f, t: f32) -> vec3f {
+    return p + (q - p) * t;
+}
+
+// de Casteljau split of the cubic a0..a3 at t: the left or right half.
+fn cc_split_cubic(a: array<vec3f, 4>, t: f32, right: bool) -> array<vec3f, 4> {
+    let a1 = array<vec3f, 3>(cc_lerp(a[0], a[1], t), cc_lerp(a[1], a[2], t), cc_lerp(a[2], a[3], t));
+    let b1 = array<vec3f, 2>(cc_lerp(a1[0], a1[1], t), cc_lerp(a1[1], a1[2], t));
+    let m = cc_lerp(b1[0], b1[1], t);
+    if right {
+        return array<vec3f, 4>(m, b1[1], a1[2], a[3]);
+    }
+    return array<vec3f, 4>(a[0], a1[0], b1[0], m);
+}
+
+// `bicubic::clip_cubic`: the cubic over [lo, hi] of [0, 1].
+fn cc_clip_cubic(c: array<vec3f, 4>, lo: f32, hi: f32) -> array<vec3f, 4> {
+    var left = c;
+    if hi < 1.0 {
+        left = cc_split_cubic(c, hi, false);
+    }
+    if lo > 0.0 {
+        return cc_split_cubic(left, lo / hi, true);
+    }
+    return left;
+}
+
+// bs_net clipped to walk_clip (rows in u, then columns in v).
+fn cc_clip_net() {
+    for (var j = 0u; j < 4u; j++) {
+        let r = cc_clip_cubic(array<vec3f, 4>(bs_net[4u * j], bs_net[4u * j + 1u],
+            bs_net[4u * j + 2u], bs_net[4u * j + 3u]), walk_clip.x, walk_clip.y);
+        for (var i = 0u; i < 4u; i++) {
+            bs_net[4u * j + i] = r[i];
+        }
+    }
+    for (var i = 0u; i < 4u; i++) {
+        let c = cc_clip_cubic(array<vec3f, 4>(bs_net[i], bs_net[4u + i], bs_net[8u + i],
+            bs_net[12u + i]), walk_clip.z, walk_clip.w);
+        for (var j = 0u; j < 4u; j++) {
+            bs_net[4u * j + i] = c[j];
+        }
+    }
+}
+
+// Net k into bs_net (shape) and bs_offset.
+fn cc_load_net(k: u32) {
+    bs_offset = vec3f(cc_nets[k].cp[0], cc_nets[k].cp[1], cc_nets[k].cp[2]) - walk_origin;
+    bs_net[0] = vec3f(0.0);
+    for (var q = 1u; q < 16u; q++) {
+        bs_net[q] = vec3f(cc_nets[k].cp[3u * q], cc_nets[k].cp[3u * q + 1u], cc_nets[k].cp[3u * q + 2u]);
+    }
+}
+
+// `Walk::enter`.
+fn walk_enter(entry: CcWalkEntry) {
+    var e = entry;
+    let nd = cc_nodes[e.node];
+    if nd.kind == CC_NODE_SPLIT {
+        if walk_len < CC_WALK_STACK {
+            walk_stack[walk_len] = e;
+            walk_len += 1u;
+        } else {
+            walk_overflow = true;
+        }
+        return;
+    }
+    if !walk_place(&e) {
+        return;
+    }
+    if nd.kind == CC_NODE_BEZIER {
+        cc_load_net(nd.index);
+        if walk_cut {
+            cc_clip_net();
+        }
+        bound_piece(e.rect, e.sides);
+    } else {
+        let c = cc_corners[nd.index];
+        bound_vertex(vec3f(c.limit[0], c.limit[1], c.limit[2]) - walk_origin, c.hull_radius, e.rect, e.sides);
+    }
+}
+
+// `Walk::split`.
+fn walk_split(entry: CcWalkEntry) {
+    var e = entry;
+    let children = cc_splits[cc_nodes[e.node].index];
+    if !walk_place(&e) {
+        return;
+    }
+    if walk_cut {
+        if (entry.size & 1u) != 0u {
+            walk_overflow = true;
+            return;
+        }
+        let h = entry.size / 2u;
+        for (var c = 0u; c < 4u; c++) {
+            let q = cc_quadrant_offset(c);
+            walk_enter(CcWalkEntry(children[c], entry.x + q.x * h, entry.y + q.y * h, h, false,
+                vec4f(0.0), 0u));
+        }
+        return;
+    }
+    let r = e.rect;
+    let hu = 0.5 * (r.y - r.x);
+    let hv = 0.5 * (r.w - r.z);
+    for (var c = 0u; c < 4u; c++) {
+        let q = cc_quadrant_offset(c);
+        let u0 = r.x + f32(q.x) * hu;
+        let v0 = r.z + f32(q.y) * hv;
+        walk_enter(CcWalkEntry(children[c], e.x, e.y, e.size, true, vec4f(u0, u0 + hu, v0, v0 + hv),
+            e.sides & cc_quadrant_sides(c)));
+    }
+}
+
+// `bound::box_bound`: the bound of box `bx` (walk units: u0, u1, v0, v1) of patch p with
+// corner positions c.
+fn cc_box_bound(p: u32, bx: vec4u, c: array<vec3f, 4>) -> f32 {
+    walk_box = bx;
+    walk_origin = c[0];
+    walk_len = 0u;
+    walk_overflow = false;
+    bound_start(c);
+    walk_enter(CcWalkEntry(cc_roots[p], 0u, 0u, CC_WALK_ONE, false, vec4f(0.0), 0u));
+    // Bounded: every split node is pushed once, and trees are finite; the cap guards a
+    // corrupt upload.
+    for (var guard = 0u; guard < 4096u && walk_len > 0u; guard++) {
+        walk_len -= 1u;
+        walk_split(walk_stack[walk_len]);
+    }
+    if walk_overflow || walk_len > 0u {
+        return CC_INFINITY;
+    }
+    return bound_finish();
+}
