@@ -50,3 +50,27 @@ fn assign(@builtin(global_invocation_id) gid: vec3u, @builtin(num_workgroups) gr
         cc_hash_status.unique = cc_offsets[item] + select(0u, 1u, is_first);
     }
 }
+
+// After `assign`: the point of each distinct key (from its first item) for the vertex
+// evaluation, and how many there are.
+@group(0) @binding(60) var<storage, read> item_points: array<CcPoint>;
+@group(0) @binding(30) var<storage, read_write> vertex_points: array<CcPoint>;
+@group(0) @binding(32) var<storage, read_write> vertex_count: array<u32>;
+
+@compute @workgroup_size(64)
+fn gather_points(@builtin(global_invocation_id) gid: vec3u, @builtin(num_workgroups) groups: vec3u) {
+    let item = cc_item_index(gid, groups);
+    if item == 0u {
+        vertex_count[0] = cc_hash_status.unique;
+    }
+    if !in_range(item) || item >= arrayLength(&item_points) {
+        return;
+    }
+    let slot = cc_item_slot[item];
+    if slot != CC_NO_SLOT && first_of(slot) == item {
+        let id = cc_offsets[item];
+        if id < arrayLength(&vertex_points) {
+            vertex_points[id] = item_points[item];
+        }
+    }
+}

@@ -3,6 +3,7 @@
 // Twin: `tessera_core::catmull_clark::vertex_hash`.
 
 #include "shared/types.wgsl"
+#include "shared/cc_hash_key.wgsl"
 
 struct CcHashSlot {
     key_hi: atomic<u32>,
@@ -22,13 +23,6 @@ struct CcHashStatus {
 @group(0) @binding(42) var<storage, read_write> cc_item_slot: array<u32>;
 @group(0) @binding(43) var<storage, read_write> cc_hash_status: CcHashStatus;
 
-fn cc_home_slot(key: vec2u, capacity: u32) -> u32 {
-    var h = (key.y * 0x9E3779B1u) ^ (key.x * 0x85EBCA77u);
-    h ^= h >> 15u;
-    h = h * 0x2C1B3C6Du;
-    h ^= h >> 12u;
-    return h & (capacity - 1u);
-}
 
 fn cc_item_index(gid: vec3u, groups: vec3u) -> u32 {
     return gid.x + gid.y * groups.x * 64u;

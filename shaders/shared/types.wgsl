@@ -126,3 +126,32 @@ struct CcPoint {
 
 const CC_HASH_MAX_PROBES: u32 = 64u;
 const CC_NO_SLOT: u32 = 0xffffffffu;
+
+// Adaptive Catmull-Clark tessellation (`tessera_core::gpu_types::{CcCell, ...}`).
+const CC_TRIALS: u32 = 64u;
+const CC_SEARCH_ROUNDS: u32 = 8u;
+const CC_NO_NEIGHBOUR: u32 = 0xffffffffu;
+
+struct CcCell {
+    patch_id: u32,
+    trial_depth: u32,
+    i: u32,
+    j: u32,
+}
+
+struct CcPatchTopo {
+    quad: vec4u,
+    edges: vec4u,
+    across: vec4u,
+}
+
+struct CcTessParams {
+    grid: u32,
+    max_depth: u32,
+    tolerance: f32,
+    patch_count: u32,
+    cell_capacity: u32,
+    leaf_capacity: u32,
+    poly_capacity: u32,
+    index_capacity: u32,
+}

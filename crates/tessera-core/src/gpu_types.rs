@@ -279,3 +279,93 @@ pub struct CcHashStatus {
     pub unique: u32,
     pub pad: u32,
 }
+
+/// A cell of the adaptive Catmull-Clark tessellation on the GPU: patch, first split
+/// (`trial` indexes [`cc_trial_split`]) and depth below it (`trial | depth << 8`), and
+/// its lower-left corner in grid units (`1 / (840 · 2^max_depth)`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable, PartialEq, Eq)]
+pub struct CcCell {
+    pub patch_id: u32,
+    pub trial_depth: u32,
+    pub i: u32,
+    pub j: u32,
+}
+
+/// First splits tried per patch: 8 squares, then the 56 rectangles.
+pub const CC_TRIALS: u32 = 64;
+/// Rounds of the first-split search (trials grouped by `ku · kv`), then the final one.
+pub const CC_SEARCH_ROUNDS: u32 = 8;
+/// No patch across an edge (an open boundary or a hole).
+pub const CC_NO_NEIGHBOUR: u32 = u32::MAX;
+
+/// `(ku, kv)` of trial `t`, in the order the CPU reference tries them: squares `1..=8`,
+/// then rectangles by `ku`, then `kv`.
+pub fn cc_trial_split(t: u32) -> (u32, u32) {
+    if t < 8 {
+        return (t + 1, t + 1);
+    }
+    let r = t - 8;
+    let ku = r / 7 + 1;
+    let k = r % 7 + 1;
+    (ku, if k >= ku { k + 1 } else { k })
+}
+
+/// The search round of trial `t`: `ceil(sqrt(ku · kv)) - 1`.
+pub fn cc_trial_round(t: u32) -> u32 {
+    let (ku, kv) = cc_trial_split(t);
+    let area = ku * kv;
+    (0..CC_SEARCH_ROUNDS).find(|r| area <= (r + 1) * (r + 1)).unwrap_or(0)
+}
+
+/// Connectivity of a patch for the GPU: its level-1 points, edge ids, and per edge the
+/// patch across it and that patch's edge index (`q << 2 | k`, or [`CC_NO_NEIGHBOUR`]).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable, PartialEq, Eq)]
+pub struct CcPatchTopo {
+    pub quad: [u32; 4],
+    pub edges: [u32; 4],
+    pub across: [u32; 4],
+}
+
+/// Uniform parameters of the adaptive Catmull-Clark kernels.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable, PartialEq)]
+pub struct CcTessParams {
+    /// Grid units per patch side: `840 << max_depth`.
+    pub grid: u32,
+    pub max_depth: u32,
+    pub tolerance: f32,
+    pub patch_count: u32,
+    pub cell_capacity: u32,
+    pub leaf_capacity: u32,
+    pub poly_capacity: u32,
+    pub index_capacity: u32,
+}
+
+/// Counters of the adaptive Catmull-Clark kernels (followed in the same buffer by the
+/// leaf count of every trial of every patch), read back to check capacities.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable, PartialEq, Eq)]
+pub struct CcState {
+    /// Current round of the first-split search; [`CC_SEARCH_ROUNDS`] is the final one.
+    pub round: u32,
+    /// Cells in the current list.
+    pub count: u32,
+    /// Leaves of the final round so far (also beyond capacity: what is needed).
+    pub leaves: u32,
+    /// Non-zero if some buffer was too small (nothing was written out of bounds).
+    pub overflow: u32,
+    /// The largest cell list needed.
+    pub need_cells: u32,
+    /// Polygon vertices needed and indices needed.
+    pub need_poly: u32,
+    pub need_indices: u32,
+    /// Leaves stopped by `max_depth` with a bound above the tolerance.
+    pub unmet: u32,
+    /// Largest bound of any leaf (f32 bits; non-negative floats order as integers).
+    pub max_bound_bits: u32,
+    /// Distinct output vertices.
+    pub vertices: u32,
+    pub pad: [u32; 2],
+}

@@ -39,6 +39,46 @@ pub const SOURCES: &[(&str, &str)] = &[
         "shared/cc_hash.wgsl",
         include_str!("../../../shaders/shared/cc_hash.wgsl"),
     ),
+    (
+        "shared/cc_hash_key.wgsl",
+        include_str!("../../../shaders/shared/cc_hash_key.wgsl"),
+    ),
+    (
+        "shared/cc_bound.wgsl",
+        include_str!("../../../shaders/shared/cc_bound.wgsl"),
+    ),
+    (
+        "shared/cc_tess.wgsl",
+        include_str!("../../../shaders/shared/cc_tess.wgsl"),
+    ),
+    (
+        "cc_roots.wgsl",
+        include_str!("../../../shaders/cc_roots.wgsl"),
+    ),
+    (
+        "cc_mark.wgsl",
+        include_str!("../../../shaders/cc_mark.wgsl"),
+    ),
+    (
+        "cc_split.wgsl",
+        include_str!("../../../shaders/cc_split.wgsl"),
+    ),
+    (
+        "cc_choose.wgsl",
+        include_str!("../../../shaders/cc_choose.wgsl"),
+    ),
+    (
+        "cc_leaf_keys.wgsl",
+        include_str!("../../../shaders/cc_leaf_keys.wgsl"),
+    ),
+    (
+        "cc_polygon.wgsl",
+        include_str!("../../../shaders/cc_polygon.wgsl"),
+    ),
+    (
+        "cc_triangulate.wgsl",
+        include_str!("../../../shaders/cc_triangulate.wgsl"),
+    ),
     ("scan.wgsl", include_str!("../../../shaders/scan.wgsl")),
     (
         "cc_hash_insert.wgsl",

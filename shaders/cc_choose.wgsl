@@ -1,0 +1,30 @@
+// After a search round: each patch keeps the split with the fewest leaves among those it
+// had so far and those of this round (ties to the earlier trial, as the CPU reference
+// trying them in order); `next_round` then advances the round.
+// Twin: `gpu_pipeline::choose`.
+
+#include "shared/cc_tess.wgsl"
+
+@compute @workgroup_size(64)
+fn main(@builtin(global_invocation_id) gid: vec3u, @builtin(num_workgroups) groups: vec3u) {
+    let p = cc_invocation(gid, groups);
+    if p >= cc_params.patch_count || cc_state.round >= CC_SEARCH_ROUNDS {
+        return;
+    }
+    let tried = round_trials(p);
+    var b = best_before(p);
+    for (var t = 0u; t < CC_TRIALS; t++) {
+        if cc_has_trial(tried, t) {
+            let leaves = atomicLoad(&cc_state.trials[p * CC_TRIALS + t]);
+            if leaves < b.x || (leaves == b.x && t < b.y) {
+                b = vec2u(leaves, t);
+            }
+        }
+    }
+    best[p] = b;
+}
+
+@compute @workgroup_size(1)
+fn next_round() {
+    cc_state.round += 1u;
+}

@@ -1,0 +1,45 @@
+// One invocation per cell of the current list: the flatness bound of the cell
+// (`shared/cc_bound.wgsl`), and the decision: a leaf if the bound is within the tolerance
+// or the cell is at the deepest level, else split (flag 1, scanned next). Leaves are
+// counted per (patch, trial) for the first-split search.
+// Twin: `gpu_pipeline::mark`.
+
+#include "shared/cc_tess.wgsl"
+#include "shared/cc_bound.wgsl"
+
+@group(0) @binding(53) var<storage, read> cells_in: array<CcCell>;
+@group(0) @binding(54) var<storage, read_write> flags: array<u32>;
+
+fn cc_corner(p: u32, i: u32, j: u32) -> vec3f {
+    return cc_eval(CcPoint(p, cc_grid_fixed(i), cc_grid_fixed(j))).position;
+}
+
+@compute @workgroup_size(64)
+fn main(@builtin(global_invocation_id) gid: vec3u, @builtin(num_workgroups) groups: vec3u) {
+    let c = cc_invocation(gid, groups);
+    if c >= cc_state.count || c >= arrayLength(&cells_in) || c >= arrayLength(&flags) {
+        return;
+    }
+    let cell = cells_in[c];
+    let size = cc_cell_size(cell);
+    let i1 = cell.i + size.x;
+    let j1 = cell.j + size.y;
+    let corners = array<vec3f, 4>(cc_corner(cell.patch_id, cell.i, cell.j),
+        cc_corner(cell.patch_id, i1, cell.j), cc_corner(cell.patch_id, i1, j1), cc_corner(cell.patch_id, cell.i, j1));
+    // Grid units to walk units: CC_WALK_ONE / grid = 2^(18 - max_depth).
+    let scale = CC_WALK_ONE / cc_params.grid;
+    let bound = cc_box_bound(cell.patch_id, vec4u(cell.i, i1, cell.j, j1) * scale, corners);
+    let depth = cell.trial_depth >> 8u;
+    let leaf = bound <= cc_params.tolerance || depth >= cc_params.max_depth;
+    flags[c] = select(1u, 0u, leaf);
+    if leaf {
+        let t = cell.trial_depth & 0xffu;
+        atomicAdd(&cc_state.trials[cell.patch_id * CC_TRIALS + t], 1u);
+        if cc_state.round >= CC_SEARCH_ROUNDS {
+            atomicMax(&cc_state.max_bound_bits, bitcast<u32>(min(bound, CC_INFINITY)));
+            if bound > cc_params.tolerance {
+                atomicAdd(&cc_state.unmet, 1u);
+            }
+        }
+    }
+}

@@ -1,0 +1,259 @@
+// Base-quadrilateral replacement, one invocation per leaf: each side of the leaf is
+// replaced by the marked points on it, found by looking them up in the vertex hash.
+// `count` writes how many points each side gets (and the polygon's size, scanned by the
+// host); `emit` writes the polygon: corner 0, the points of side 0 in order, corner 1, ...
+//
+// Inside a patch every cell lies on the grid of the patch's first split, so the points
+// on a side are dyadic subdivisions of it: if its midpoint is marked, look in both
+// halves, else there is none. On the patch boundary the points come from the patch
+// across the edge, whose own first split may differ: its root cells divide the edge in
+// steps of grid / k, and inside each step the same dyadic search applies.
+// Twin: `gpu_pipeline::side_points`.
+
+#include "shared/cc_tess.wgsl"
+#include "shared/cc_hash_key.wgsl"
+
+struct CcHashSlotView {
+    key_hi: u32,
+    key_lo: u32,
+    first: u32,
+}
+
+@group(0) @binding(41) var<storage, read> table: array<CcHashSlotView>;
+@group(0) @binding(45) var<storage, read> ids: array<u32>;
+@group(0) @binding(55) var<storage, read> leaves: array<CcCell>;
+@group(0) @binding(59) var<storage, read> topo: array<CcPatchTopo>;
+// The polygon sizes (scanned into offsets by the host) for leaf_capacity + 1 entries,
+// then four side counts per leaf.
+@group(0) @binding(62) var<storage, read_write> poly_offsets: array<u32>;
+@group(0) @binding(63) var<storage, read_write> poly_verts: array<vec4u>;
+
+fn cc_side_base(l: u32) -> u32 {
+    return cc_params.leaf_capacity + 1u + 4u * l;
+}
+
+fn cc_side_counts(l: u32) -> vec4u {
+    let b = cc_side_base(l);
+    return vec4u(poly_offsets[b], poly_offsets[b + 1u], poly_offsets[b + 2u], poly_offsets[b + 3u]);
+}
+
+// The slot of a key, or CC_NO_SLOT if it is not in the table (unmarked).
+fn cc_find(key: vec2u) -> u32 {
+    let capacity = arrayLength(&table);
+    var slot = cc_home_slot(key, capacity);
+    let hi = ~key.x;
+    let lo = ~key.y;
+    for (var probe = 0u; probe < CC_HASH_MAX_PROBES; probe++) {
+        let s = table[slot];
+        if s.key_hi == 0u {
+            return CC_NO_SLOT;
+        }
+        if s.key_hi == hi && s.key_lo == lo {
+            return slot;
+        }
+        slot = (slot + 1u) & (capacity - 1u);
+    }
+    return CC_NO_SLOT;
+}
+
+// The line a side runs along: a patch-boundary edge (positions are canonical t along
+// it) or a row or column inside the patch (positions are i or j).
+struct CcLine {
+    patch_id: u32,
+    edge_side: u32, // 0..4: edge k of the patch; 4: inside
+    fixed: u32,     // the other coordinate of a row or column
+    is_row: bool,
+}
+
+var<private> line: CcLine;
+var<private> line_topo: CcPatchTopo;
+// Output of the walk: how many points so far, and where to write them (emit only).
+var<private> found: u32;
+var<private> emitting: bool;
+var<private> emit_at: u32;
+
+// Grid point of the leaf's patch at position x of the line.
+fn line_point(x: u32) -> vec2u {
+    let n = cc_params.grid;
+    if line.edge_side < 4u {
+        let local = cc_edge_canonical(line_topo, line.edge_side, x);
+        switch line.edge_side {
+            case 0u: { return vec2u(local, 0u); }
+            case 1u: { return vec2u(n, local); }
+            case 2u: { return vec2u(n - local, n); }
+            default: { return vec2u(0u, n - local); }
+        }
+    }
+    if line.is_row {
+        return vec2u(x, line.fixed);
+    }
+    return vec2u(line.fixed, x);
+}
+
+fn line_slot(x: u32) -> u32 {
+    let q = line_point(x);
+    return cc_find(cc_point_key(line_topo, line.patch_id, q.x, q.y));
+}
+
+fn found_point(x: u32, slot: u32) {
+    if emitting {
+        let q = line_point(x);
+        let at = emit_at + found;
+        if at < arrayLength(&poly_verts) && at < cc_params.poly_capacity {
+            poly_verts[at] = vec4u(ids[~table[slot].first], q.x, q.y, 0u);
+        }
+    }
+    found += 1u;
+}
+
+// The marked points strictly inside (lo, hi) among the dyadic subdivisions of the
+// segment [a, b], in order (ascending or not): in-order walk with an explicit stack.
+fn dyadic_walk(a: u32, b: u32, lo: u32, hi: u32, ascending: bool) {
+    var stack: array<vec3u, 24>;
+    var len = 0u;
+    var cur = vec2u(a, b);
+    for (var guard = 0u; guard < 4096u; guard++) {
+        // Go down toward the near end while the midpoint is marked.
+        loop {
+            let s = cur.y - cur.x;
+            if (s & 1u) != 0u || cur.x >= hi || cur.y <= lo {
+                break;
+            }
+            let m = cur.x + s / 2u;
+            let slot = line_slot(m);
+            if slot == CC_NO_SLOT || len >= 24u {
+                break;
+            }
+            if ascending {
+                stack[len] = vec3u(m, cur.y, slot);
+                cur = vec2u(cur.x, m);
+            } else {
+                stack[len] = vec3u(cur.x, m, slot);
+                cur = vec2u(m, cur.y);
+            }
+            len += 1u;
+        }
+        if len == 0u {
+            return;
+        }
+        len -= 1u;
+        let e = stack[len];
+        let m = select(e.y, e.x, ascending);
+        if m > lo && m < hi {
+            found_point(m, e.z);
+        }
+        cur = e.xy;
+    }
+}
+
+// Walks side s of the leaf from its corner s to corner s + 1.
+fn side_walk(cell: CcCell, s: u32) {
+    let n = cc_params.grid;
+    let size = cc_cell_size(cell);
+    let c = array<vec2u, 4>(vec2u(cell.i, cell.j), vec2u(cell.i + size.x, cell.j),
+        vec2u(cell.i + size.x, cell.j + size.y), vec2u(cell.i, cell.j + size.y));
+    let side_from = c[s];
+    let side_to = c[(s + 1u) % 4u];
+    line.patch_id = cell.patch_id;
+    var on_edge = 4u;
+    if s == 0u && side_from.y == 0u {
+        on_edge = 0u;
+    } else if s == 1u && side_from.x == n {
+        on_edge = 1u;
+    } else if s == 2u && side_from.y == n {
+        on_edge = 2u;
+    } else if s == 3u && side_from.x == 0u {
+        on_edge = 3u;
+    }
+    line.edge_side = on_edge;
+    if on_edge == 4u {
+        line.is_row = s == 0u || s == 2u;
+        line.fixed = select(side_from.x, side_from.y, line.is_row);
+        let ta = select(side_from.y, side_from.x, line.is_row);
+        let tb = select(side_to.y, side_to.x, line.is_row);
+        dyadic_walk(min(ta, tb), max(ta, tb), min(ta, tb), max(ta, tb), ta < tb);
+        return;
+    }
+    // Canonical positions along the level-1 edge, and the patch across it.
+    let local = array<u32, 4>(side_from.x, side_from.y, n - side_from.x, n - side_from.y);
+    let local_to = array<u32, 4>(side_to.x, side_to.y, n - side_to.x, n - side_to.y);
+    let ta = cc_edge_canonical(line_topo, on_edge, local[on_edge]);
+    let tb = cc_edge_canonical(line_topo, on_edge, local_to[on_edge]);
+    let across = line_topo.across[on_edge];
+    if across == CC_NO_NEIGHBOUR {
+        return;
+    }
+    let q = across >> 2u;
+    let split = cc_trial_split(best[q].y);
+    // Edges 0 and 2 of the patch across run along its u, 1 and 3 along its v.
+    let k = select(split.y, split.x, ((across & 3u) % 2u) == 0u);
+    let step = n / k;
+    let lo = min(ta, tb);
+    let hi = max(ta, tb);
+    let ascending = ta < tb;
+    let first = lo / step;
+    let last = (hi + step - 1u) / step; // exclusive
+    for (var g = 0u; g < last - first; g++) {
+        let root = select(last - 1u - g, first + g, ascending);
+        let a = root * step;
+        let b = a + step;
+        // Order: the root's near end (a boundary point of the patch across), then inside.
+        let near = select(b, a, ascending);
+        if near > lo && near < hi {
+            let slot = line_slot(near);
+            if slot != CC_NO_SLOT {
+                found_point(near, slot);
+            }
+        }
+        dyadic_walk(a, b, lo, hi, ascending);
+    }
+}
+
+@compute @workgroup_size(64)
+fn count(@builtin(global_invocation_id) gid: vec3u, @builtin(num_workgroups) groups: vec3u) {
+    let l = cc_invocation(gid, groups);
+    let n = min(cc_state.leaves, cc_params.leaf_capacity);
+    if l >= n || l >= arrayLength(&leaves) || cc_side_base(l) + 4u > arrayLength(&poly_offsets) {
+        return;
+    }
+    let cell = leaves[l];
+    line_topo = topo[cell.patch_id];
+    emitting = false;
+    var counts = vec4u(0u);
+    for (var s = 0u; s < 4u; s++) {
+        found = 0u;
+        side_walk(cell, s);
+        counts[s] = found;
+    }
+    for (var s = 0u; s < 4u; s++) {
+        poly_offsets[cc_side_base(l) + s] = counts[s];
+    }
+    poly_offsets[l] = 4u + counts.x + counts.y + counts.z + counts.w;
+}
+
+@compute @workgroup_size(64)
+fn emit(@builtin(global_invocation_id) gid: vec3u, @builtin(num_workgroups) groups: vec3u) {
+    let l = cc_invocation(gid, groups);
+    let n = min(cc_state.leaves, cc_params.leaf_capacity);
+    if l >= n || l >= arrayLength(&leaves) || cc_side_base(l) + 4u > arrayLength(&poly_offsets) {
+        return;
+    }
+    let cell = leaves[l];
+    line_topo = topo[cell.patch_id];
+    let counts = cc_side_counts(l);
+    let size = cc_cell_size(cell);
+    let c = array<vec2u, 4>(vec2u(cell.i, cell.j), vec2u(cell.i + size.x, cell.j),
+        vec2u(cell.i + size.x, cell.j + size.y), vec2u(cell.i, cell.j + size.y));
+    var at = poly_offsets[l];
+    emitting = true;
+    for (var s = 0u; s < 4u; s++) {
+        // The corner's vertex is its item's number (items 4·leaf + corner).
+        if at < arrayLength(&poly_verts) && at < cc_params.poly_capacity {
+            poly_verts[at] = vec4u(ids[4u * l + s], c[s].x, c[s].y, 0u);
+        }
+        emit_at = at + 1u;
+        found = 0u;
+        side_walk(cell, s);
+        at += 1u + counts[s];
+    }
+}

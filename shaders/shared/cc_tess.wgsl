@@ -1,0 +1,165 @@
+// What the kernels of the adaptive Catmull-Clark pipeline share (bindings 50-59): the
+// parameters, the counters, the first-split trials, grid parameters and point keys.
+// Twins: `tessera_core::catmull_clark::gpu_pipeline`.
+
+#include "shared/types.wgsl"
+#include "shared/cc_patch.wgsl"
+
+// `tessera_core::gpu_types::CcState`, then the leaf count of every (patch, trial).
+struct CcCounters {
+    round: u32,
+    count: u32,
+    leaves: u32,
+    overflow: atomic<u32>,
+    need_cells: atomic<u32>,
+    need_poly: u32,
+    need_indices: u32,
+    unmet: atomic<u32>,
+    max_bound_bits: atomic<u32>,
+    vertices: u32,
+    pad0: u32,
+    pad1: u32,
+    trials: array<atomic<u32>>,
+}
+
+@group(0) @binding(50) var<uniform> cc_params: CcTessParams;
+@group(0) @binding(51) var<storage, read_write> cc_state: CcCounters;
+// Per patch: (leaves, trial) of the best first split so far.
+@group(0) @binding(56) var<storage, read_write> best: array<vec2u>;
+
+fn cc_invocation(gid: vec3u, groups: vec3u) -> u32 {
+    return gid.x + gid.y * groups.x * 64u;
+}
+
+// `cc_trial_split`: (ku, kv) of trial t.
+fn cc_trial_split(t: u32) -> vec2u {
+    if t < 8u {
+        return vec2u(t + 1u, t + 1u);
+    }
+    let r = t - 8u;
+    let ku = r / 7u + 1u;
+    let k = r % 7u + 1u;
+    return vec2u(ku, select(k, k + 1u, k >= ku));
+}
+
+fn cc_trial_round(t: u32) -> u32 {
+    let s = cc_trial_split(t);
+    let area = s.x * s.y;
+    for (var r = 0u; r < CC_SEARCH_ROUNDS; r++) {
+        if area <= (r + 1u) * (r + 1u) {
+            return r;
+        }
+    }
+    return 0u;
+}
+
+// Width and height of a cell in grid units.
+fn cc_cell_size(cell: CcCell) -> vec2u {
+    let s = cc_trial_split(cell.trial_depth & 0xffu);
+    let depth = cell.trial_depth >> 8u;
+    return vec2u((cc_params.grid / s.x) >> depth, (cc_params.grid / s.y) >> depth);
+}
+
+// A grid coordinate as a fixed-point parameter: round(i · 2^31 / grid), grid =
+// 105 · 2^(max_depth + 3), by long division (no 64-bit integers in WGSL).
+fn cc_grid_fixed(i: u32) -> u32 {
+    let s = 28u - cc_params.max_depth;
+    let q = i / 105u;
+    var rem = i % 105u;
+    var frac = 0u;
+    for (var b = 0u; b < s; b++) {
+        rem = rem << 1u;
+        frac = frac << 1u;
+        if rem >= 105u {
+            rem -= 105u;
+            frac |= 1u;
+        }
+    }
+    var r = (q << s) + frac;
+    if 2u * rem >= 105u {
+        r += 1u;
+    }
+    return r;
+}
+
+// `keys::point_key` as `[hi, lo]` words: the same point from every patch gets the same key.
+fn cc_point_key(topo: CcPatchTopo, p: u32, i: u32, j: u32) -> vec2u {
+    let n = cc_params.grid;
+    if i == 0u && j == 0u {
+        return vec2u(0u, topo.quad[0]);
+    }
+    if i == n && j == 0u {
+        return vec2u(0u, topo.quad[1]);
+    }
+    if i == n && j == n {
+        return vec2u(0u, topo.quad[2]);
+    }
+    if i == 0u && j == n {
+        return vec2u(0u, topo.quad[3]);
+    }
+    var k = 4u;
+    var t = 0u;
+    if j == 0u {
+        k = 0u;
+        t = i;
+    } else if i == n {
+        k = 1u;
+        t = j;
+    } else if j == n {
+        k = 2u;
+        t = n - i;
+    } else if i == 0u {
+        k = 3u;
+        t = n - j;
+    }
+    if k < 4u {
+        return vec2u((1u << 30u) | topo.edges[k], cc_edge_canonical(topo, k, t));
+    }
+    return vec2u((2u << 30u) | (p << 8u) | (i >> 12u), ((i & 0xfffu) << 20u) | j);
+}
+
+// Distance from corner k along edge k, counted from the edge's smaller end point.
+fn cc_edge_canonical(topo: CcPatchTopo, k: u32, t: u32) -> u32 {
+    return select(cc_params.grid - t, t, topo.quad[k] < topo.quad[(k + 1u) % 4u]);
+}
+
+// Best (leaves, trial) before this round.
+fn best_before(p: u32) -> vec2u {
+    if cc_state.round == 0u {
+        return vec2u(0xffffffffu, CC_TRIALS);
+    }
+    return best[p];
+}
+
+// Whether trial t of a patch whose best so far is b must be tried: a split into ku·kv
+// cells has at least ku·kv leaves, and ties go to the earlier trial.
+fn needed(t: u32, b: vec2u) -> bool {
+    let s = cc_trial_split(t);
+    let area = s.x * s.y;
+    return area < b.x || (area == b.x && t < b.y);
+}
+
+// The trials of patch p in this round, as a bit tried (bit t): in search rounds those of
+// the round that are needed, in the final round the best one.
+fn round_trials(p: u32) -> vec2u {
+    var tried = vec2u(0u);
+    if cc_roots[p] == CC_NO_ROOT {
+        return tried;
+    }
+    if cc_state.round >= CC_SEARCH_ROUNDS {
+        let t = best[p].y;
+        tried[t / 32u] = 1u << (t % 32u);
+        return tried;
+    }
+    let b = best_before(p);
+    for (var t = 0u; t < CC_TRIALS; t++) {
+        if cc_trial_round(t) == cc_state.round && needed(t, b) {
+            tried[t / 32u] |= 1u << (t % 32u);
+        }
+    }
+    return tried;
+}
+
+fn cc_has_trial(tried: vec2u, t: u32) -> bool {
+    return (tried[t / 32u] & (1u << (t % 32u))) != 0u;
+}
