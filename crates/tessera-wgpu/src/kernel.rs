@@ -64,6 +64,22 @@ impl Kernel {
     }
 }
 
+impl Kernel {
+    /// Dispatches with workgroup counts that an earlier kernel wrote into `args` at
+    /// `offset` (three `u32`).
+    pub fn dispatch_indirect(
+        &self,
+        pass: &mut wgpu::ComputePass,
+        bind_group: &wgpu::BindGroup,
+        args: &wgpu::Buffer,
+        offset: u64,
+    ) {
+        pass.set_pipeline(&self.pipeline);
+        pass.set_bind_group(0, bind_group, &[]);
+        pass.dispatch_workgroups_indirect(args, offset);
+    }
+}
+
 /// Workgroups for `items` invocations, as (x, y) within the per-dimension limit.
 pub(crate) fn groups_2d(items: u32, per_group: u32) -> (u32, u32) {
     let g = items.div_ceil(per_group);

@@ -9,9 +9,10 @@
 use glam::Vec3;
 
 use super::patch::{Node, SurfaceModel};
+use super::topology::PatchMesh;
 use crate::gpu_types::{
-    CcCorner, CcNode, CcPoint, GpuPatch, OutVertex, CC_NODE_BEZIER, CC_NODE_CORNER, CC_NODE_SPLIT,
-    CC_NO_ROOT, CC_PARAM_ONE,
+    CcCorner, CcNode, CcPatchTopo, CcPoint, GpuPatch, OutVertex, CC_NODE_BEZIER, CC_NODE_CORNER,
+    CC_NODE_SPLIT, CC_NO_NEIGHBOUR, CC_NO_ROOT, CC_PARAM_ONE,
 };
 
 /// Flattened quadtrees of all patches.
@@ -199,6 +200,35 @@ pub fn vertex_eval(model: &CcGpuModel, points: &[CcPoint]) -> Vec<OutVertex> {
                 normal: n.to_array(),
                 uv: [point.u as f32 / one, point.v as f32 / one],
                 patch: point.patch_id,
+            }
+        })
+        .collect()
+}
+
+/// Per patch: its level-1 points and edges, and the patch (and its edge) across each
+/// edge; [`CC_NO_NEIGHBOUR`] on an open boundary or where the patch across is a hole,
+/// which has no points to contribute.
+pub fn patch_topology(mesh: &PatchMesh) -> Vec<CcPatchTopo> {
+    let mut uses: Vec<Vec<u32>> = vec![Vec::new(); mesh.edge_uses.len()];
+    for (p, edges) in mesh.quad_edges.iter().enumerate() {
+        for (k, &e) in edges.iter().enumerate() {
+            uses[e as usize].push((p as u32) << 2 | k as u32);
+        }
+    }
+    (0..mesh.patch_count())
+        .map(|p| {
+            let across = std::array::from_fn(|k| {
+                let me = (p as u32) << 2 | k as u32;
+                uses[mesh.quad_edges[p][k] as usize]
+                    .iter()
+                    .copied()
+                    .find(|&u| u != me && !mesh.hole[(u >> 2) as usize])
+                    .unwrap_or(CC_NO_NEIGHBOUR)
+            });
+            CcPatchTopo {
+                quad: mesh.quads[p],
+                edges: mesh.quad_edges[p],
+                across,
             }
         })
         .collect()

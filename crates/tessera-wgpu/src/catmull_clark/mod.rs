@@ -1,4 +1,5 @@
-//! The Catmull-Clark stage on the GPU (in progress): the patches' quadtrees uploaded
+//! The Catmull-Clark stage on the GPU: [`CcStage`] (the adaptive tessellation, module
+//! `stage`) and its parts: the patches' quadtrees uploaded
 //! once ([`CcModelBuffers`]), the kernel that evaluates surface points exactly
 //! ([`CcVertexEval`], `shaders/cc_vertex_eval.wgsl`, CPU twin
 //! [`tessera_core::catmull_clark::gpu_model::vertex_eval`]), and the global vertex hash
@@ -17,6 +18,10 @@
 //! queue.submit([encoder.finish()]);
 //! # }
 //! ```
+
+mod stage;
+
+pub use stage::{CcCapacities, CcKernels, CcStage, CcStatus};
 
 use tessera_core::catmull_clark::gpu_model::CcGpuModel;
 use tessera_core::gpu_types::{CcHashSlot, CcHashStatus};

@@ -1,0 +1,696 @@
+//! The adaptive Catmull-Clark stage: the GPU twin of
+//! [`tessera_core::catmull_clark::tessellate_adaptive`], the same mesh up to vertex order.
+//!
+//! [`CcStage::prepare`] records one straight-line script into the caller's encoder; no
+//! step reads anything back, every loop bound below is known on the host:
+//!
+//! | # | kernel | per | writes |
+//! |---|---|---|---|
+//! | 1 | `cc_roots` count, scan, emit, finish | patch | root cells of the round, list size, dispatch |
+//! | 2 | `cc_mark` (indirect) | cell | flatness bound → split flag; leaves per (patch, split) |
+//! | 3 | scan, `cc_split` (indirect), finish | cell | next list (quadrants), leaves (final round) |
+//! | 4 | `cc_choose`, `next_round` | patch | best first split so far |
+//! |   | 2–3 repeat per level (`max_depth + 1`), 1–4 per round (8 search rounds + the final one) | | |
+//! | 5 | `cc_leaf_keys` (indirect) | leaf | corner keys and points |
+//! | 6 | `cc_hash_*` (insert, number, gather) | corner | vertex ids, one point per vertex |
+//! | 7 | `cc_vertex_eval` | vertex | vertices (position, normal, patch u v, patch) |
+//! | 8 | `cc_polygon` count, scan, emit (indirect) | leaf | polygons: corners + marked points on the sides |
+//! | 9 | `cc_triangulate` (indirect), finish | leaf | indices, draw arguments |
+//!
+//! The first split of each patch (`ku × kv` cells, up to 8 × 8) is the one with the fewest
+//! leaves, as on the CPU; the search runs in rounds of growing `ku · kv`, and a patch
+//! skips the splits that cannot beat its best so far.
+//!
+//! Capacities: every list, the leaves, polygons, indices and the hash table. Kernels
+//! never write past them; the counters record what the run needed, and
+//! [`CcStage::grow`] reallocates ([`CcStage::run_blocking`] grows and reruns).
+//!
+//! ```no_run
+//! use tessera_core::catmull_clark::{load_surface, CcParams};
+//! use tessera_wgpu::{catmull_clark::CcStage, headless::Gpu};
+//! # fn main() -> Result<(), Box<dyn std::error::Error>> {
+//! let gpu = Gpu::new()?;
+//! let model = load_surface(std::path::Path::new("assets/opensubdiv/catmark_car.obj"))?;
+//! let params = CcParams { tolerance: 1e-2, max_depth: 8 };
+//! let mut stage = CcStage::new(&gpu.device, &model, &params)?;
+//! // Once (and after set_params): run to completion, growing buffers that were too small.
+//! let status = stage.run_blocking(&gpu.device, &gpu.queue)?;
+//! println!("{} triangles", status.indices / 3);
+//! // Each frame, e.g. after `stage.update_points(...)`: record with your own work.
+//! let mut encoder = gpu.device.create_command_encoder(&Default::default());
+//! stage.prepare(&gpu.device, &gpu.queue, &mut encoder);
+//! gpu.queue.submit([encoder.finish()]);
+//! // Draw `stage.output()` with `draw_indexed_indirect`.
+//! # Ok(()) }
+//! ```
+
+use tessera_core::catmull_clark::gpu_model::{patch_topology, CcGpuModel};
+use tessera_core::catmull_clark::{CcParams, SurfaceModel};
+use tessera_core::gpu_types::{
+    CcCell, CcHashStatus, CcPoint, CcState, CcTessParams, OutVertex, CC_SEARCH_ROUNDS, CC_TRIALS,
+};
+use tessera_core::Mesh;
+use wgpu::util::DeviceExt;
+
+use super::{CcHashKernels, CcModelBuffers, CcVertexEval, CcVertexHash};
+use crate::error::{Error, Result};
+use crate::headless::{map_read, read_buffer};
+use crate::kernel::{storage, Kernel};
+use crate::output::MeshBuffers;
+use crate::scan::{PrefixSum, ScanKernels};
+
+/// Binding numbers of the pipeline's own buffers (`shaders/shared/cc_tess.wgsl`).
+mod slot {
+    pub const PARAMS: u32 = 50;
+    pub const STATE: u32 = 51;
+    pub const CELLS_OUT: u32 = 52;
+    pub const CELLS_IN: u32 = 53;
+    pub const FLAGS: u32 = 54;
+    pub const LEAVES: u32 = 55;
+    pub const BEST: u32 = 56;
+    pub const ROOT_OFFSETS: u32 = 57;
+    pub const ARGS: u32 = 58;
+    pub const TOPO: u32 = 59;
+    pub const ITEM_POINTS: u32 = 60;
+    pub const POLY_OFFSETS: u32 = 62;
+    pub const POLY_VERTS: u32 = 63;
+    pub const VERTICES: u32 = 64;
+    pub const INDICES: u32 = 65;
+    pub const DRAW: u32 = 66;
+    // The vertex hash's and the vertex evaluation's (shared/cc_hash.wgsl, cc_vertex_eval).
+    pub const KEYS: u32 = 40;
+    pub const TABLE: u32 = 41;
+    pub const ITEM_SLOT: u32 = 42;
+    pub const HASH_STATUS: u32 = 43;
+    pub const HASH_OFFSETS: u32 = 44;
+    pub const IDS: u32 = 45;
+    pub const VERTEX_POINTS: u32 = 30;
+    pub const VERTEX_COUNT: u32 = 32;
+}
+
+/// Offsets into the dispatch-arguments buffer.
+const LIST_ARGS: u64 = 0;
+const LEAF_ARGS: u64 = 12;
+
+/// Every kernel of the stage, compiled once per device.
+pub struct CcKernels {
+    roots_count: Kernel,
+    roots_emit: Kernel,
+    roots_finish: Kernel,
+    mark: Kernel,
+    split: Kernel,
+    split_finish: Kernel,
+    choose: Kernel,
+    next_round: Kernel,
+    leaf_keys: Kernel,
+    gather_points: Kernel,
+    polygon_count: Kernel,
+    polygon_emit: Kernel,
+    triangulate: Kernel,
+    triangulate_finish: Kernel,
+    hash: CcHashKernels,
+    eval: CcVertexEval,
+    scan: ScanKernels,
+}
+
+impl CcKernels {
+    pub fn new(device: &wgpu::Device) -> Self {
+        let k = |file, entry| Kernel::new(device, file, entry);
+        CcKernels {
+            roots_count: k("cc_roots.wgsl", "count"),
+            roots_emit: k("cc_roots.wgsl", "emit"),
+            roots_finish: k("cc_roots.wgsl", "finish"),
+            mark: k("cc_mark.wgsl", "main"),
+            split: k("cc_split.wgsl", "main"),
+            split_finish: k("cc_split.wgsl", "finish"),
+            choose: k("cc_choose.wgsl", "main"),
+            next_round: k("cc_choose.wgsl", "next_round"),
+            leaf_keys: k("cc_leaf_keys.wgsl", "main"),
+            gather_points: k("cc_hash_number.wgsl", "gather_points"),
+            polygon_count: k("cc_polygon.wgsl", "count"),
+            polygon_emit: k("cc_polygon.wgsl", "emit"),
+            triangulate: k("cc_triangulate.wgsl", "main"),
+            triangulate_finish: k("cc_triangulate.wgsl", "finish"),
+            hash: CcHashKernels::new(device),
+            eval: CcVertexEval::new(device),
+            scan: ScanKernels::new(device),
+        }
+    }
+}
+
+/// How many of each thing the buffers hold.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct CcCapacities {
+    /// Cells per list (each level's list of cells to test).
+    pub cells: u32,
+    /// Leaves of the final tessellation.
+    pub leaves: u32,
+    /// Polygon vertices (leaf corners plus the points on their sides).
+    pub poly: u32,
+    /// Indices (3 per triangle).
+    pub indices: u32,
+    /// Slots of the vertex hash (rounded up to a power of two).
+    pub hash_slots: u32,
+}
+
+impl CcCapacities {
+    /// A first guess for a model of `patches` patches; runs grow what is too small.
+    pub fn guess(patches: u32) -> Self {
+        let p = patches.max(1);
+        CcCapacities {
+            cells: 64 * p,
+            leaves: 16 * p,
+            poly: 96 * p,
+            indices: 3 * 96 * p,
+            hash_slots: 2 * 64 * p,
+        }
+    }
+}
+
+/// What a run needed and reported (read back by [`CcStage::read_status`]).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct CcStatus {
+    pub state: CcState,
+    pub hash: CcHashStatus,
+    /// Indices written (0 after an overflow).
+    pub indices: u32,
+}
+
+impl CcStatus {
+    pub fn overflowed(&self) -> bool {
+        self.state.overflow != 0 || self.hash.overflow != 0
+    }
+    /// Distinct output vertices.
+    pub fn vertices(&self) -> u32 {
+        self.hash.unique
+    }
+    /// The largest flatness bound of a leaf: the guaranteed error of the output.
+    pub fn max_bound(&self) -> f32 {
+        f32::from_bits(self.state.max_bound_bits)
+    }
+}
+
+/// Buffers that depend on the capacities.
+struct Buffers {
+    caps: CcCapacities,
+    params: wgpu::Buffer,
+    cells: [wgpu::Buffer; 2],
+    flags: wgpu::Buffer,
+    leaves: wgpu::Buffer,
+    keys: wgpu::Buffer,
+    item_points: wgpu::Buffer,
+    vertex_points: wgpu::Buffer,
+    vertex_count: wgpu::Buffer,
+    poly_offsets: wgpu::Buffer,
+    poly_verts: wgpu::Buffer,
+    hash: CcVertexHash,
+    output: MeshBuffers,
+    flag_scan: PrefixSum,
+    poly_scan: PrefixSum,
+}
+
+/// Bind groups of every dispatch, rebuilt when buffers are reallocated.
+struct Binds {
+    roots_count: wgpu::BindGroup,
+    roots_emit: wgpu::BindGroup,
+    roots_finish: wgpu::BindGroup,
+    /// Per list parity: the list read is `cells[parity]`.
+    mark: [wgpu::BindGroup; 2],
+    split: [wgpu::BindGroup; 2],
+    split_finish: wgpu::BindGroup,
+    choose: wgpu::BindGroup,
+    next_round: wgpu::BindGroup,
+    leaf_keys: wgpu::BindGroup,
+    gather_points: wgpu::BindGroup,
+    polygon_count: wgpu::BindGroup,
+    polygon_emit: wgpu::BindGroup,
+    triangulate: wgpu::BindGroup,
+    triangulate_finish: wgpu::BindGroup,
+}
+
+/// The adaptive Catmull-Clark tessellation stage of one model.
+pub struct CcStage {
+    kernels: CcKernels,
+    model: CcModelBuffers,
+    patch_count: u32,
+    params: CcParams,
+    topo: wgpu::Buffer,
+    state: wgpu::Buffer,
+    best: wgpu::Buffer,
+    root_offsets: wgpu::Buffer,
+    root_scan: PrefixSum,
+    args: wgpu::Buffer,
+    status_readback: wgpu::Buffer,
+    buffers: Buffers,
+    binds: Binds,
+}
+
+fn state_bytes(patches: u32) -> u64 {
+    (std::mem::size_of::<CcState>() as u64) + 4 * (CC_TRIALS as u64) * patches.max(1) as u64
+}
+
+impl CcStage {
+    /// Uploads `model` and sizes the buffers with a first guess.
+    pub fn new(device: &wgpu::Device, model: &SurfaceModel, params: &CcParams) -> Result<Self> {
+        let caps = CcCapacities::guess(model.mesh.patch_count() as u32);
+        Self::with_capacity(device, model, params, caps)
+    }
+
+    /// As [`new`](Self::new) with given capacities (tests start from tiny ones).
+    pub fn with_capacity(
+        device: &wgpu::Device,
+        model: &SurfaceModel,
+        params: &CcParams,
+        caps: CcCapacities,
+    ) -> Result<Self> {
+        params.validate(model)?;
+        let kernels = CcKernels::new(device);
+        let gpu_model = CcGpuModel::new(model);
+        let model_buffers = CcModelBuffers::new(device, &gpu_model);
+        let patch_count = model.mesh.patch_count() as u32;
+        let topo = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("tessera cc topology"),
+            contents: bytemuck::cast_slice(&patch_topology(&model.mesh)),
+            usage: wgpu::BufferUsages::STORAGE,
+        });
+        let state = storage(device, "tessera cc state", state_bytes(patch_count));
+        let best = storage(device, "tessera cc best split", 8 * patch_count.max(1) as u64);
+        let root_offsets = storage(device, "tessera cc root offsets", 4 * (patch_count as u64 + 1));
+        let root_scan = PrefixSum::new(device, &kernels.scan, &root_offsets, patch_count + 1);
+        let args = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("tessera cc dispatch args"),
+            size: 24,
+            usage: wgpu::BufferUsages::STORAGE
+                | wgpu::BufferUsages::INDIRECT
+                | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let status_readback = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("tessera cc status readback"),
+            size: status_size(),
+            usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+            mapped_at_creation: false,
+        });
+        let buffers = Buffers::new(device, &kernels, patch_count, params, caps)?;
+        let binds = Binds::new(
+            device,
+            &kernels,
+            &model_buffers,
+            (&topo, &state, &best, &root_offsets, &args),
+            &buffers,
+        );
+        Ok(CcStage {
+            kernels,
+            model: model_buffers,
+            patch_count,
+            params: *params,
+            topo,
+            state,
+            best,
+            root_offsets,
+            root_scan,
+            args,
+            status_readback,
+            buffers,
+            binds,
+        })
+    }
+
+    /// The tolerance and depth of the next runs.
+    pub fn set_params(&mut self, queue: &wgpu::Queue, params: &CcParams) -> Result<()> {
+        if params.max_depth > tessera_core::catmull_clark::MAX_DEPTH {
+            return Err(tessera_core::Error::Param(format!(
+                "max depth {} out of range 0..={}",
+                params.max_depth,
+                tessera_core::catmull_clark::MAX_DEPTH
+            ))
+            .into());
+        }
+        self.params = *params;
+        let p = tess_params(self.patch_count, params, self.buffers.caps);
+        queue.write_buffer(&self.buffers.params, 0, bytemuck::bytes_of(&p));
+        Ok(())
+    }
+
+    /// New control-point positions for the same topology: the quadtrees are rebuilt on
+    /// the CPU and re-uploaded in place; the next [`prepare`](Self::prepare) tessellates
+    /// the moved surface.
+    pub fn update_points(&self, queue: &wgpu::Queue, model: &SurfaceModel) -> Result<()> {
+        self.model.update(queue, &CcGpuModel::new(model))
+    }
+
+    pub fn params(&self) -> &CcParams {
+        &self.params
+    }
+
+    pub fn capacities(&self) -> CcCapacities {
+        self.buffers.caps
+    }
+
+    /// The vertex, index and draw-argument buffers.
+    pub fn output(&self) -> &MeshBuffers {
+        &self.buffers.output
+    }
+
+    /// Bytes of the uploaded model.
+    pub fn upload_bytes(&self) -> usize {
+        self.model.byte_size()
+    }
+
+    /// Records the whole tessellation into `encoder` (see the module docs), and a copy of
+    /// the counters for [`read_status`](Self::read_status). Submits nothing.
+    pub fn prepare(
+        &self,
+        device: &wgpu::Device,
+        _queue: &wgpu::Queue,
+        encoder: &mut wgpu::CommandEncoder,
+    ) {
+        let b = &self.buffers;
+        let k = &self.kernels;
+        let binds = &self.binds;
+        encoder.clear_buffer(&self.state, 0, None);
+        encoder.clear_buffer(&b.hash.status, 0, None);
+        {
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("tessera cc marking"),
+                timestamp_writes: None,
+            });
+            let p = self.patch_count;
+            for round in 0..=CC_SEARCH_ROUNDS {
+                k.roots_count.dispatch(&mut pass, &binds.roots_count, p, 64);
+                self.root_scan.record(&mut pass, &k.scan);
+                k.roots_emit.dispatch(&mut pass, &binds.roots_emit, p, 64);
+                k.roots_finish.dispatch(&mut pass, &binds.roots_finish, 1, 1);
+                for level in 0..=self.params.max_depth as usize {
+                    let parity = level % 2;
+                    k.mark
+                        .dispatch_indirect(&mut pass, &binds.mark[parity], &self.args, LIST_ARGS);
+                    b.flag_scan.record(&mut pass, &k.scan);
+                    k.split
+                        .dispatch_indirect(&mut pass, &binds.split[parity], &self.args, LIST_ARGS);
+                    k.split_finish
+                        .dispatch(&mut pass, &binds.split_finish, 1, 1);
+                }
+                if round < CC_SEARCH_ROUNDS {
+                    k.choose.dispatch(&mut pass, &binds.choose, p, 64);
+                    k.next_round.dispatch(&mut pass, &binds.next_round, 1, 1);
+                }
+            }
+            k.leaf_keys
+                .dispatch_indirect(&mut pass, &binds.leaf_keys, &self.args, LEAF_ARGS);
+        }
+        // The hash clears its table; the keys kernel has set how many items.
+        b.hash.record(device, encoder, &k.hash, &b.keys);
+        {
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("tessera cc vertices"),
+                timestamp_writes: None,
+            });
+            k.gather_points
+                .dispatch(&mut pass, &binds.gather_points, b.hash.item_capacity, 64);
+        }
+        k.eval.record(
+            device,
+            encoder,
+            &self.model,
+            &b.vertex_points,
+            &b.vertex_count,
+            &b.output.vertices,
+            b.hash.item_capacity,
+        );
+        {
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("tessera cc polygons"),
+                timestamp_writes: None,
+            });
+            k.polygon_count
+                .dispatch_indirect(&mut pass, &binds.polygon_count, &self.args, LEAF_ARGS);
+            b.poly_scan.record(&mut pass, &k.scan);
+            k.polygon_emit
+                .dispatch_indirect(&mut pass, &binds.polygon_emit, &self.args, LEAF_ARGS);
+            k.triangulate
+                .dispatch_indirect(&mut pass, &binds.triangulate, &self.args, LEAF_ARGS);
+            k.triangulate_finish
+                .dispatch(&mut pass, &binds.triangulate_finish, 1, 1);
+        }
+        let state_size = std::mem::size_of::<CcState>() as u64;
+        let hash_size = std::mem::size_of::<CcHashStatus>() as u64;
+        encoder.copy_buffer_to_buffer(&self.state, 0, &self.status_readback, 0, state_size);
+        encoder.copy_buffer_to_buffer(&b.hash.status, 0, &self.status_readback, state_size, hash_size);
+        encoder.copy_buffer_to_buffer(
+            &b.output.indirect,
+            0,
+            &self.status_readback,
+            state_size + hash_size,
+            4,
+        );
+    }
+
+    /// What the last submitted run needed (waits for the GPU).
+    pub fn read_status(&self, device: &wgpu::Device) -> Result<CcStatus> {
+        let bytes = map_read(device, &self.status_readback)?;
+        let state_size = std::mem::size_of::<CcState>();
+        let hash_size = std::mem::size_of::<CcHashStatus>();
+        Ok(CcStatus {
+            state: bytemuck::pod_read_unaligned(&bytes[..state_size]),
+            hash: bytemuck::pod_read_unaligned(&bytes[state_size..state_size + hash_size]),
+            indices: u32::from_le_bytes(
+                bytes[state_size + hash_size..state_size + hash_size + 4]
+                    .try_into()
+                    .expect("4 bytes"),
+            ),
+        })
+    }
+
+    /// After an overflow, reallocates what was too small to what the run needed (with
+    /// headroom). Returns whether anything changed; an error if the device cannot hold it.
+    pub fn grow(&mut self, device: &wgpu::Device, status: &CcStatus) -> Result<bool> {
+        if !status.overflowed() {
+            return Ok(false);
+        }
+        let s = &status.state;
+        let old = self.buffers.caps;
+        let grow = |need: u32, have: u32| {
+            if need > have {
+                need.saturating_add(need / 4)
+            } else {
+                have
+            }
+        };
+        let mut caps = CcCapacities {
+            cells: grow(s.need_cells, old.cells),
+            leaves: grow(s.leaves, old.leaves),
+            poly: grow(s.need_poly, old.poly),
+            indices: grow(s.need_indices, old.indices),
+            hash_slots: old.hash_slots,
+        };
+        // The hash's items are the leaves' corners: keep the table at least twice that.
+        if status.hash.overflow != 0 || caps.hash_slots < 8 * caps.leaves {
+            caps.hash_slots = (2 * old.hash_slots).max(8 * caps.leaves);
+        }
+        if caps == old {
+            return Err(Error::Wgpu(
+                "the run overflowed but reports nothing larger than the buffers".into(),
+            ));
+        }
+        let buffers = Buffers::new(device, &self.kernels, self.patch_count, &self.params, caps)?;
+        self.binds = Binds::new(
+            device,
+            &self.kernels,
+            &self.model,
+            (&self.topo, &self.state, &self.best, &self.root_offsets, &self.args),
+            &buffers,
+        );
+        self.buffers = buffers;
+        Ok(true)
+    }
+
+    /// Runs to completion on its own submission, growing and rerunning until everything
+    /// fits. For loading, tools and tests; a renderer records [`prepare`](Self::prepare).
+    pub fn run_blocking(&mut self, device: &wgpu::Device, queue: &wgpu::Queue) -> Result<CcStatus> {
+        for _ in 0..8 {
+            let mut encoder = device.create_command_encoder(&Default::default());
+            self.prepare(device, queue, &mut encoder);
+            queue.submit([encoder.finish()]);
+            let status = self.read_status(device)?;
+            if !self.grow(device, &status)? {
+                return Ok(status);
+            }
+        }
+        Err(Error::Wgpu("still overflowing after growing 8 times".into()))
+    }
+
+    /// Copies the output mesh back (files and tests).
+    pub fn read_mesh(&self, device: &wgpu::Device, queue: &wgpu::Queue, status: &CcStatus) -> Result<Mesh> {
+        if status.overflowed() {
+            return Err(Error::Wgpu("the last run overflowed its buffers; grow and rerun".into()));
+        }
+        let vsize = status.vertices() as u64 * std::mem::size_of::<OutVertex>() as u64;
+        let isize = status.indices as u64 * 4;
+        let vertices = read_buffer(device, queue, &self.buffers.output.vertices, 0, vsize)?;
+        let indices = read_buffer(device, queue, &self.buffers.output.indices, 0, isize)?;
+        Ok(Mesh {
+            vertices: bytemuck::pod_collect_to_vec(&vertices),
+            indices: bytemuck::pod_collect_to_vec(&indices),
+        })
+    }
+
+    /// The leaves of the last run (tests compare them with the CPU reference's).
+    pub fn read_leaves(&self, device: &wgpu::Device, queue: &wgpu::Queue, status: &CcStatus) -> Result<Vec<CcCell>> {
+        let n = status.state.leaves.min(self.buffers.caps.leaves) as u64;
+        let bytes = read_buffer(device, queue, &self.buffers.leaves, 0, n * 16)?;
+        Ok(bytemuck::pod_collect_to_vec(&bytes))
+    }
+}
+
+fn status_size() -> u64 {
+    (std::mem::size_of::<CcState>() + std::mem::size_of::<CcHashStatus>() + 4) as u64
+}
+
+fn tess_params(patch_count: u32, params: &CcParams, caps: CcCapacities) -> CcTessParams {
+    CcTessParams {
+        grid: 840 << params.max_depth,
+        max_depth: params.max_depth,
+        tolerance: params.tolerance as f32,
+        patch_count,
+        cell_capacity: caps.cells,
+        leaf_capacity: caps.leaves,
+        poly_capacity: caps.poly,
+        index_capacity: caps.indices,
+    }
+}
+
+impl Buffers {
+    fn new(
+        device: &wgpu::Device,
+        kernels: &CcKernels,
+        patch_count: u32,
+        params: &CcParams,
+        caps: CcCapacities,
+    ) -> Result<Self> {
+        let caps = CcCapacities {
+            cells: caps.cells.max(1),
+            leaves: caps.leaves.max(1),
+            poly: caps.poly.max(4),
+            indices: caps.indices.max(3),
+            hash_slots: caps.hash_slots.max(1).next_power_of_two(),
+        };
+        let items = 4 * caps.leaves;
+        let limits = device.limits();
+        let limit = limits.max_buffer_size.min(limits.max_storage_buffer_binding_size);
+        for (what, bytes) in [
+            ("cell list", caps.cells as u64 * 16),
+            ("leaf", caps.leaves as u64 * 16),
+            ("polygon", caps.poly as u64 * 16),
+            ("index", caps.indices as u64 * 4),
+            ("vertex", items as u64 * std::mem::size_of::<OutVertex>() as u64),
+            ("vertex hash", caps.hash_slots as u64 * 12),
+        ] {
+            if bytes > limit {
+                return Err(Error::OutputTooLarge { what, bytes, limit });
+            }
+        }
+        let params = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("tessera cc params"),
+            contents: bytemuck::bytes_of(&tess_params(patch_count, params, caps)),
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+        });
+        let cell_bytes = std::mem::size_of::<CcCell>() as u64;
+        let flags = storage(device, "tessera cc split flags", 4 * (caps.cells as u64 + 1));
+        let flag_scan = PrefixSum::new(device, &kernels.scan, &flags, caps.cells + 1);
+        let poly_offsets = storage(
+            device,
+            "tessera cc polygon offsets",
+            4 * (caps.leaves as u64 + 1 + 4 * caps.leaves as u64),
+        );
+        let poly_scan = PrefixSum::new(device, &kernels.scan, &poly_offsets, caps.leaves + 1);
+        let point_bytes = std::mem::size_of::<CcPoint>() as u64;
+        Ok(Buffers {
+            caps,
+            params,
+            cells: [
+                storage(device, "tessera cc cells 0", cell_bytes * caps.cells as u64),
+                storage(device, "tessera cc cells 1", cell_bytes * caps.cells as u64),
+            ],
+            flags,
+            leaves: storage(device, "tessera cc leaves", cell_bytes * caps.leaves as u64),
+            keys: storage(device, "tessera cc keys", 8 * items as u64),
+            item_points: storage(device, "tessera cc item points", point_bytes * items as u64),
+            vertex_points: storage(device, "tessera cc vertex points", point_bytes * items as u64),
+            vertex_count: storage(device, "tessera cc vertex count", 4),
+            poly_offsets,
+            poly_verts: storage(device, "tessera cc polygons", 16 * caps.poly as u64),
+            hash: CcVertexHash::new(device, &kernels.hash, items, caps.hash_slots),
+            output: MeshBuffers::with_capacity(device, items, caps.indices),
+            flag_scan,
+            poly_scan,
+        })
+    }
+}
+
+impl Binds {
+    fn new(
+        device: &wgpu::Device,
+        k: &CcKernels,
+        model: &CcModelBuffers,
+        (topo, state, best, root_offsets, args): (
+            &wgpu::Buffer,
+            &wgpu::Buffer,
+            &wgpu::Buffer,
+            &wgpu::Buffer,
+            &wgpu::Buffer,
+        ),
+        b: &Buffers,
+    ) -> Self {
+        let common = |parity: usize| {
+            let mut e: Vec<(u32, &wgpu::Buffer)> = model.entries().to_vec();
+            e.extend([
+                (slot::PARAMS, &b.params),
+                (slot::STATE, state),
+                (slot::CELLS_IN, &b.cells[parity]),
+                (slot::CELLS_OUT, &b.cells[1 - parity]),
+                (slot::FLAGS, &b.flags),
+                (slot::LEAVES, &b.leaves),
+                (slot::BEST, best),
+                (slot::ROOT_OFFSETS, root_offsets),
+                (slot::ARGS, args),
+                (slot::TOPO, topo),
+                (slot::ITEM_POINTS, &b.item_points),
+                (slot::POLY_OFFSETS, &b.poly_offsets),
+                (slot::POLY_VERTS, &b.poly_verts),
+                (slot::VERTICES, &b.output.vertices),
+                (slot::INDICES, &b.output.indices),
+                (slot::DRAW, &b.output.indirect),
+                (slot::KEYS, &b.keys),
+                (slot::TABLE, &b.hash.table),
+                (slot::ITEM_SLOT, &b.hash.item_slot),
+                (slot::HASH_STATUS, &b.hash.status),
+                (slot::HASH_OFFSETS, &b.hash.offsets),
+                (slot::IDS, &b.hash.ids),
+                (slot::VERTEX_POINTS, &b.vertex_points),
+                (slot::VERTEX_COUNT, &b.vertex_count),
+            ]);
+            e
+        };
+        // Roots are written to cells[0], read by level 0 as parity 0: CELLS_OUT of
+        // parity 1 is cells[0].
+        let even = common(0);
+        let odd = common(1);
+        Binds {
+            roots_count: k.roots_count.bind(device, &odd),
+            roots_emit: k.roots_emit.bind(device, &odd),
+            roots_finish: k.roots_finish.bind(device, &odd),
+            mark: [k.mark.bind(device, &even), k.mark.bind(device, &odd)],
+            split: [k.split.bind(device, &even), k.split.bind(device, &odd)],
+            split_finish: k.split_finish.bind(device, &even),
+            choose: k.choose.bind(device, &even),
+            next_round: k.next_round.bind(device, &even),
+            leaf_keys: k.leaf_keys.bind(device, &even),
+            gather_points: k.gather_points.bind(device, &even),
+            polygon_count: k.polygon_count.bind(device, &even),
+            polygon_emit: k.polygon_emit.bind(device, &even),
+            triangulate: k.triangulate.bind(device, &even),
+            triangulate_finish: k.triangulate_finish.bind(device, &even),
+        }
+    }
+}
