@@ -15,7 +15,10 @@ fn main(@builtin(global_invocation_id) gid: vec3u, @builtin(num_workgroups) grou
     var b = best_before(p);
     for (var t = 0u; t < CC_TRIALS; t++) {
         if cc_has_trial(tried, t) {
-            let leaves = atomicLoad(&cc_state.trials[p * CC_TRIALS + t]);
+            // ku·kv + 3 · splits: exact for a trial run to the end, and for one dropped
+            // a number that cannot win (see cc_split.wgsl).
+            let s = cc_trial_split(t);
+            let leaves = s.x * s.y + 3u * atomicLoad(&cc_state.trials[p * CC_TRIALS + t]);
             if leaves < b.x || (leaves == b.x && t < b.y) {
                 b = vec2u(leaves, t);
             }

@@ -1,6 +1,6 @@
 // One invocation per cell of the current list: the flatness bound of the cell
 // (`shared/cc_bound.wgsl`), and the decision: a leaf if the bound is within the tolerance
-// or the cell is at the deepest level, else split (flag 1, scanned next). Leaves are
+// or the cell is at the deepest level, else split (flag 1, scanned next). Splits are
 // counted per (patch, trial) for the first-split search.
 // Twin: `gpu_pipeline::mark`.
 
@@ -21,6 +21,11 @@ fn main(@builtin(global_invocation_id) gid: vec3u, @builtin(num_workgroups) grou
         return;
     }
     let cell = cells_in[c];
+    // A cell of a trial dropped by the search (see cc_split.wgsl): nothing to test.
+    if cell.patch_id == CC_NO_NEIGHBOUR {
+        flags[c] = 0u;
+        return;
+    }
     let size = cc_cell_size(cell);
     let i1 = cell.i + size.x;
     let j1 = cell.j + size.y;
@@ -32,9 +37,12 @@ fn main(@builtin(global_invocation_id) gid: vec3u, @builtin(num_workgroups) grou
     let depth = cell.trial_depth >> 8u;
     let leaf = bound <= cc_params.tolerance || depth >= cc_params.max_depth;
     flags[c] = select(1u, 0u, leaf);
-    if leaf {
+    if !leaf {
+        // A trial ends with ku·kv + 3 · (its splits) leaves: each split turns one cell
+        // into four.
         let t = cell.trial_depth & 0xffu;
         atomicAdd(&cc_state.trials[cell.patch_id * CC_TRIALS + t], 1u);
+    } else {
         if cc_state.round >= CC_SEARCH_ROUNDS {
             atomicMax(&cc_state.max_bound_bits, bitcast<u32>(min(bound, CC_INFINITY)));
             if bound > cc_params.tolerance {

@@ -13,6 +13,18 @@
 @group(0) @binding(55) var<storage, read_write> leaves: array<CcCell>;
 @group(0) @binding(58) var<storage, read_write> args: array<u32>;
 
+// Whether the cell's trial can no longer beat its patch's best split so far: it will
+// have at least ku·kv + 3 · (splits so far) leaves. Its cells are then dropped (the
+// quadrants are written as dead cells), as the CPU reference stops counting a trial
+// once it reaches the best.
+fn cannot_win(cell: CcCell) -> bool {
+    let t = cell.trial_depth & 0xffu;
+    let s = cc_trial_split(t);
+    let at_least = s.x * s.y + 3u * atomicLoad(&cc_state.trials[cell.patch_id * CC_TRIALS + t]);
+    let b = best_before(cell.patch_id);
+    return at_least > b.x || (at_least == b.x && t > b.y);
+}
+
 @compute @workgroup_size(64)
 fn main(@builtin(global_invocation_id) gid: vec3u, @builtin(num_workgroups) groups: vec3u) {
     let c = cc_invocation(gid, groups);
@@ -24,11 +36,16 @@ fn main(@builtin(global_invocation_id) gid: vec3u, @builtin(num_workgroups) grou
     if flags[c + 1u] > before {
         let half = cc_cell_size(cell) / 2u;
         let deeper = cell.trial_depth + (1u << 8u);
+        let dead = cc_state.round < CC_SEARCH_ROUNDS && cannot_win(cell);
         for (var q = 0u; q < 4u; q++) {
             let at = 4u * before + q;
             let o = vec2u(select(0u, 1u, q == 1u || q == 2u), select(0u, 1u, q >= 2u));
+            var child = CcCell(cell.patch_id, deeper, cell.i + o.x * half.x, cell.j + o.y * half.y);
+            if dead {
+                child.patch_id = CC_NO_NEIGHBOUR;
+            }
             if at < arrayLength(&cells_out) && at < cc_params.cell_capacity {
-                cells_out[at] = CcCell(cell.patch_id, deeper, cell.i + o.x * half.x, cell.j + o.y * half.y);
+                cells_out[at] = child;
             }
         }
     } else if cc_state.round >= CC_SEARCH_ROUNDS {

@@ -260,6 +260,7 @@ fn bound_finish() -> f32 {
 
 struct CcWalkEntry {
     node: u32,
+    level: u32,
     x: u32,
     y: u32,
     size: u32,
@@ -269,6 +270,7 @@ struct CcWalkEntry {
 }
 
 var<private> walk_box: vec4u;
+var<private> walk_max_ball: f32;
 var<private> walk_origin: vec3f;
 var<private> walk_stack: array<CcWalkEntry, CC_WALK_STACK>;
 var<private> walk_len: u32;
@@ -375,7 +377,8 @@ fn cc_load_net(k: u32) {
 fn walk_enter(entry: CcWalkEntry) {
     var e = entry;
     let nd = cc_nodes[e.node];
-    if nd.kind == CC_NODE_SPLIT {
+    let kind = nd.kind & CC_NODE_KIND_MASK;
+    if kind == CC_NODE_SPLIT {
         if walk_len < CC_WALK_STACK {
             walk_stack[walk_len] = e;
             walk_len += 1u;
@@ -387,7 +390,7 @@ fn walk_enter(entry: CcWalkEntry) {
     if !walk_place(&e) {
         return;
     }
-    if nd.kind == CC_NODE_BEZIER {
+    if kind == CC_NODE_BEZIER {
         cc_load_net(nd.index);
         if walk_cut {
             cc_clip_net();
@@ -399,12 +402,27 @@ fn walk_enter(entry: CcWalkEntry) {
     }
 }
 
+// `Walk::small`: a node of `level` is at most 1/64 of the box's shorter side.
+fn walk_small(level: u32) -> bool {
+    let bmin = min(walk_box.y - walk_box.x, walk_box.w - walk_box.z);
+    return level >= 27u || (bmin >> (27u - level)) >= 105u;
+}
+
 // `Walk::split`.
 fn walk_split(entry: CcWalkEntry) {
     var e = entry;
-    let children = cc_splits[cc_nodes[e.node].index];
+    let nd = cc_nodes[e.node];
+    let children = cc_splits[nd.index];
     if !walk_place(&e) {
         return;
+    }
+    let ball = nd.kind >> CC_NODE_BALL_SHIFT;
+    if !walk_cut && ball != 0u {
+        let c = cc_corners[ball - 1u];
+        if c.hull_radius <= walk_max_ball && walk_small(entry.level) {
+            bound_vertex(vec3f(c.limit[0], c.limit[1], c.limit[2]) - walk_origin, c.hull_radius, e.rect, e.sides);
+            return;
+        }
     }
     if walk_cut {
         if (entry.size & 1u) != 0u {
@@ -414,8 +432,8 @@ fn walk_split(entry: CcWalkEntry) {
         let h = entry.size / 2u;
         for (var c = 0u; c < 4u; c++) {
             let q = cc_quadrant_offset(c);
-            walk_enter(CcWalkEntry(children[c], entry.x + q.x * h, entry.y + q.y * h, h, false,
-                vec4f(0.0), 0u));
+            walk_enter(CcWalkEntry(children[c], entry.level + 1u, entry.x + q.x * h, entry.y + q.y * h, h,
+                false, vec4f(0.0), 0u));
         }
         return;
     }
@@ -426,8 +444,8 @@ fn walk_split(entry: CcWalkEntry) {
         let q = cc_quadrant_offset(c);
         let u0 = r.x + f32(q.x) * hu;
         let v0 = r.z + f32(q.y) * hv;
-        walk_enter(CcWalkEntry(children[c], e.x, e.y, e.size, true, vec4f(u0, u0 + hu, v0, v0 + hv),
-            e.sides & cc_quadrant_sides(c)));
+        walk_enter(CcWalkEntry(children[c], entry.level + 1u, e.x, e.y, e.size, true,
+            vec4f(u0, u0 + hu, v0, v0 + hv), e.sides & cc_quadrant_sides(c)));
     }
 }
 
@@ -435,11 +453,12 @@ fn walk_split(entry: CcWalkEntry) {
 // corner positions c.
 fn cc_box_bound(p: u32, bx: vec4u, c: array<vec3f, 4>) -> f32 {
     walk_box = bx;
+    walk_max_ball = 1e-4 * max(length(c[2] - c[0]), length(c[3] - c[1]));
     walk_origin = c[0];
     walk_len = 0u;
     walk_overflow = false;
     bound_start(c);
-    walk_enter(CcWalkEntry(cc_roots[p], 0u, 0u, CC_WALK_ONE, false, vec4f(0.0), 0u));
+    walk_enter(CcWalkEntry(cc_roots[p], 0u, 0u, 0u, CC_WALK_ONE, false, vec4f(0.0), 0u));
     // Bounded: every split node is pushed once, and trees are finite; the cap guards a
     // corrupt upload.
     for (var guard = 0u; guard < 4096u && walk_len > 0u; guard++) {

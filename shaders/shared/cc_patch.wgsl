@@ -83,7 +83,8 @@ fn cc_eval(point: CcPoint) -> CcSample {
     // The stored depth bounds the walk; the cap only guards against a corrupt upload.
     for (var level = 0u; level < 64u; level++) {
         let nd = cc_nodes[node];
-        if nd.kind == CC_NODE_SPLIT {
+        let kind = nd.kind & CC_NODE_KIND_MASK;
+        if kind == CC_NODE_SPLIT {
             // Past 2^-31 (the chains at extraordinary vertices) the point is a corner of
             // the node and stays that corner of the child.
             let half = size >> 1u;
@@ -107,7 +108,7 @@ fn cc_eval(point: CcPoint) -> CcSample {
                 size = half;
             }
             node = cc_splits[nd.index][c];
-        } else if nd.kind == CC_NODE_BEZIER {
+        } else if kind == CC_NODE_BEZIER {
             return cc_net_point(nd.index, f32(x) / f32(size), f32(y) / f32(size));
         } else {
             let c = cc_corners[nd.index];

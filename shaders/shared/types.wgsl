@@ -103,6 +103,8 @@ struct BezierStatus {
 const CC_NODE_BEZIER: u32 = 0u;
 const CC_NODE_SPLIT: u32 = 1u;
 const CC_NODE_CORNER: u32 = 2u;
+const CC_NODE_KIND_MASK: u32 = 0xffu;
+const CC_NODE_BALL_SHIFT: u32 = 8u;
 const CC_NO_ROOT: u32 = 0xffffffffu;
 const CC_PARAM_ONE: u32 = 0x80000000u;
 

@@ -1,12 +1,13 @@
-//! `tessera tessellate` and `tessera info` for Catmull-Clark control meshes (CPU reference).
+//! `tessera tessellate` and `tessera info` for Catmull-Clark control meshes: the CPU
+//! reference, or the adaptive stage on the GPU (`--backend gpu`).
 
 use std::path::Path;
 use std::time::Instant;
 
 use serde::Serialize;
 use tessera_core::catmull_clark::{
-    surface_samples, tessellate_adaptive, tessellate_uniform, CcParams, PatchMesh, SurfaceModel,
-    MAX_DEPTH, TREE_DEPTH,
+    surface_samples, tessellate_adaptive, tessellate_uniform, CcParams, CcTessellation, PatchMesh,
+    SurfaceModel, MAX_DEPTH, TREE_DEPTH,
 };
 use tessera_core::io::export::{write_atomically, MeshFormat};
 use tessera_core::io::load_control_mesh;
@@ -15,6 +16,7 @@ use tessera_core::Error as CoreError;
 use tessera_wgpu::Error;
 
 use crate::cli::{Backend, Method, TessellateArgs};
+use crate::gpu::GpuTimings;
 use crate::tessellate::{measure_and_write, ms, Timings};
 
 /// Default tolerance as a fraction of the bounding-box diagonal.
@@ -64,9 +66,10 @@ pub fn tessellate(args: TessellateArgs) -> Result<(), Error> {
         )
         .into());
     }
-    if args.backend == Some(Backend::Gpu) {
+    let on_gpu = args.backend == Some(Backend::Gpu);
+    if on_gpu && method == Method::Uniform {
         return Err(CoreError::Param(
-            "the Catmull-Clark kernels do not exist yet; use --backend cpu".into(),
+            "--method uniform runs on the CPU only; use --backend cpu".into(),
         )
         .into());
     }
@@ -136,10 +139,22 @@ pub fn tessellate(args: TessellateArgs) -> Result<(), Error> {
                 tolerance,
                 max_depth,
             };
-            (tessellate_adaptive(&model, &params)?, Some(tolerance), None)
+            params.validate(&model)?;
+            if on_gpu {
+                let mut gpu_timings = GpuTimings::default();
+                let out = run_gpu(&model, &params, &mut gpu_timings)?;
+                timings.gpu = Some(gpu_timings);
+                (out, Some(tolerance), None)
+            } else {
+                (tessellate_adaptive(&model, &params)?, Some(tolerance), None)
+            }
         }
     };
-    timings.tessellate = ms(t);
+    timings.tessellate = match &timings.gpu {
+        // The tessellation alone (GPU work to completion), as for Bézier inputs.
+        Some(g) => g.tessellate,
+        None => ms(t),
+    };
     let mut warnings = control.warnings.clone();
     if out.unmet > 0 {
         let w = format!(
@@ -170,7 +185,7 @@ pub fn tessellate(args: TessellateArgs) -> Result<(), Error> {
         } else {
             "adaptive"
         },
-        backend: "cpu",
+        backend: if on_gpu { "gpu" } else { "cpu" },
         boundary: model.mesh.boundary,
         tolerance,
         max_depth: tolerance.map(|_| max_depth),
@@ -190,9 +205,10 @@ pub fn tessellate(args: TessellateArgs) -> Result<(), Error> {
         measure_samples: args.measure.then_some(measure_samples),
     };
     let mut line = format!(
-        "{}: {} (cpu) {} triangles, {} vertices, {} patches ({} irregular), {} evaluations, tessellate {:.2} ms",
+        "{}: {} ({}) {} triangles, {} vertices, {} patches ({} irregular), {} evaluations, tessellate {:.2} ms",
         stats.input,
         stats.method,
+        stats.backend,
         stats.triangles,
         stats.vertices,
         stats.patches,
@@ -250,4 +266,26 @@ pub fn info(input: &Path) -> Result<(), Error> {
         println!("  warning: {w}");
     }
     Ok(())
+}
+
+/// The adaptive stage on the GPU: a first run that grows the buffers, then the timed run
+/// and the readback. Evaluations are the output vertices (the GPU evaluates each once;
+/// the cell corners its flatness test reads are not counted).
+pub fn run_gpu(
+    model: &SurfaceModel,
+    params: &CcParams,
+    timings: &mut GpuTimings,
+) -> Result<CcTessellation, Error> {
+    let gpu = crate::gpu::open(timings)?;
+    let (stage, status) = crate::gpu::run_cc(&gpu, model, params, timings)?;
+    let t = Instant::now();
+    let mesh = stage.read_mesh(&gpu.device, &gpu.queue, &status)?;
+    timings.readback = ms(t);
+    Ok(CcTessellation {
+        evaluations: mesh.vertices.len() as u64,
+        mesh,
+        leaves: status.state.leaves as usize,
+        unmet: status.state.unmet as usize,
+        max_bound: status.max_bound() as f64,
+    })
 }

@@ -7,7 +7,9 @@ use crate::tessellate::ms;
 use serde::Serialize;
 use tessera_core::bezier::{AdaptiveParams, PreparedBezier};
 use tessera_core::gpu_types::BezierStatus;
+use tessera_core::catmull_clark::{CcParams, SurfaceModel};
 use tessera_wgpu::bezier::BezierStage;
+use tessera_wgpu::catmull_clark::{CcStage, CcStatus};
 use tessera_wgpu::headless::Gpu;
 use tessera_wgpu::Result;
 
@@ -42,6 +44,31 @@ pub fn run(
 ) -> Result<(BezierStage, BezierStatus)> {
     let t = Instant::now();
     let mut stage = BezierStage::new(&gpu.device, prep, params)?;
+    gpu.check()?;
+    timings.pipelines_and_upload = ms(t);
+    let t = Instant::now();
+    stage.run_blocking(&gpu.device, &gpu.queue)?;
+    timings.first_run = ms(t);
+    let t = Instant::now();
+    let mut encoder = gpu.device.create_command_encoder(&Default::default());
+    stage.prepare(&gpu.device, &gpu.queue, &mut encoder);
+    gpu.queue.submit([encoder.finish()]);
+    gpu.wait()?;
+    timings.tessellate = ms(t);
+    let status = stage.read_status(&gpu.device)?;
+    gpu.check()?;
+    Ok((stage, status))
+}
+
+/// [`run`] for the adaptive Catmull-Clark stage.
+pub fn run_cc(
+    gpu: &Gpu,
+    model: &SurfaceModel,
+    params: &CcParams,
+    timings: &mut GpuTimings,
+) -> Result<(CcStage, CcStatus)> {
+    let t = Instant::now();
+    let mut stage = CcStage::new(&gpu.device, model, params)?;
     gpu.check()?;
     timings.pipelines_and_upload = ms(t);
     let t = Instant::now();

@@ -213,6 +213,11 @@ mod tests {
 pub const CC_NODE_BEZIER: u32 = 0;
 pub const CC_NODE_SPLIT: u32 = 1;
 pub const CC_NODE_CORNER: u32 = 2;
+/// [`CcNode::kind`] holds the kind in its low byte; a split node on the chain at an
+/// extraordinary vertex holds `1 +` the index of its ball (a [`CcCorner`]) above
+/// [`CC_NODE_BALL_SHIFT`] (0: none).
+pub const CC_NODE_KIND_MASK: u32 = 0xff;
+pub const CC_NODE_BALL_SHIFT: u32 = 8;
 /// A patch without a surface (a hole): its root is this.
 pub const CC_NO_ROOT: u32 = u32::MAX;
 /// Patch parameters are fixed point: `u = x / CC_PARAM_ONE`, so that the walk down the

@@ -54,7 +54,9 @@
 //! clipped (de Casteljau) or, if split, its children visited; a node wholly inside is
 //! taken as is, and its descendants (the chain of squares at an extraordinary vertex,
 //! [`CORNER_DEPTH`](super::CORNER_DEPTH) levels deep) inherit from it which sides of the
-//! box they lie on. Each piece is fed to [`BoundSum`], which keeps every running maximum
+//! box they lie on. Down the chain, a square 64 times smaller than the box whose ball
+//! (around the vertex, holding the surface over it) is below 1e-4 of the cell ends the
+//! walk there, as that ball. Each piece is fed to [`BoundSum`], which keeps every running maximum
 //! the two bounds need. Points are taken relative to the box's first corner, so that
 //! single precision keeps the shape of small cells.
 //!
@@ -327,6 +329,7 @@ fn project(plane: (DVec3, DVec3), p: DVec3) -> DVec2 {
 #[derive(Clone, Copy)]
 struct WalkEntry {
     node: u32,
+    level: u32,
     x: u32,
     y: u32,
     size: u32,
@@ -338,9 +341,15 @@ struct WalkEntry {
 /// The flatness bound of the box `bx = [u0, u1, v0, v1]` (walk units) of a patch whose
 /// corner positions are `corners`.
 pub fn box_bound(surface: &PatchSurface, bx: [u32; 4], corners: [DVec3; 4]) -> f64 {
+    // The ball at a vertex enters the bound as is: stop at a node 64 times smaller than
+    // the box whose ball is below 1e-4 of the cell.
+    let size = (corners[2] - corners[0])
+        .length()
+        .max((corners[3] - corners[1]).length());
     let mut walk = Walk {
         surface,
         bx,
+        max_ball: 1e-4 * size,
         origin: corners[0],
         sum: BoundSum::new(corners),
         stack: Vec::with_capacity(WALK_STACK),
@@ -348,6 +357,7 @@ pub fn box_bound(surface: &PatchSurface, bx: [u32; 4], corners: [DVec3; 4]) -> f
     };
     walk.enter(WalkEntry {
         node: 0,
+        level: 0,
         x: 0,
         y: 0,
         size: WALK_ONE,
@@ -368,6 +378,7 @@ pub fn box_bound(surface: &PatchSurface, bx: [u32; 4], corners: [DVec3; 4]) -> f
 struct Walk<'a> {
     surface: &'a PatchSurface,
     bx: [u32; 4],
+    max_ball: f64,
     origin: DVec3,
     sum: BoundSum,
     stack: Vec<WalkEntry>,
@@ -447,6 +458,13 @@ impl Walk<'_> {
         Some((e, clip))
     }
 
+    /// Whether a node of `level` is at most 1/64 of the box's shorter side: its side is
+    /// `105 · 2^(21 - level)` walk units.
+    fn small(&self, level: u32) -> bool {
+        let bmin = (self.bx[1] - self.bx[0]).min(self.bx[3] - self.bx[2]);
+        level >= 27 || (bmin >> (27 - level)) >= 105
+    }
+
     /// A split node: its children entered, in walk coordinates while the box cuts the
     /// node, by rectangle and inherited sides once it is wholly inside.
     fn split(&mut self, e: WalkEntry) {
@@ -456,6 +474,15 @@ impl Walk<'_> {
         let Some((placed, clip)) = self.place(e) else {
             return;
         };
+        if clip.is_none() {
+            if let Some(ball) = self.surface.balls[e.node as usize] {
+                if ball.radius <= self.max_ball && self.small(e.level) {
+                    self.sum
+                        .vertex(ball.limit - self.origin, ball.radius, placed.rect, placed.sides);
+                    return;
+                }
+            }
+        }
         if clip.is_some() {
             // Below level 21 nodes are never cut by a box of the grid.
             if e.size % 2 != 0 {
@@ -467,6 +494,7 @@ impl Walk<'_> {
                 let (qx, qy) = quadrant_offset(c);
                 self.enter(WalkEntry {
                     node: child,
+                    level: e.level + 1,
                     x: e.x + qx * h,
                     y: e.y + qy * h,
                     size: h,
@@ -483,6 +511,7 @@ impl Walk<'_> {
             let v0 = r[2] + qy as f64 * hv;
             self.enter(WalkEntry {
                 node: child,
+                level: e.level + 1,
                 rect: [u0, u0 + hu, v0, v0 + hv],
                 sides: placed.sides & QUADRANT_SIDES[c],
                 ..placed

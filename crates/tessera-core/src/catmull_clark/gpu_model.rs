@@ -11,8 +11,8 @@ use glam::Vec3;
 use super::patch::{Node, SurfaceModel};
 use super::topology::PatchMesh;
 use crate::gpu_types::{
-    CcCorner, CcNode, CcPatchTopo, CcPoint, GpuPatch, OutVertex, CC_NODE_BEZIER, CC_NODE_CORNER,
-    CC_NODE_SPLIT, CC_NO_NEIGHBOUR, CC_NO_ROOT, CC_PARAM_ONE,
+    CcCorner, CcNode, CcPatchTopo, CcPoint, GpuPatch, OutVertex, CC_NODE_BALL_SHIFT, CC_NODE_BEZIER,
+    CC_NODE_CORNER, CC_NODE_KIND_MASK, CC_NODE_SPLIT, CC_NO_NEIGHBOUR, CC_NO_ROOT, CC_PARAM_ONE,
 };
 
 /// Flattened quadtrees of all patches.
@@ -40,7 +40,7 @@ impl CcGpuModel {
             }
             let base = out.nodes.len() as u32;
             out.roots.push(base);
-            for node in &surface.nodes {
+            for (id, node) in surface.nodes.iter().enumerate() {
                 let f = |v: glam::DVec3| v.as_vec3().to_array();
                 let gpu = match node {
                     Node::Bezier(net) => {
@@ -57,8 +57,18 @@ impl CcGpuModel {
                     }
                     Node::Split(children) => {
                         out.splits.push(children.map(|c| base + c));
+                        // A chain node's ball, as a corner record: kind's high bits.
+                        let ball = surface.balls[id].map_or(0, |b| {
+                            out.corners.push(CcCorner {
+                                limit: f(b.limit),
+                                corner: 0,
+                                normal: [0.0; 3],
+                                hull_radius: b.radius as f32,
+                            });
+                            out.corners.len() as u32
+                        });
                         CcNode {
-                            kind: CC_NODE_SPLIT,
+                            kind: CC_NODE_SPLIT | ball << CC_NODE_BALL_SHIFT,
                             index: out.splits.len() as u32 - 1,
                         }
                     }
@@ -153,7 +163,8 @@ pub fn cc_eval(model: &CcGpuModel, point: CcPoint) -> (Vec3, Vec3) {
     let (mut x, mut y, mut size) = (point.u, point.v, CC_PARAM_ONE);
     loop {
         let nd = model.nodes[node as usize];
-        if nd.kind == CC_NODE_SPLIT {
+        let kind = nd.kind & CC_NODE_KIND_MASK;
+        if kind == CC_NODE_SPLIT {
             // Past 2^-31 (the chains at extraordinary vertices) the point is a corner of
             // the node and stays that corner of the child.
             let half = size >> 1;
@@ -178,7 +189,7 @@ pub fn cc_eval(model: &CcGpuModel, point: CcPoint) -> (Vec3, Vec3) {
                 size = half;
             }
             node = model.splits[nd.index as usize][c];
-        } else if nd.kind == CC_NODE_BEZIER {
+        } else if kind == CC_NODE_BEZIER {
             let (u, v) = (x as f32 / size as f32, y as f32 / size as f32);
             return net_point(&model.nets[nd.index as usize], u, v);
         } else {

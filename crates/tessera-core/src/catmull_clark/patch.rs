@@ -43,11 +43,22 @@ pub struct CornerNode {
     pub ring: LocalMesh,
 }
 
+/// A ball around an extraordinary vertex that holds the surface over a split node with
+/// that vertex at one corner (the convex hull of the node's one-ring): the flatness bound
+/// stops walking down the chain at a node small enough for the ball to be negligible.
+#[derive(Clone, Copy, Debug)]
+pub struct Ball {
+    pub limit: DVec3,
+    pub radius: f64,
+}
+
 /// The exact surface of one patch.
 #[derive(Clone, Debug)]
 pub struct PatchSurface {
     /// Node 0 covers the whole patch.
     pub nodes: Vec<Node>,
+    /// Per node: for split nodes with one extraordinary corner, its ball.
+    pub balls: Vec<Option<Ball>>,
     pub rule: BoundaryRule,
 }
 
@@ -64,6 +75,7 @@ impl PatchSurface {
         let ring = LocalMesh::gather(&mesh.points, &mesh.quads, &mesh.point_quads, p);
         let mut s = PatchSurface {
             nodes: Vec::new(),
+            balls: Vec::new(),
             rule: mesh.boundary,
         };
         s.add(ring, 0, depth.max(1));
@@ -72,6 +84,7 @@ impl PatchSurface {
 
     fn add(&mut self, ring: LocalMesh, level: u32, depth: u32) -> u32 {
         let id = self.nodes.len() as u32;
+        self.balls.push(None);
         if let Some(net) = ring.regular_net(self.rule) {
             self.nodes
                 .push(Node::Bezier(Box::new(bspline_to_bezier(&net))));
@@ -105,6 +118,16 @@ impl PatchSurface {
             return id;
         }
         self.nodes.push(Node::Split([0; 4]));
+        let irregular: Vec<usize> = (0..4)
+            .filter(|&c| !ring.corner(c).is_regular(self.rule))
+            .collect();
+        if let [corner] = irregular[..] {
+            let limit = ring.limit_point(corner, self.rule);
+            self.balls[id as usize] = Some(Ball {
+                limit,
+                radius: ring.hull_radius(limit),
+            });
+        }
         let children = ring.children(self.rule);
         let mut ids = [0u32; 4];
         for (c, child) in children.into_iter().enumerate() {
@@ -233,16 +256,17 @@ impl SurfaceModel {
 
     /// Bytes of the quadtrees as the GPU reads them ([`super::gpu_model::CcGpuModel`]):
     /// a root per patch (4 B), a node per node (8 B), and a Bézier net (192 B), a split's
-    /// four children (16 B) or a corner (32 B) each.
+    /// four children (16 B, plus 32 B for its ball on a chain at a vertex) or a corner
+    /// (32 B) each.
     pub fn upload_bytes(&self) -> usize {
         4 * self.patches.len()
             + self
                 .patches
                 .iter()
-                .flat_map(|p| &p.nodes)
-                .map(|n| match n {
+                .flat_map(|p| p.nodes.iter().zip(&p.balls))
+                .map(|(n, ball)| match n {
                     Node::Bezier(_) => 8 + 192,
-                    Node::Split(_) => 8 + 16,
+                    Node::Split(_) => 8 + 16 + if ball.is_some() { 32 } else { 0 },
                     Node::Corner(_) => 8 + 32,
                 })
                 .sum::<usize>()
