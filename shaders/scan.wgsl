@@ -8,11 +8,23 @@ const BLOCK: u32 = 2u * WORKGROUP;
 
 struct ScanParams {
     n: u32,
+    // Where the number of live values is, minus one (`live[slot] + 1` values), or
+    // 0xffffffff: all n. Lists sized for their capacity are then scanned only as far as
+    // they are filled; values beyond are left as they are.
+    live_slot: u32,
 }
 
 @group(0) @binding(0) var<uniform> scan: ScanParams;
 @group(0) @binding(1) var<storage, read_write> data: array<u32>;
 @group(0) @binding(2) var<storage, read_write> sums: array<u32>;
+@group(0) @binding(3) var<storage, read> live: array<u32>;
+
+fn scan_len() -> u32 {
+    if scan.live_slot == 0xffffffffu {
+        return scan.n;
+    }
+    return min(scan.n, live[scan.live_slot] + 1u);
+}
 
 var<workgroup> partial: array<u32, WORKGROUP>;
 
@@ -27,13 +39,18 @@ fn scan_blocks(
     @builtin(local_invocation_index) lid: u32,
 ) {
     let block = block_index(wg, groups);
+    let n = scan_len();
+    // Uniform per workgroup: a block wholly past the live values does nothing.
+    if block * BLOCK >= n && block > 0u {
+        return;
+    }
     let i0 = block * BLOCK + 2u * lid;
     var a = 0u;
     var b = 0u;
-    if i0 < scan.n {
+    if i0 < n {
         a = data[i0];
     }
-    if i0 + 1u < scan.n {
+    if i0 + 1u < n {
         b = data[i0 + 1u];
     }
     // Inclusive Hillis–Steele scan of the pair sums across the workgroup.
@@ -49,10 +66,10 @@ fn scan_blocks(
         workgroupBarrier();
     }
     let before = partial[lid] - (a + b);
-    if i0 < scan.n {
+    if i0 < n {
         data[i0] = before;
     }
-    if i0 + 1u < scan.n {
+    if i0 + 1u < n {
         data[i0 + 1u] = before + a;
     }
     // Dispatches folded into two dimensions may carry whole groups past the last block.
@@ -72,11 +89,12 @@ fn add_offsets(
         return;
     }
     let i0 = block * BLOCK + 2u * lid;
+    let n = scan_len();
     let add = sums[block];
-    if i0 < scan.n {
+    if i0 < n {
         data[i0] += add;
     }
-    if i0 + 1u < scan.n {
+    if i0 + 1u < n {
         data[i0 + 1u] += add;
     }
 }

@@ -40,19 +40,49 @@ pub struct PrefixSum {
 impl PrefixSum {
     /// Plans the scan of the first `n` `u32` of `data` (which needs `STORAGE` usage).
     pub fn new(device: &wgpu::Device, kernels: &ScanKernels, data: &wgpu::Buffer, n: u32) -> Self {
+        Self::plan(device, kernels, data, n, None)
+    }
+
+    /// Plans the scan of the first `live[slot] + 1` (at most `n`) values of `data`, the
+    /// count written by an earlier kernel: a list sized for its capacity costs what it
+    /// holds. Values beyond are left as they are.
+    pub fn with_live_count(
+        device: &wgpu::Device,
+        kernels: &ScanKernels,
+        data: &wgpu::Buffer,
+        n: u32,
+        live: (&wgpu::Buffer, u32),
+    ) -> Self {
+        Self::plan(device, kernels, data, n, Some(live))
+    }
+
+    fn plan(
+        device: &wgpu::Device,
+        kernels: &ScanKernels,
+        data: &wgpu::Buffer,
+        n: u32,
+        live: Option<(&wgpu::Buffer, u32)>,
+    ) -> Self {
         let block = SCAN_BLOCK as u32;
         let mut levels: Vec<Level> = Vec::new();
         let mut n = n;
+        let no_live = storage(device, "tessera scan no live count", 4);
         loop {
             let count = n.div_ceil(block).max(1);
+            // Only the first level is bounded by the live count; the block sums above it
+            // are few.
+            let (live_buffer, slot) = match (levels.is_empty(), live) {
+                (true, Some((b, s))) => (b, s),
+                _ => (&no_live, u32::MAX),
+            };
             let uniform = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
                 label: Some("tessera scan params"),
-                contents: bytemuck::bytes_of(&[n, 0u32, 0, 0]),
+                contents: bytemuck::bytes_of(&[n, slot, 0, 0]),
                 usage: wgpu::BufferUsages::UNIFORM,
             });
             let sums = storage(device, "tessera scan sums", 4 * count as u64);
             let input = levels.last().map_or(data, |l| &l._sums);
-            let entries = [(0, &uniform), (1, input), (2, &sums)];
+            let entries = [(0, &uniform), (1, input), (2, &sums), (3, live_buffer)];
             let level = Level {
                 n,
                 blocks: kernels.scan_blocks.bind(device, &entries),

@@ -291,7 +291,7 @@ impl CcStage {
             usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
             mapped_at_creation: false,
         });
-        let buffers = Buffers::new(device, &kernels, patch_count, params, caps)?;
+        let buffers = Buffers::new(device, &kernels, (patch_count, &state), params, caps)?;
         let binds = Binds::new(
             device,
             &kernels,
@@ -493,7 +493,13 @@ impl CcStage {
                 "the run overflowed but reports nothing larger than the buffers".into(),
             ));
         }
-        let buffers = Buffers::new(device, &self.kernels, self.patch_count, &self.params, caps)?;
+        let buffers = Buffers::new(
+            device,
+            &self.kernels,
+            (self.patch_count, &self.state),
+            &self.params,
+            caps,
+        )?;
         self.binds = Binds::new(
             device,
             &self.kernels,
@@ -564,7 +570,7 @@ impl Buffers {
     fn new(
         device: &wgpu::Device,
         kernels: &CcKernels,
-        patch_count: u32,
+        (patch_count, state): (u32, &wgpu::Buffer),
         params: &CcParams,
         caps: CcCapacities,
     ) -> Result<Self> {
@@ -597,13 +603,22 @@ impl Buffers {
         });
         let cell_bytes = std::mem::size_of::<CcCell>() as u64;
         let flags = storage(device, "tessera cc split flags", 4 * (caps.cells as u64 + 1));
-        let flag_scan = PrefixSum::new(device, &kernels.scan, &flags, caps.cells + 1);
+        // Scanned as far as the list is filled (CcState::count, word 1).
+        let flag_scan =
+            PrefixSum::with_live_count(device, &kernels.scan, &flags, caps.cells + 1, (state, 1));
         let poly_offsets = storage(
             device,
             "tessera cc polygon offsets",
             4 * (caps.leaves as u64 + 1 + 4 * caps.leaves as u64),
         );
-        let poly_scan = PrefixSum::new(device, &kernels.scan, &poly_offsets, caps.leaves + 1);
+        // As far as there are leaves (CcState::leaves, word 2).
+        let poly_scan = PrefixSum::with_live_count(
+            device,
+            &kernels.scan,
+            &poly_offsets,
+            caps.leaves + 1,
+            (state, 2),
+        );
         let point_bytes = std::mem::size_of::<CcPoint>() as u64;
         Ok(Buffers {
             caps,
