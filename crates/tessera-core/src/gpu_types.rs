@@ -320,7 +320,9 @@ pub fn cc_trial_split(t: u32) -> (u32, u32) {
 pub fn cc_trial_round(t: u32) -> u32 {
     let (ku, kv) = cc_trial_split(t);
     let area = ku * kv;
-    (0..CC_SEARCH_ROUNDS).find(|r| area <= (r + 1) * (r + 1)).unwrap_or(0)
+    (0..CC_SEARCH_ROUNDS)
+        .find(|r| area <= (r + 1) * (r + 1))
+        .unwrap_or(0)
 }
 
 /// Connectivity of a patch for the GPU: its level-1 points, edge ids, and per edge the

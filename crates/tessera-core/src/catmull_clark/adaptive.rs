@@ -129,8 +129,13 @@ const QUADRANT: [(f64, f64); 4] = [(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0
 pub fn flatness_bound(model: &SurfaceModel, p: usize, b: [f64; 4]) -> f64 {
     let bx = b.map(|t| (t.clamp(0.0, 1.0) * WALK_ONE as f64).round() as u32);
     let t = |x: u32| x as f64 / WALK_ONE as f64;
-    let corners = [(bx[0], bx[2]), (bx[1], bx[2]), (bx[1], bx[3]), (bx[0], bx[3])]
-        .map(|(u, v)| model.eval(p, t(u), t(v)).position);
+    let corners = [
+        (bx[0], bx[2]),
+        (bx[1], bx[2]),
+        (bx[1], bx[3]),
+        (bx[0], bx[3]),
+    ]
+    .map(|(u, v)| model.eval(p, t(u), t(v)).position);
     box_bound(&model.patches[p], bx, corners)
 }
 

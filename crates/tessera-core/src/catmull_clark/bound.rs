@@ -477,8 +477,12 @@ impl Walk<'_> {
         if clip.is_none() {
             if let Some(ball) = self.surface.balls[e.node as usize] {
                 if ball.radius <= self.max_ball && self.small(e.level) {
-                    self.sum
-                        .vertex(ball.limit - self.origin, ball.radius, placed.rect, placed.sides);
+                    self.sum.vertex(
+                        ball.limit - self.origin,
+                        ball.radius,
+                        placed.rect,
+                        placed.sides,
+                    );
                     return;
                 }
             }

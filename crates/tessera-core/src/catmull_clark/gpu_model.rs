@@ -11,8 +11,9 @@ use glam::Vec3;
 use super::patch::{Node, SurfaceModel};
 use super::topology::PatchMesh;
 use crate::gpu_types::{
-    CcCorner, CcNode, CcPatchTopo, CcPoint, GpuPatch, OutVertex, CC_NODE_BALL_SHIFT, CC_NODE_BEZIER,
-    CC_NODE_CORNER, CC_NODE_KIND_MASK, CC_NODE_SPLIT, CC_NO_NEIGHBOUR, CC_NO_ROOT, CC_PARAM_ONE,
+    CcCorner, CcNode, CcPatchTopo, CcPoint, GpuPatch, OutVertex, CC_NODE_BALL_SHIFT,
+    CC_NODE_BEZIER, CC_NODE_CORNER, CC_NODE_KIND_MASK, CC_NODE_SPLIT, CC_NO_NEIGHBOUR, CC_NO_ROOT,
+    CC_PARAM_ONE,
 };
 
 /// Flattened quadtrees of all patches.
@@ -33,8 +34,10 @@ pub struct CcGpuModel {
 impl CcGpuModel {
     pub fn new(model: &SurfaceModel) -> Self {
         let mut out = CcGpuModel::default();
-        for surface in &model.patches {
-            if surface.nodes.is_empty() {
+        for (p, surface) in model.patches.iter().enumerate() {
+            // Holes shape their neighbours (through the quadtrees built from their
+            // one-rings) but have no surface of their own.
+            if surface.nodes.is_empty() || model.mesh.hole[p] {
                 out.roots.push(CC_NO_ROOT);
                 continue;
             }

@@ -68,8 +68,8 @@ pub fn triangulate(
     out.extend([backward(0).id, poly[start].id, forward(0).id]);
     let (mut l, mut r) = (0, 0);
     while l + 1 < len_l || r + 1 < len_r {
-        let advance_l =
-            r + 1 == len_r || (l + 1 < len_l && progress(forward(l + 1)) <= progress(backward(r + 1)));
+        let advance_l = r + 1 == len_r
+            || (l + 1 < len_l && progress(forward(l + 1)) <= progress(backward(r + 1)));
         if advance_l {
             out.extend([backward(r).id, forward(l).id, forward(l + 1).id]);
             l += 1;

@@ -274,8 +274,16 @@ impl CcStage {
             usage: wgpu::BufferUsages::STORAGE,
         });
         let state = storage(device, "tessera cc state", state_bytes(patch_count));
-        let best = storage(device, "tessera cc best split", 8 * patch_count.max(1) as u64);
-        let root_offsets = storage(device, "tessera cc root offsets", 4 * (patch_count as u64 + 1));
+        let best = storage(
+            device,
+            "tessera cc best split",
+            8 * patch_count.max(1) as u64,
+        );
+        let root_offsets = storage(
+            device,
+            "tessera cc root offsets",
+            4 * (patch_count as u64 + 1),
+        );
         let root_scan = PrefixSum::new(device, &kernels.scan, &root_offsets, patch_count + 1);
         let args = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("tessera cc dispatch args"),
@@ -380,14 +388,19 @@ impl CcStage {
                 k.roots_count.dispatch(&mut pass, &binds.roots_count, p, 64);
                 self.root_scan.record(&mut pass, &k.scan);
                 k.roots_emit.dispatch(&mut pass, &binds.roots_emit, p, 64);
-                k.roots_finish.dispatch(&mut pass, &binds.roots_finish, 1, 1);
+                k.roots_finish
+                    .dispatch(&mut pass, &binds.roots_finish, 1, 1);
                 for level in 0..=self.params.max_depth as usize {
                     let parity = level % 2;
                     k.mark
                         .dispatch_indirect(&mut pass, &binds.mark[parity], &self.args, LIST_ARGS);
                     b.flag_scan.record(&mut pass, &k.scan);
-                    k.split
-                        .dispatch_indirect(&mut pass, &binds.split[parity], &self.args, LIST_ARGS);
+                    k.split.dispatch_indirect(
+                        &mut pass,
+                        &binds.split[parity],
+                        &self.args,
+                        LIST_ARGS,
+                    );
                     k.split_finish
                         .dispatch(&mut pass, &binds.split_finish, 1, 1);
                 }
@@ -423,8 +436,12 @@ impl CcStage {
                 label: Some("tessera cc polygons"),
                 timestamp_writes: None,
             });
-            k.polygon_count
-                .dispatch_indirect(&mut pass, &binds.polygon_count, &self.args, LEAF_ARGS);
+            k.polygon_count.dispatch_indirect(
+                &mut pass,
+                &binds.polygon_count,
+                &self.args,
+                LEAF_ARGS,
+            );
             b.poly_scan.record(&mut pass, &k.scan);
             k.polygon_emit
                 .dispatch_indirect(&mut pass, &binds.polygon_emit, &self.args, LEAF_ARGS);
@@ -436,7 +453,13 @@ impl CcStage {
         let state_size = std::mem::size_of::<CcState>() as u64;
         let hash_size = std::mem::size_of::<CcHashStatus>() as u64;
         encoder.copy_buffer_to_buffer(&self.state, 0, &self.status_readback, 0, state_size);
-        encoder.copy_buffer_to_buffer(&b.hash.status, 0, &self.status_readback, state_size, hash_size);
+        encoder.copy_buffer_to_buffer(
+            &b.hash.status,
+            0,
+            &self.status_readback,
+            state_size,
+            hash_size,
+        );
         encoder.copy_buffer_to_buffer(
             &b.output.indirect,
             0,
@@ -504,7 +527,13 @@ impl CcStage {
             device,
             &self.kernels,
             &self.model,
-            (&self.topo, &self.state, &self.best, &self.root_offsets, &self.args),
+            (
+                &self.topo,
+                &self.state,
+                &self.best,
+                &self.root_offsets,
+                &self.args,
+            ),
             &buffers,
         );
         self.buffers = buffers;
@@ -523,13 +552,22 @@ impl CcStage {
                 return Ok(status);
             }
         }
-        Err(Error::Wgpu("still overflowing after growing 8 times".into()))
+        Err(Error::Wgpu(
+            "still overflowing after growing 8 times".into(),
+        ))
     }
 
     /// Copies the output mesh back (files and tests).
-    pub fn read_mesh(&self, device: &wgpu::Device, queue: &wgpu::Queue, status: &CcStatus) -> Result<Mesh> {
+    pub fn read_mesh(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        status: &CcStatus,
+    ) -> Result<Mesh> {
         if status.overflowed() {
-            return Err(Error::Wgpu("the last run overflowed its buffers; grow and rerun".into()));
+            return Err(Error::Wgpu(
+                "the last run overflowed its buffers; grow and rerun".into(),
+            ));
         }
         let vsize = status.vertices() as u64 * std::mem::size_of::<OutVertex>() as u64;
         let isize = status.indices as u64 * 4;
@@ -542,7 +580,12 @@ impl CcStage {
     }
 
     /// The leaves of the last run (tests compare them with the CPU reference's).
-    pub fn read_leaves(&self, device: &wgpu::Device, queue: &wgpu::Queue, status: &CcStatus) -> Result<Vec<CcCell>> {
+    pub fn read_leaves(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        status: &CcStatus,
+    ) -> Result<Vec<CcCell>> {
         let n = status.state.leaves.min(self.buffers.caps.leaves) as u64;
         let bytes = read_buffer(device, queue, &self.buffers.leaves, 0, n * 16)?;
         Ok(bytemuck::pod_collect_to_vec(&bytes))
@@ -583,13 +626,18 @@ impl Buffers {
         };
         let items = 4 * caps.leaves;
         let limits = device.limits();
-        let limit = limits.max_buffer_size.min(limits.max_storage_buffer_binding_size);
+        let limit = limits
+            .max_buffer_size
+            .min(limits.max_storage_buffer_binding_size);
         for (what, bytes) in [
             ("cell list", caps.cells as u64 * 16),
             ("leaf", caps.leaves as u64 * 16),
             ("polygon", caps.poly as u64 * 16),
             ("index", caps.indices as u64 * 4),
-            ("vertex", items as u64 * std::mem::size_of::<OutVertex>() as u64),
+            (
+                "vertex",
+                items as u64 * std::mem::size_of::<OutVertex>() as u64,
+            ),
             ("vertex hash", caps.hash_slots as u64 * 12),
         ] {
             if bytes > limit {
@@ -602,7 +650,11 @@ impl Buffers {
             usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
         });
         let cell_bytes = std::mem::size_of::<CcCell>() as u64;
-        let flags = storage(device, "tessera cc split flags", 4 * (caps.cells as u64 + 1));
+        let flags = storage(
+            device,
+            "tessera cc split flags",
+            4 * (caps.cells as u64 + 1),
+        );
         // Scanned as far as the list is filled (CcState::count, word 1).
         let flag_scan =
             PrefixSum::with_live_count(device, &kernels.scan, &flags, caps.cells + 1, (state, 1));
@@ -631,7 +683,11 @@ impl Buffers {
             leaves: storage(device, "tessera cc leaves", cell_bytes * caps.leaves as u64),
             keys: storage(device, "tessera cc keys", 8 * items as u64),
             item_points: storage(device, "tessera cc item points", point_bytes * items as u64),
-            vertex_points: storage(device, "tessera cc vertex points", point_bytes * items as u64),
+            vertex_points: storage(
+                device,
+                "tessera cc vertex points",
+                point_bytes * items as u64,
+            ),
             vertex_count: storage(device, "tessera cc vertex count", 4),
             poly_offsets,
             poly_verts: storage(device, "tessera cc polygons", 16 * caps.poly as u64),
