@@ -98,7 +98,8 @@ pub struct TessellateArgs {
 
 #[derive(Args, Debug)]
 pub struct RenderArgs {
-    /// Input surface: a Newell teaset file (Bézier patches).
+    /// Input surface: a Newell teaset file (Bézier patches) or a Catmull-Clark control
+    /// mesh (.obj, .gltf, .glb).
     pub input: PathBuf,
     /// Output PNG.
     #[arg(short = 'o', long = "output")]
@@ -106,15 +107,21 @@ pub struct RenderArgs {
     /// Image size, WIDTHxHEIGHT.
     #[arg(long, default_value = "800x600", value_parser = parse_size)]
     pub size: (u32, u32),
-    /// Edge test (map2p, map4p, map8p or flat).
-    #[arg(long, value_enum, default_value = "map4p")]
-    pub method: Method,
-    /// Edge-test threshold in model units. Default: 0.002 of the bounding-box diagonal.
+    /// Bézier: edge test (map2p, map4p, map8p or flat; default map4p). Catmull-Clark:
+    /// adaptive (the default).
+    #[arg(long, value_enum)]
+    pub method: Option<Method>,
+    /// Bézier: edge-test threshold in model units. Default: 0.002 of the bounding-box
+    /// diagonal.
     #[arg(long)]
     pub threshold: Option<f32>,
-    /// Levels of recursive edge bisection.
-    #[arg(long, default_value_t = 6)]
-    pub max_depth: u32,
+    /// Catmull-Clark: largest distance to the limit surface, as a fraction of the
+    /// bounding-box diagonal (default 1e-3).
+    #[arg(long)]
+    pub tolerance_rel: Option<f64>,
+    /// Levels of recursive subdivision (Bézier default 6, Catmull-Clark 10).
+    #[arg(long)]
+    pub max_depth: Option<u32>,
     /// Draw the triangle edges over the shading.
     #[arg(long)]
     pub wireframe: bool,

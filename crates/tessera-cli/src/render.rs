@@ -1,4 +1,5 @@
-//! `tessera render`: tessellate on the GPU and draw the result headless into a PNG.
+//! `tessera render`: tessellate on the GPU (Bézier or Catmull-Clark) and draw the result
+//! headless into a PNG.
 
 use std::time::Instant;
 
@@ -9,23 +10,63 @@ use tessera_wgpu::image_out::{render_camera_to_rgba, save_png};
 use tessera_wgpu::render::Camera;
 use tessera_wgpu::{Error, RenderOptions};
 
+use tessera_core::catmull_clark::{CcParams, PatchMesh, SurfaceModel, MAX_DEPTH, TREE_DEPTH};
+use tessera_wgpu::bezier::BezierStage;
+use tessera_wgpu::catmull_clark::CcStage;
+use tessera_wgpu::glam::DVec3;
+use tessera_wgpu::output::MeshBuffers;
+
 use crate::cli::{Axis, Method, RenderArgs};
 use crate::gpu::GpuTimings;
 
+/// The stage whose output buffers are drawn.
+enum StageOutput {
+    Bezier(BezierStage),
+    Cc(CcStage),
+}
+
+impl StageOutput {
+    fn mesh(&self) -> &MeshBuffers {
+        match self {
+            StageOutput::Bezier(s) => s.output(),
+            StageOutput::Cc(s) => s.output(),
+        }
+    }
+}
+
 pub fn render(args: RenderArgs) -> Result<(), Error> {
     let t_total = Instant::now();
-    let test = match args.method {
-        Method::Map2p => EdgeTest::Map2p,
-        Method::Map4p => EdgeTest::Map4p,
-        Method::Map8p => EdgeTest::Map8p,
-        Method::Flat => EdgeTest::Flat,
-        Method::Uniform | Method::Adaptive => {
+    let cc = crate::tessellate::is_control_mesh(&args.input);
+    let test = match (cc, args.method) {
+        (false, None | Some(Method::Map4p)) => EdgeTest::Map4p,
+        (false, Some(Method::Map2p)) => EdgeTest::Map2p,
+        (false, Some(Method::Map8p)) => EdgeTest::Map8p,
+        (false, Some(Method::Flat)) => EdgeTest::Flat,
+        (true, None | Some(Method::Adaptive)) => EdgeTest::Map4p,
+        (false, _) => return Err(CoreError::Param(
+            "tessera render takes the GPU methods map2p, map4p, map8p or flat for Bézier surfaces"
+                .into(),
+        )
+        .into()),
+        (true, _) => {
             return Err(CoreError::Param(
-                "tessera render takes the GPU methods map2p, map4p, map8p or flat".into(),
+                "tessera render takes --method adaptive for Catmull-Clark meshes".into(),
             )
             .into())
         }
     };
+    if cc && args.threshold.is_some() {
+        return Err(CoreError::Param(
+            "--threshold is a Bézier option; Catmull-Clark meshes take --tolerance-rel".into(),
+        )
+        .into());
+    }
+    if !cc && args.tolerance_rel.is_some() {
+        return Err(CoreError::Param(
+            "--tolerance-rel is a Catmull-Clark option; Bézier surfaces take --threshold".into(),
+        )
+        .into());
+    }
     if args
         .output
         .extension()
@@ -39,18 +80,63 @@ pub fn render(args: RenderArgs) -> Result<(), Error> {
         ))
         .into());
     }
-    let model = crate::tessellate::load(&args.input)?;
-    let prep = PreparedBezier::new(&model);
-    let (lo, hi) = model.bounds();
-    let params = AdaptiveParams {
-        test,
-        threshold: args.threshold.unwrap_or(0.002 * (hi - lo).length()),
-        max_depth: args.max_depth,
-    };
-    params.validate()?;
     let mut timings = GpuTimings::default();
-    let gpu = crate::gpu::open(&mut timings)?;
-    let (stage, status) = crate::gpu::run(&gpu, &prep, &params, &mut timings)?;
+    let (gpu, output, (lo, hi), what, (triangles, vertices)) = if cc {
+        let control = tessera_core::io::load_control_mesh(&args.input)?;
+        for w in &control.warnings {
+            eprintln!("warning: {w}");
+        }
+        let model = SurfaceModel::new(PatchMesh::new(&control)?, TREE_DEPTH);
+        let (lo, hi) = control.positions.iter().fold(
+            (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
+            |(lo, hi), p| (lo.min(*p), hi.max(*p)),
+        );
+        let rel = args
+            .tolerance_rel
+            .unwrap_or(crate::catmull_clark::DEFAULT_TOLERANCE_REL);
+        if !(rel.is_finite() && rel > 0.0) {
+            return Err(CoreError::Param(format!(
+                "tolerance must be a positive number, got {rel}"
+            ))
+            .into());
+        }
+        let params = CcParams {
+            tolerance: rel * control.bbox_diag(),
+            max_depth: args.max_depth.unwrap_or(MAX_DEPTH),
+        };
+        params.validate(&model)?;
+        let gpu = crate::gpu::open(&mut timings)?;
+        let (stage, status) = crate::gpu::run_cc(&gpu, &model, &params, &mut timings)?;
+        let counts = (status.indices / 3, status.vertices());
+        let output = StageOutput::Cc(stage);
+        (
+            gpu,
+            output,
+            (lo.as_vec3(), hi.as_vec3()),
+            "adaptive",
+            counts,
+        )
+    } else {
+        let model = crate::tessellate::load(&args.input)?;
+        let prep = PreparedBezier::new(&model);
+        let (lo, hi) = model.bounds();
+        let params = AdaptiveParams {
+            test,
+            threshold: args.threshold.unwrap_or(0.002 * (hi - lo).length()),
+            max_depth: args.max_depth.unwrap_or(6),
+        };
+        params.validate()?;
+        let gpu = crate::gpu::open(&mut timings)?;
+        let (stage, status) = crate::gpu::run(&gpu, &prep, &params, &mut timings)?;
+        let counts = (status.indices / 3, status.vertices);
+        (
+            gpu,
+            StageOutput::Bezier(stage),
+            (lo, hi),
+            test.name(),
+            counts,
+        )
+    };
     let options = RenderOptions {
         wireframe: args.wireframe,
         patch_tint: args.patch_tint,
@@ -67,15 +153,15 @@ pub fn render(args: RenderArgs) -> Result<(), Error> {
         Axis::X => (Vec3::new(d.z, d.x, d.y), Vec3::X),
     };
     let camera = Camera::framing_along(lo, hi, aspect, direction, up);
-    let image = render_camera_to_rgba(&gpu, stage.output(), &camera, w, h, &options)?;
+    let image = render_camera_to_rgba(&gpu, output.mesh(), &camera, w, h, &options)?;
     let render_ms = t.elapsed().as_secs_f64() * 1e3;
     save_png(&image, &args.output)?;
     println!(
         "{}: {} {} triangles, {} vertices on {}; tessellate {:.2} ms, render {:.1} ms, total {:.0} ms -> {}",
         args.input.display(),
-        test.name(),
-        status.indices / 3,
-        status.vertices,
+        what,
+        triangles,
+        vertices,
         gpu.adapter_name(),
         timings.tessellate,
         render_ms,

@@ -350,3 +350,71 @@ fn bad_control_meshes_fail_with_one_line() {
     let pole = std::fs::read(asset("opensubdiv/catmark_pole360.obj")).unwrap();
     expect_cc_failure(&pole, "valence 360; at most 64");
 }
+
+#[test]
+fn catmull_clark_on_the_gpu_writes_what_the_cpu_writes_and_renders() {
+    // The same triangles and vertices from both backends, the GPU's guarantee reported
+    // and kept (measured error at or under the tolerance), and a PNG from `render`.
+    let mut counts = Vec::new();
+    for backend in ["gpu", "cpu"] {
+        let stats = tmp(&format!("cc_{backend}.json"));
+        let ply = tmp(&format!("cc_{backend}.ply"));
+        run_ok(
+            tessera()
+                .args(["tessellate"])
+                .arg(asset("opensubdiv/catmark_pyramid.obj"))
+                .args([
+                    "--method",
+                    "adaptive",
+                    "--tolerance-rel",
+                    "2e-3",
+                    "--max-depth",
+                    "6",
+                ])
+                .args(["--backend", backend, "--measure", "--stats"])
+                .arg(&stats)
+                .arg("-o")
+                .arg(&ply),
+        );
+        let json: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(&stats).unwrap()).unwrap();
+        assert_eq!(json["backend"], backend);
+        let tol = json["tolerance"].as_f64().unwrap();
+        assert!(
+            json["max_error"].as_f64().unwrap() <= tol,
+            "{backend}: {json}"
+        );
+        assert!(json["guaranteed_error"].as_f64().unwrap() <= tol * (1.0 + 1e-6));
+        assert_eq!(json["unmet"], 0);
+        if backend == "gpu" {
+            assert!(json["timings_ms"]["gpu"]["tessellate"].as_f64().unwrap() > 0.0);
+        }
+        counts.push((
+            json["triangles"].clone(),
+            json["vertices"].clone(),
+            json["leaves"].clone(),
+        ));
+    }
+    assert_eq!(counts[0], counts[1], "gpu and cpu differ");
+    let png = tmp("cc.png");
+    run_ok(
+        tessera()
+            .args(["render"])
+            .arg(asset("opensubdiv/catmark_pyramid.obj"))
+            .args(["--size", "64x48", "--tolerance-rel", "3e-3", "-o"])
+            .arg(&png),
+    );
+    let bytes = std::fs::read(&png).unwrap();
+    assert_eq!(&bytes[..8], b"\x89PNG\r\n\x1a\n");
+    // Options of the other kind of surface are refused.
+    let out = tessera()
+        .args(["render"])
+        .arg(asset("opensubdiv/catmark_pyramid.obj"))
+        .args(["--threshold", "0.1", "-o"])
+        .arg(tmp("never.png"))
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("--tolerance-rel"));
+    assert!(!tmp("never.png").exists());
+}
