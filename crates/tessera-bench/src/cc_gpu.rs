@@ -1,0 +1,182 @@
+//! Catmull-Clark on the GPU: the adaptive stage against the CPU reference (time,
+//! triangles per second), the time to reach a max error of 5e-4 of the diagonal against
+//! uniform tessellation (the CPU's, at the smallest grid that reaches it), and how the
+//! GPU time grows with the output. Writes `OUT/catmull_clark_gpu.{json,md}`.
+
+use std::path::Path;
+use std::time::Instant;
+
+use serde::Serialize;
+use tessera_core::catmull_clark::{
+    surface_samples, tessellate_adaptive, tessellate_uniform, CcParams, PatchMesh, SurfaceModel,
+    MAX_DEPTH, TREE_DEPTH,
+};
+use tessera_core::io::load_control_mesh;
+use tessera_core::measure::measure_error;
+use tessera_wgpu::catmull_clark::CcStage;
+use tessera_wgpu::headless::Gpu;
+
+#[derive(Serialize)]
+struct Row {
+    model: String,
+    device: String,
+    patches: usize,
+    tolerance_rel: f64,
+    triangles: usize,
+    /// Measured max error of the GPU output, as a fraction of the diagonal.
+    max_error_rel: f64,
+    gpu_ms: f64,
+    cpu_ms: f64,
+    gpu_over_cpu: f64,
+    gpu_mtris_per_s: f64,
+    cpu_mtris_per_s: f64,
+    /// Smallest uniform grid (n × n per patch) whose measured max error is at or under
+    /// the GPU output's, with its CPU time and triangles.
+    uniform_segments: u32,
+    uniform_triangles: usize,
+    uniform_ms: f64,
+    gpu_over_uniform: f64,
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    v[v.len() / 2]
+}
+
+/// Median time of the recorded stage run to completion (after a first run that grew the
+/// buffers), and the stage's status.
+fn gpu_time(
+    gpu: &Gpu,
+    model: &SurfaceModel,
+    params: &CcParams,
+    repeats: usize,
+) -> (f64, tessera_core::Mesh) {
+    let mut stage = CcStage::new(&gpu.device, model, params).expect("stage");
+    let status = stage.run_blocking(&gpu.device, &gpu.queue).expect("run");
+    let mesh = stage
+        .read_mesh(&gpu.device, &gpu.queue, &status)
+        .expect("mesh");
+    let mut times = Vec::new();
+    for _ in 0..repeats {
+        let t = Instant::now();
+        let mut encoder = gpu.device.create_command_encoder(&Default::default());
+        stage.prepare(&gpu.device, &gpu.queue, &mut encoder);
+        gpu.queue.submit([encoder.finish()]);
+        gpu.wait().expect("gpu");
+        times.push(t.elapsed().as_secs_f64() * 1e3);
+    }
+    gpu.check().expect("no wgpu errors");
+    (median(times), mesh)
+}
+
+pub fn run(assets: &Path, out_dir: &Path, quick: bool) {
+    let gpu = Gpu::new().expect("a wgpu adapter");
+    let device = gpu.adapter_name();
+    let repeats = if quick { 1 } else { 3 };
+    let models: &[&str] = if quick {
+        &["opensubdiv/catmark_rook.obj"]
+    } else {
+        &[
+            "opensubdiv/catmark_car.obj",
+            "opensubdiv/catmark_bishop.obj",
+            "opensubdiv/catmark_rook.obj",
+            "catmull_clark/spot_control_mesh.obj",
+        ]
+    };
+    let mut rows = Vec::new();
+    for file in models {
+        let control = load_control_mesh(&assets.join(file)).expect("shipped mesh");
+        let model = SurfaceModel::new(PatchMesh::new(&control).expect("valid"), TREE_DEPTH);
+        let diag = control.bbox_diag();
+        let samples = surface_samples(&model, 32);
+        for rel in [3e-3, 5e-4] {
+            let params = CcParams {
+                tolerance: rel * diag,
+                max_depth: MAX_DEPTH,
+            };
+            let (gpu_ms, mesh) = gpu_time(&gpu, &model, &params, repeats);
+            let e = measure_error(&samples, &mesh);
+            let cpu_ms = median(
+                (0..repeats)
+                    .map(|_| {
+                        let t = Instant::now();
+                        tessellate_adaptive(&model, &params).expect("cpu");
+                        t.elapsed().as_secs_f64() * 1e3
+                    })
+                    .collect(),
+            );
+            let mut n = 1;
+            let (uniform_triangles, uniform_ms) = loop {
+                let t = Instant::now();
+                let u = tessellate_uniform(&model, n).expect("uniform");
+                let first = t.elapsed().as_secs_f64() * 1e3;
+                if measure_error(&samples, &u.mesh).max_error <= e.max_error || n >= 64 {
+                    let mut times = vec![first];
+                    for _ in 1..repeats {
+                        let t = Instant::now();
+                        tessellate_uniform(&model, n).expect("uniform");
+                        times.push(t.elapsed().as_secs_f64() * 1e3);
+                    }
+                    break (u.mesh.triangle_count(), median(times));
+                }
+                n += 1;
+            };
+            let tris = mesh.triangle_count();
+            let row = Row {
+                model: Path::new(file)
+                    .file_stem()
+                    .unwrap()
+                    .to_string_lossy()
+                    .into(),
+                device: device.clone(),
+                patches: model.mesh.surface_patches().count(),
+                tolerance_rel: rel,
+                triangles: tris,
+                max_error_rel: e.max_error / diag,
+                gpu_ms,
+                cpu_ms,
+                gpu_over_cpu: gpu_ms / cpu_ms,
+                gpu_mtris_per_s: tris as f64 / gpu_ms / 1e3,
+                cpu_mtris_per_s: tris as f64 / cpu_ms / 1e3,
+                uniform_segments: n,
+                uniform_triangles,
+                uniform_ms,
+                gpu_over_uniform: gpu_ms / uniform_ms,
+            };
+            eprintln!(
+                "cc gpu {} {rel:e}: {} tris, gpu {:.1} ms, cpu {:.1} ms, uniform n={} {:.1} ms",
+                row.model, tris, gpu_ms, cpu_ms, n, uniform_ms
+            );
+            rows.push(row);
+        }
+    }
+    let json = serde_json::to_string_pretty(&rows).expect("rows serialize");
+    std::fs::write(out_dir.join("catmull_clark_gpu.json"), json).expect("write json");
+    std::fs::write(out_dir.join("catmull_clark_gpu.md"), table(&rows)).expect("write md");
+}
+
+fn table(rows: &[Row]) -> String {
+    let mut s = String::from(
+        "| model | device | patches | ε (of diagonal) | triangles | measured max (of diag.) | GPU ms | CPU ms | GPU/CPU | GPU Mtri/s | uniform n (same error) | uniform tris | uniform CPU ms | **GPU/uniform** |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
+    );
+    for r in rows {
+        s += &format!(
+            "| {} | {} | {} | {:.0e} | {} | {:.2e} | {:.1} | {:.1} | {:.2} | {:.3} | {} | {} | {:.1} | **{:.2}** |\n",
+            r.model,
+            r.device,
+            r.patches,
+            r.tolerance_rel,
+            r.triangles,
+            r.max_error_rel,
+            r.gpu_ms,
+            r.cpu_ms,
+            r.gpu_over_cpu,
+            r.gpu_mtris_per_s,
+            r.uniform_segments,
+            r.uniform_triangles,
+            r.uniform_ms,
+            r.gpu_over_uniform
+        );
+    }
+    s
+}
