@@ -21,8 +21,8 @@ use crate::gpu::GpuTimings;
 
 /// The stage whose output buffers are drawn.
 enum StageOutput {
-    Bezier(BezierStage),
-    Cc(CcStage),
+    Bezier(Box<BezierStage>),
+    Cc(Box<CcStage>),
 }
 
 impl StageOutput {
@@ -108,7 +108,7 @@ pub fn render(args: RenderArgs) -> Result<(), Error> {
         let gpu = crate::gpu::open(&mut timings)?;
         let (stage, status) = crate::gpu::run_cc(&gpu, &model, &params, &mut timings)?;
         let counts = (status.indices / 3, status.vertices());
-        let output = StageOutput::Cc(stage);
+        let output = StageOutput::Cc(Box::new(stage));
         (
             gpu,
             output,
@@ -131,7 +131,7 @@ pub fn render(args: RenderArgs) -> Result<(), Error> {
         let counts = (status.indices / 3, status.vertices);
         (
             gpu,
-            StageOutput::Bezier(stage),
+            StageOutput::Bezier(Box::new(stage)),
             (lo, hi),
             test.name(),
             counts,

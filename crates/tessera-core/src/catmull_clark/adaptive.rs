@@ -249,7 +249,9 @@ pub fn tessellate_adaptive(model: &SurfaceModel, params: &CcParams) -> Result<Cc
         }
     }
     lines.sort();
-    let polygons: Vec<(Vec<(u32, u32)>, [usize; 4])> = leaves
+    // Each leaf's polygon, with the positions of its four corners in it.
+    type Polygon = (Vec<(u32, u32)>, [usize; 4]);
+    let polygons: Vec<Polygon> = leaves
         .iter()
         .map(|&(p, cell)| {
             let c = cell.corners();

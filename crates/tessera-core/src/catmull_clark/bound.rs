@@ -234,7 +234,7 @@ impl BoundSum {
                 }
             }
         }
-        for s in 0..4 {
+        for (s, &(start_corner, _)) in SIDES.iter().enumerate() {
             if sides & (1 << s) == 0 {
                 continue;
             }
@@ -253,7 +253,7 @@ impl BoundSum {
                     return false;
                 }
             }
-            let start = self.corners[SIDES[s].0];
+            let start = self.corners[start_corner];
             for p in pts {
                 let off = d.perp_dot(project(self.plane, p - start));
                 self.band[s] = (self.band[s].0.min(off), self.band[s].1.max(off));
@@ -450,10 +450,11 @@ impl Walk<'_> {
             (ov[2] - bx[2]) as f64 / bh,
             (ov[3] - bx[2]) as f64 / bh,
         ];
-        e.sides = (ov[2] == bx[2]) as u32 * SIDE_BOTTOM
-            | (ov[1] == bx[1]) as u32 * SIDE_RIGHT
-            | (ov[3] == bx[3]) as u32 * SIDE_TOP
-            | (ov[0] == bx[0]) as u32 * SIDE_LEFT;
+        let bit = |on: bool, side: u32| if on { side } else { 0 };
+        e.sides = bit(ov[2] == bx[2], SIDE_BOTTOM)
+            | bit(ov[1] == bx[1], SIDE_RIGHT)
+            | bit(ov[3] == bx[3], SIDE_TOP)
+            | bit(ov[0] == bx[0], SIDE_LEFT);
         e.inside = true;
         Some((e, clip))
     }
@@ -489,7 +490,7 @@ impl Walk<'_> {
         }
         if clip.is_some() {
             // Below level 21 nodes are never cut by a box of the grid.
-            if e.size % 2 != 0 {
+            if !e.size.is_multiple_of(2) {
                 self.overflow = true;
                 return;
             }
