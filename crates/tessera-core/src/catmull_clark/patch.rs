@@ -78,11 +78,13 @@ impl PatchSurface {
             balls: Vec::new(),
             rule: mesh.boundary,
         };
-        s.add(ring, 0, depth.max(1));
+        s.add(ring, 0, depth.max(1), None);
         s
     }
 
-    fn add(&mut self, ring: LocalMesh, level: u32, depth: u32) -> u32 {
+    /// `chain_normal`: the vertex normal, computed where the chain below `depth` starts
+    /// (deeper one-rings are too small for double precision to give it accurately).
+    fn add(&mut self, ring: LocalMesh, level: u32, depth: u32, chain_normal: Option<DVec3>) -> u32 {
         let id = self.nodes.len() as u32;
         self.balls.push(None);
         if let Some(net) = ring.regular_net(self.rule) {
@@ -111,7 +113,7 @@ impl PatchSurface {
             self.nodes.push(Node::Corner(Box::new(CornerNode {
                 corner,
                 limit,
-                normal: ring.corner_normal(corner, self.rule),
+                normal: chain_normal.unwrap_or_else(|| ring.corner_normal(corner, self.rule)),
                 hull_radius: ring.hull_radius(limit),
                 ring,
             })));
@@ -128,10 +130,17 @@ impl PatchSurface {
                 radius: ring.hull_radius(limit),
             });
         }
+        // Below `depth` only the chain goes on: its normal is the one computed here.
+        let normal = (level >= depth).then(|| {
+            chain_normal.unwrap_or_else(|| {
+                let corner = ring.irregular_corner(self.rule).unwrap_or(0);
+                ring.corner_normal(corner, self.rule)
+            })
+        });
         let children = ring.children(self.rule);
         let mut ids = [0u32; 4];
         for (c, child) in children.into_iter().enumerate() {
-            ids[c] = self.add(child, level + 1, depth);
+            ids[c] = self.add(child, level + 1, depth, normal);
         }
         self.nodes[id as usize] = Node::Split(ids);
         id
