@@ -11,6 +11,7 @@
 // Twin: `gpu_pipeline::side_points`.
 
 #include "shared/cc_tess.wgsl"
+#include "shared/cc_poly.wgsl"
 #include "shared/cc_hash_key.wgsl"
 
 struct CcHashSlotView {
@@ -23,19 +24,7 @@ struct CcHashSlotView {
 @group(0) @binding(45) var<storage, read> ids: array<u32>;
 @group(0) @binding(55) var<storage, read> leaves: array<CcCell>;
 @group(0) @binding(59) var<storage, read> topo: array<CcPatchTopo>;
-// The polygon sizes (scanned into offsets by the host) for leaf_capacity + 1 entries,
-// then four side counts per leaf.
-@group(0) @binding(62) var<storage, read_write> poly_offsets: array<u32>;
 @group(0) @binding(63) var<storage, read_write> poly_verts: array<vec4u>;
-
-fn cc_side_base(l: u32) -> u32 {
-    return cc_params.leaf_capacity + 1u + 4u * l;
-}
-
-fn cc_side_counts(l: u32) -> vec4u {
-    let b = cc_side_base(l);
-    return vec4u(poly_offsets[b], poly_offsets[b + 1u], poly_offsets[b + 2u], poly_offsets[b + 3u]);
-}
 
 // The slot of a key, or CC_NO_SLOT if it is not in the table (unmarked).
 fn cc_find(key: vec2u) -> u32 {

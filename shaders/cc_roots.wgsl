@@ -9,7 +9,6 @@
 
 @group(0) @binding(52) var<storage, read_write> cells_out: array<CcCell>;
 @group(0) @binding(57) var<storage, read_write> root_offsets: array<u32>;
-@group(0) @binding(58) var<storage, read_write> args: array<u32>;
 
 @compute @workgroup_size(64)
 fn count(@builtin(global_invocation_id) gid: vec3u, @builtin(num_workgroups) groups: vec3u) {
@@ -50,14 +49,6 @@ fn emit(@builtin(global_invocation_id) gid: vec3u, @builtin(num_workgroups) grou
             at += 1u;
         }
     }
-}
-
-// Indirect dispatch arguments for `items` invocations of 64 (as `kernel::groups_2d`).
-fn cc_write_args(base: u32, items: u32) {
-    let g = (items + 63u) / 64u;
-    args[base] = min(g, 32768u);
-    args[base + 1u] = select((g + 32767u) / 32768u, 1u, g == 0u);
-    args[base + 2u] = 1u;
 }
 
 @compute @workgroup_size(1)

@@ -11,7 +11,6 @@
 @group(0) @binding(52) var<storage, read_write> cells_out: array<CcCell>;
 @group(0) @binding(54) var<storage, read> flags: array<u32>;
 @group(0) @binding(55) var<storage, read_write> leaves: array<CcCell>;
-@group(0) @binding(58) var<storage, read_write> args: array<u32>;
 
 // Whether the cell's trial can no longer beat its patch's best split so far: it will
 // have at least ku·kv + 3 · (splits so far) leaves. Its cells are then dropped (the
@@ -54,13 +53,6 @@ fn main(@builtin(global_invocation_id) gid: vec3u, @builtin(num_workgroups) grou
             leaves[at] = cell;
         }
     }
-}
-
-fn cc_write_args(base: u32, items: u32) {
-    let g = (items + 63u) / 64u;
-    args[base] = min(g, 32768u);
-    args[base + 1u] = select((g + 32767u) / 32768u, 1u, g == 0u);
-    args[base + 2u] = 1u;
 }
 
 @compute @workgroup_size(1)

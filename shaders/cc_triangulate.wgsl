@@ -5,20 +5,10 @@
 // writes the draw arguments and what the run needed.
 
 #include "shared/cc_tess.wgsl"
+#include "shared/cc_poly.wgsl"
 
 @group(0) @binding(55) var<storage, read> leaves: array<CcCell>;
-// Polygon offsets (leaf_capacity + 1 entries), then four side counts per leaf.
-@group(0) @binding(62) var<storage, read> poly_offsets: array<u32>;
 @group(0) @binding(63) var<storage, read> poly_verts: array<vec4u>;
-
-fn cc_side_base(l: u32) -> u32 {
-    return cc_params.leaf_capacity + 1u + 4u * l;
-}
-
-fn cc_side_counts(l: u32) -> vec4u {
-    let b = cc_side_base(l);
-    return vec4u(poly_offsets[b], poly_offsets[b + 1u], poly_offsets[b + 2u], poly_offsets[b + 3u]);
-}
 @group(0) @binding(64) var<storage, read> vertices: array<OutVertex>;
 @group(0) @binding(65) var<storage, read_write> indices: array<u32>;
 @group(0) @binding(66) var<storage, read_write> draw: DrawIndexedIndirectArgs;

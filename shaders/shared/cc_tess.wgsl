@@ -26,6 +26,8 @@ struct CcCounters {
 @group(0) @binding(51) var<storage, read_write> cc_state: CcCounters;
 // Per patch: (leaves, trial) of the best first split so far.
 @group(0) @binding(56) var<storage, read_write> best: array<vec2u>;
+// Indirect dispatch arguments: [0..3] the current cell list, [3..6] the leaves.
+@group(0) @binding(58) var<storage, read_write> args: array<u32>;
 
 fn cc_invocation(gid: vec3u, groups: vec3u) -> u32 {
     return gid.x + gid.y * groups.x * 64u;
@@ -162,4 +164,12 @@ fn round_trials(p: u32) -> vec2u {
 
 fn cc_has_trial(tried: vec2u, t: u32) -> bool {
     return (tried[t / 32u] & (1u << (t % 32u))) != 0u;
+}
+
+// Indirect dispatch arguments for `items` invocations of 64 (as `kernel::groups_2d`).
+fn cc_write_args(base: u32, items: u32) {
+    let g = (items + 63u) / 64u;
+    args[base] = min(g, 32768u);
+    args[base + 1u] = select((g + 32767u) / 32768u, 1u, g == 0u);
+    args[base + 2u] = 1u;
 }

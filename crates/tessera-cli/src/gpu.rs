@@ -11,7 +11,7 @@ use tessera_core::gpu_types::BezierStatus;
 use tessera_wgpu::bezier::BezierStage;
 use tessera_wgpu::catmull_clark::{CcStage, CcStatus};
 use tessera_wgpu::headless::Gpu;
-use tessera_wgpu::Result;
+use tessera_wgpu::{wgpu, Result};
 
 /// Stages of a GPU run, ms. `tessellate` is the tessellation alone.
 #[derive(Serialize, Default, Clone, Copy, Debug)]
@@ -49,12 +49,7 @@ pub fn run(
     let t = Instant::now();
     stage.run_blocking(&gpu.device, &gpu.queue)?;
     timings.first_run = ms(t);
-    let t = Instant::now();
-    let mut encoder = gpu.device.create_command_encoder(&Default::default());
-    stage.prepare(&gpu.device, &gpu.queue, &mut encoder);
-    gpu.queue.submit([encoder.finish()]);
-    gpu.wait()?;
-    timings.tessellate = ms(t);
+    timed_run(gpu, timings, |e| stage.prepare(&gpu.device, &gpu.queue, e))?;
     let status = stage.read_status(&gpu.device)?;
     gpu.check()?;
     Ok((stage, status))
@@ -74,13 +69,23 @@ pub fn run_cc(
     let t = Instant::now();
     stage.run_blocking(&gpu.device, &gpu.queue)?;
     timings.first_run = ms(t);
-    let t = Instant::now();
-    let mut encoder = gpu.device.create_command_encoder(&Default::default());
-    stage.prepare(&gpu.device, &gpu.queue, &mut encoder);
-    gpu.queue.submit([encoder.finish()]);
-    gpu.wait()?;
-    timings.tessellate = ms(t);
+    timed_run(gpu, timings, |e| stage.prepare(&gpu.device, &gpu.queue, e))?;
     let status = stage.read_status(&gpu.device)?;
     gpu.check()?;
     Ok((stage, status))
+}
+
+/// The timed run: what `record` puts in an encoder, submitted and waited for.
+fn timed_run(
+    gpu: &Gpu,
+    timings: &mut GpuTimings,
+    record: impl FnOnce(&mut wgpu::CommandEncoder),
+) -> Result<()> {
+    let t = Instant::now();
+    let mut encoder = gpu.device.create_command_encoder(&Default::default());
+    record(&mut encoder);
+    gpu.queue.submit([encoder.finish()]);
+    gpu.wait()?;
+    timings.tessellate = ms(t);
+    Ok(())
 }

@@ -52,6 +52,10 @@ pub const SOURCES: &[(&str, &str)] = &[
         include_str!("../../../shaders/shared/cc_tess.wgsl"),
     ),
     (
+        "shared/cc_poly.wgsl",
+        include_str!("../../../shaders/shared/cc_poly.wgsl"),
+    ),
+    (
         "cc_roots.wgsl",
         include_str!("../../../shaders/cc_roots.wgsl"),
     ),
