@@ -326,6 +326,13 @@ impl CcStage {
 
     /// The tolerance and depth of the next runs.
     pub fn set_params(&mut self, queue: &wgpu::Queue, params: &CcParams) -> Result<()> {
+        if !(params.tolerance.is_finite() && params.tolerance > 0.0) {
+            return Err(tessera_core::Error::Param(format!(
+                "tolerance must be a positive number, got {}",
+                params.tolerance
+            ))
+            .into());
+        }
         if params.max_depth > tessera_core::catmull_clark::MAX_DEPTH {
             return Err(tessera_core::Error::Param(format!(
                 "max depth {} out of range 0..={}",
