@@ -18,13 +18,6 @@ struct CcHashStatusOut {
 @group(0) @binding(59) var<storage, read> topo: array<CcPatchTopo>;
 @group(0) @binding(60) var<storage, read_write> item_points: array<CcPoint>;
 
-// Corner k of a cell, counter-clockwise from its lower-left.
-fn cc_cell_corner(cell: CcCell, k: u32) -> vec2u {
-    let size = cc_cell_size(cell);
-    let o = vec2u(select(0u, 1u, k == 1u || k == 2u), select(0u, 1u, k >= 2u));
-    return vec2u(cell.i, cell.j) + o * size;
-}
-
 @compute @workgroup_size(64)
 fn main(@builtin(global_invocation_id) gid: vec3u, @builtin(num_workgroups) groups: vec3u) {
     let l = cc_invocation(gid, groups);

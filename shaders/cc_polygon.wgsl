@@ -138,11 +138,8 @@ fn dyadic_walk(a: u32, b: u32, lo: u32, hi: u32, ascending: bool) {
 // Walks side s of the leaf from its corner s to corner s + 1.
 fn side_walk(cell: CcCell, s: u32) {
     let n = cc_params.grid;
-    let size = cc_cell_size(cell);
-    let c = array<vec2u, 4>(vec2u(cell.i, cell.j), vec2u(cell.i + size.x, cell.j),
-        vec2u(cell.i + size.x, cell.j + size.y), vec2u(cell.i, cell.j + size.y));
-    let side_from = c[s];
-    let side_to = c[(s + 1u) % 4u];
+    let side_from = cc_cell_corner(cell, s);
+    let side_to = cc_cell_corner(cell, (s + 1u) % 4u);
     line.patch_id = cell.patch_id;
     var on_edge = 4u;
     if s == 0u && side_from.y == 0u {
@@ -198,11 +195,16 @@ fn side_walk(cell: CcCell, s: u32) {
     }
 }
 
+// Whether invocation l has a leaf (and room for its side counts).
+fn leaf_in_range(l: u32) -> bool {
+    let n = min(cc_state.leaves, cc_params.leaf_capacity);
+    return l < n && l < arrayLength(&leaves) && cc_side_base(l) + 4u <= arrayLength(&poly_offsets);
+}
+
 @compute @workgroup_size(64)
 fn count(@builtin(global_invocation_id) gid: vec3u, @builtin(num_workgroups) groups: vec3u) {
     let l = cc_invocation(gid, groups);
-    let n = min(cc_state.leaves, cc_params.leaf_capacity);
-    if l >= n || l >= arrayLength(&leaves) || cc_side_base(l) + 4u > arrayLength(&poly_offsets) {
+    if !leaf_in_range(l) {
         return;
     }
     let cell = leaves[l];
@@ -223,22 +225,19 @@ fn count(@builtin(global_invocation_id) gid: vec3u, @builtin(num_workgroups) gro
 @compute @workgroup_size(64)
 fn emit(@builtin(global_invocation_id) gid: vec3u, @builtin(num_workgroups) groups: vec3u) {
     let l = cc_invocation(gid, groups);
-    let n = min(cc_state.leaves, cc_params.leaf_capacity);
-    if l >= n || l >= arrayLength(&leaves) || cc_side_base(l) + 4u > arrayLength(&poly_offsets) {
+    if !leaf_in_range(l) {
         return;
     }
     let cell = leaves[l];
     line_topo = topo[cell.patch_id];
     let counts = cc_side_counts(l);
-    let size = cc_cell_size(cell);
-    let c = array<vec2u, 4>(vec2u(cell.i, cell.j), vec2u(cell.i + size.x, cell.j),
-        vec2u(cell.i + size.x, cell.j + size.y), vec2u(cell.i, cell.j + size.y));
     var at = poly_offsets[l];
     emitting = true;
     for (var s = 0u; s < 4u; s++) {
         // The corner's vertex is its item's number (items 4·leaf + corner).
         if at < arrayLength(&poly_verts) && at < cc_params.poly_capacity {
-            poly_verts[at] = vec4u(ids[4u * l + s], c[s].x, c[s].y, 0u);
+            let c = cc_cell_corner(cell, s);
+            poly_verts[at] = vec4u(ids[4u * l + s], c.x, c.y, 0u);
         }
         emit_at = at + 1u;
         found = 0u;

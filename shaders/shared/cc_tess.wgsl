@@ -62,6 +62,13 @@ fn cc_cell_size(cell: CcCell) -> vec2u {
     return vec2u((cc_params.grid / s.x) >> depth, (cc_params.grid / s.y) >> depth);
 }
 
+// Corner k of a cell, counter-clockwise from its lower-left.
+fn cc_cell_corner(cell: CcCell, k: u32) -> vec2u {
+    let size = cc_cell_size(cell);
+    let o = vec2u(select(0u, 1u, k == 1u || k == 2u), select(0u, 1u, k >= 2u));
+    return vec2u(cell.i, cell.j) + o * size;
+}
+
 // A grid coordinate as a fixed-point parameter: round(i · 2^31 / grid), grid =
 // 105 · 2^(max_depth + 3), by long division (no 64-bit integers in WGSL).
 fn cc_grid_fixed(i: u32) -> u32 {

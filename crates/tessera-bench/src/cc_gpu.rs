@@ -44,7 +44,7 @@ fn median(mut v: Vec<f64>) -> f64 {
 }
 
 /// Median time of the recorded stage run to completion (after a first run that grew the
-/// buffers), and the stage's status.
+/// buffers), and the mesh.
 fn gpu_time(
     gpu: &Gpu,
     model: &SurfaceModel,

@@ -644,14 +644,9 @@ impl BezierStage {
                 "the last run overflowed its buffers; grow and rerun".into(),
             ));
         }
-        let vsize = status.vertices as u64 * std::mem::size_of::<OutVertex>() as u64;
-        let isize = status.indices as u64 * 4;
-        let vertices = read_buffer(device, queue, &self.buffers.output.vertices, 0, vsize)?;
-        let indices = read_buffer(device, queue, &self.buffers.output.indices, 0, isize)?;
-        Ok(Mesh {
-            vertices: bytemuck::pod_collect_to_vec(&vertices),
-            indices: bytemuck::pod_collect_to_vec(&indices),
-        })
+        self.buffers
+            .output
+            .read_mesh(device, queue, status.vertices, status.indices)
     }
 
     /// The intermediate buffers, for comparison with the CPU twins in tests: edge bit

@@ -72,6 +72,24 @@ impl MeshBuffers {
         }
     }
 
+    /// Copies the first `vertices` vertices and `indices` indices back (files and tests;
+    /// drawing needs no readback).
+    pub fn read_mesh(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        vertices: u32,
+        indices: u32,
+    ) -> crate::Result<Mesh> {
+        let vsize = vertices as u64 * std::mem::size_of::<OutVertex>() as u64;
+        let v = crate::headless::read_buffer(device, queue, &self.vertices, 0, vsize)?;
+        let i = crate::headless::read_buffer(device, queue, &self.indices, 0, indices as u64 * 4)?;
+        Ok(Mesh {
+            vertices: bytemuck::pod_collect_to_vec(&v),
+            indices: bytemuck::pod_collect_to_vec(&i),
+        })
+    }
+
     /// Uploads a mesh made on the CPU (the CPU reference backend, uniform tessellation).
     pub fn from_mesh(device: &wgpu::Device, mesh: &Mesh) -> Self {
         let init = |label, contents: &[u8], usage| {

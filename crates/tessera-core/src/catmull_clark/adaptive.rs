@@ -28,7 +28,7 @@ use std::collections::HashMap;
 use glam::DVec3;
 use serde::Serialize;
 
-use super::bound::{box_bound, WALK_ONE};
+use super::bound::{box_bound, quadrant_offset, WALK_ONE};
 use super::keys::{key_place, point_key, KeyPlace};
 use super::patch::{SurfaceModel, SurfacePoint};
 use super::topology::PatchMesh;
@@ -120,9 +120,6 @@ impl Evaluator<'_> {
     }
 }
 
-/// Lower-left offsets of the quadrants, in units of half the parent.
-const QUADRANT: [(f64, f64); 4] = [(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)];
-
 /// The flatness bound of the box `[u0, u1] × [v0, v1]` of patch `p`: a guaranteed upper
 /// bound on the distance between the surface and any triangulation of the box's
 /// polygon ([`super::bound`]). The box is snapped to the walk grid (`1 / WALK_ONE`).
@@ -158,10 +155,11 @@ fn mark(
         return;
     }
     let (w, h) = (cell.w / 2, cell.h / 2);
-    for (di, dj) in QUADRANT {
+    for c in 0..4 {
+        let (di, dj) = quadrant_offset(c);
         let child = Cell {
-            i: cell.i + di as u32 * w,
-            j: cell.j + dj as u32 * h,
+            i: cell.i + di * w,
+            j: cell.j + dj * h,
             w,
             h,
         };

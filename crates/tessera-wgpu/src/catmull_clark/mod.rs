@@ -139,14 +139,36 @@ impl CcVertexEval {
         out: &wgpu::Buffer,
         max_points: u32,
     ) {
+        let bind = self.bind(device, model, points, counts, out);
+        self.record_bound(encoder, &bind, max_points);
+    }
+
+    /// The bind group of [`record`](Self::record), to keep across frames.
+    pub fn bind(
+        &self,
+        device: &wgpu::Device,
+        model: &CcModelBuffers,
+        points: &wgpu::Buffer,
+        counts: &wgpu::Buffer,
+        out: &wgpu::Buffer,
+    ) -> wgpu::BindGroup {
         let mut entries = model.entries().to_vec();
         entries.extend([(30, points), (31, out), (32, counts)]);
-        let bind = self.kernel.bind(device, &entries);
+        self.kernel.bind(device, &entries)
+    }
+
+    /// [`record`](Self::record) with a bind group made by [`bind`](Self::bind).
+    pub fn record_bound(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        bind: &wgpu::BindGroup,
+        max_points: u32,
+    ) {
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
             label: Some("tessera cc_vertex_eval"),
             timestamp_writes: None,
         });
-        self.kernel.dispatch(&mut pass, &bind, max_points, 64);
+        self.kernel.dispatch(&mut pass, bind, max_points, 64);
     }
 }
 
@@ -167,6 +189,13 @@ impl CcHashKernels {
             scan: ScanKernels::new(device),
         }
     }
+}
+
+/// Bind groups of the vertex-hash kernels over one set of buffers.
+pub struct CcHashBinds {
+    insert: wgpu::BindGroup,
+    mark_first: wgpu::BindGroup,
+    assign: wgpu::BindGroup,
 }
 
 /// The global vertex hash: canonical keys in, a vertex number per key and the distinct
@@ -243,7 +272,18 @@ impl CcVertexHash {
         kernels: &CcHashKernels,
         keys: &wgpu::Buffer,
     ) {
-        encoder.clear_buffer(&self.table, 0, None);
+        let binds = self.bind(device, kernels, keys);
+        self.record_bound(encoder, kernels, &binds);
+    }
+
+    /// The bind groups of [`record`](Self::record), to keep across frames (valid until
+    /// [`grow`](Self::grow)).
+    pub fn bind(
+        &self,
+        device: &wgpu::Device,
+        kernels: &CcHashKernels,
+        keys: &wgpu::Buffer,
+    ) -> CcHashBinds {
         let entries = [
             (40, keys),
             (41, &self.table),
@@ -253,18 +293,32 @@ impl CcVertexHash {
             (45, &self.ids),
             (46, &self.unique_keys),
         ];
-        let insert = kernels.insert.bind(device, &entries);
-        let mark = kernels.mark_first.bind(device, &entries);
-        let assign = kernels.assign.bind(device, &entries);
+        CcHashBinds {
+            insert: kernels.insert.bind(device, &entries),
+            mark_first: kernels.mark_first.bind(device, &entries),
+            assign: kernels.assign.bind(device, &entries),
+        }
+    }
+
+    /// [`record`](Self::record) with bind groups made by [`bind`](Self::bind).
+    pub fn record_bound(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        kernels: &CcHashKernels,
+        binds: &CcHashBinds,
+    ) {
+        encoder.clear_buffer(&self.table, 0, None);
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
             label: Some("tessera cc vertex hash"),
             timestamp_writes: None,
         });
         let n = self.item_capacity;
-        kernels.insert.dispatch(&mut pass, &insert, n, 64);
-        kernels.mark_first.dispatch(&mut pass, &mark, n, 64);
+        kernels.insert.dispatch(&mut pass, &binds.insert, n, 64);
+        kernels
+            .mark_first
+            .dispatch(&mut pass, &binds.mark_first, n, 64);
         self.prefix.record(&mut pass, &kernels.scan);
-        kernels.assign.dispatch(&mut pass, &assign, n, 64);
+        kernels.assign.dispatch(&mut pass, &binds.assign, n, 64);
     }
 
     /// After an overflow: a table twice as large (and at least twice the items), same

@@ -52,9 +52,9 @@ use tessera_core::gpu_types::{
 use tessera_core::Mesh;
 use wgpu::util::DeviceExt;
 
-use super::{CcHashKernels, CcModelBuffers, CcVertexEval, CcVertexHash};
+use super::{CcHashBinds, CcHashKernels, CcModelBuffers, CcVertexEval, CcVertexHash};
 use crate::error::{Error, Result};
-use crate::headless::{map_read, read_buffer};
+use crate::headless::map_read;
 use crate::kernel::{storage, Kernel};
 use crate::output::MeshBuffers;
 use crate::scan::{PrefixSum, ScanKernels};
@@ -226,6 +226,8 @@ struct Binds {
     polygon_emit: wgpu::BindGroup,
     triangulate: wgpu::BindGroup,
     triangulate_finish: wgpu::BindGroup,
+    hash: CcHashBinds,
+    eval: wgpu::BindGroup,
 }
 
 /// The adaptive Catmull-Clark tessellation stage of one model.
@@ -376,7 +378,7 @@ impl CcStage {
     /// the counters for [`read_status`](Self::read_status). Submits nothing.
     pub fn prepare(
         &self,
-        device: &wgpu::Device,
+        _device: &wgpu::Device,
         _queue: &wgpu::Queue,
         encoder: &mut wgpu::CommandEncoder,
     ) {
@@ -420,7 +422,7 @@ impl CcStage {
                 .dispatch_indirect(&mut pass, &binds.leaf_keys, &self.args, LEAF_ARGS);
         }
         // The hash clears its table; the keys kernel has set how many items.
-        b.hash.record(device, encoder, &k.hash, &b.keys);
+        b.hash.record_bound(encoder, &k.hash, &binds.hash);
         {
             let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                 label: Some("tessera cc vertices"),
@@ -429,15 +431,8 @@ impl CcStage {
             k.gather_points
                 .dispatch(&mut pass, &binds.gather_points, b.hash.item_capacity, 64);
         }
-        k.eval.record(
-            device,
-            encoder,
-            &self.model,
-            &b.vertex_points,
-            &b.vertex_count,
-            &b.output.vertices,
-            b.hash.item_capacity,
-        );
+        k.eval
+            .record_bound(encoder, &binds.eval, b.hash.item_capacity);
         {
             let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                 label: Some("tessera cc polygons"),
@@ -576,26 +571,9 @@ impl CcStage {
                 "the last run overflowed its buffers; grow and rerun".into(),
             ));
         }
-        let vsize = status.vertices() as u64 * std::mem::size_of::<OutVertex>() as u64;
-        let isize = status.indices as u64 * 4;
-        let vertices = read_buffer(device, queue, &self.buffers.output.vertices, 0, vsize)?;
-        let indices = read_buffer(device, queue, &self.buffers.output.indices, 0, isize)?;
-        Ok(Mesh {
-            vertices: bytemuck::pod_collect_to_vec(&vertices),
-            indices: bytemuck::pod_collect_to_vec(&indices),
-        })
-    }
-
-    /// The leaves of the last run (tests compare them with the CPU reference's).
-    pub fn read_leaves(
-        &self,
-        device: &wgpu::Device,
-        queue: &wgpu::Queue,
-        status: &CcStatus,
-    ) -> Result<Vec<CcCell>> {
-        let n = status.state.leaves.min(self.buffers.caps.leaves) as u64;
-        let bytes = read_buffer(device, queue, &self.buffers.leaves, 0, n * 16)?;
-        Ok(bytemuck::pod_collect_to_vec(&bytes))
+        self.buffers
+            .output
+            .read_mesh(device, queue, status.vertices(), status.indices)
     }
 }
 
@@ -769,6 +747,14 @@ impl Binds {
             polygon_emit: k.polygon_emit.bind(device, &even),
             triangulate: k.triangulate.bind(device, &even),
             triangulate_finish: k.triangulate_finish.bind(device, &even),
+            hash: b.hash.bind(device, &k.hash, &b.keys),
+            eval: k.eval.bind(
+                device,
+                model,
+                &b.vertex_points,
+                &b.vertex_count,
+                &b.output.vertices,
+            ),
         }
     }
 }
