@@ -149,16 +149,20 @@ fn cc_slab_piece(sides: u32) -> bool {
         bs_lo = min(bs_lo, h);
         bs_hi = max(bs_hi, h);
     }
+    // n · (a × b) > 0 for every u-step a and v-step b: with (e1, e2, n) right-handed
+    // that is the perp-dot of their projections, which is cheaper.
+    var du: array<vec2f, 12>;
+    var dv: array<vec2f, 12>;
     for (var j = 0u; j < 4u; j++) {
         for (var k = 0u; k < 3u; k++) {
-            let a = bs_net[4u * j + k + 1u] - bs_net[4u * j + k];
-            for (var jj = 0u; jj < 3u; jj++) {
-                for (var kk = 0u; kk < 4u; kk++) {
-                    let b = bs_net[4u * (jj + 1u) + kk] - bs_net[4u * jj + kk];
-                    if dot(bs_normal, cross(a, b)) <= 0.0 {
-                        return false;
-                    }
-                }
+            du[3u * j + k] = cc_project(bs_net[4u * j + k + 1u] - bs_net[4u * j + k]);
+            dv[4u * k + j] = cc_project(bs_net[4u * (k + 1u) + j] - bs_net[4u * k + j]);
+        }
+    }
+    for (var a = 0u; a < 12u; a++) {
+        for (var b = 0u; b < 12u; b++) {
+            if cc_perp_dot(du[a], dv[b]) <= 0.0 {
+                return false;
             }
         }
     }

@@ -38,10 +38,8 @@ fn cc_trial_split(t: u32) -> vec2u {
     if t < 8u {
         return vec2u(t + 1u, t + 1u);
     }
-    let r = t - 8u;
-    let ku = r / 7u + 1u;
-    let k = r % 7u + 1u;
-    return vec2u(ku, select(k, k + 1u, k >= ku));
+    let k = (t - 8u) / 2u + 1u;
+    return select(vec2u(k + 1u, k), vec2u(k, k + 1u), t % 2u == 0u);
 }
 
 fn cc_trial_round(t: u32) -> u32 {

@@ -207,6 +207,19 @@ mod tests {
         assert_eq!(std::mem::size_of::<OutVertex>(), 36);
         assert_eq!(std::mem::size_of::<DrawIndexedIndirectArgs>(), 20);
     }
+
+    #[test]
+    fn trials_are_the_cpu_first_splits_in_its_order() {
+        let cpu: Vec<(u32, u32)> = crate::catmull_clark::first_splits().collect();
+        let gpu: Vec<(u32, u32)> = (0..CC_TRIALS).map(cc_trial_split).collect();
+        assert_eq!(gpu, cpu);
+        // Rounds group trials by area: round r holds r² < ku·kv ≤ (r+1)².
+        for t in 0..CC_TRIALS {
+            let (ku, kv) = cc_trial_split(t);
+            let r = cc_trial_round(t);
+            assert!(r * r < ku * kv && ku * kv <= (r + 1) * (r + 1), "trial {t}");
+        }
+    }
 }
 
 /// Catmull-Clark quadtree node kinds ([`CcNode::kind`]).
@@ -297,23 +310,26 @@ pub struct CcCell {
     pub j: u32,
 }
 
-/// First splits tried per patch: 8 squares, then the 56 rectangles.
-pub const CC_TRIALS: u32 = 64;
+/// First splits tried per patch: 8 squares, then the 14 near-square rectangles.
+pub const CC_TRIALS: u32 = 22;
 /// Rounds of the first-split search (trials grouped by `ku · kv`), then the final one.
 pub const CC_SEARCH_ROUNDS: u32 = 8;
 /// No patch across an edge (an open boundary or a hole).
 pub const CC_NO_NEIGHBOUR: u32 = u32::MAX;
 
-/// `(ku, kv)` of trial `t`, in the order the CPU reference tries them: squares `1..=8`,
-/// then rectangles by `ku`, then `kv`.
+/// `(ku, kv)` of trial `t`, in the order the CPU reference tries them
+/// ([`crate::catmull_clark::first_splits`]): squares `1..=8`, then `k × (k + 1)` and
+/// `(k + 1) × k` for `k = 1..=7`.
 pub fn cc_trial_split(t: u32) -> (u32, u32) {
     if t < 8 {
         return (t + 1, t + 1);
     }
-    let r = t - 8;
-    let ku = r / 7 + 1;
-    let k = r % 7 + 1;
-    (ku, if k >= ku { k + 1 } else { k })
+    let k = (t - 8) / 2 + 1;
+    if t.is_multiple_of(2) {
+        (k, k + 1)
+    } else {
+        (k + 1, k)
+    }
 }
 
 /// The search round of trial `t`: `ceil(sqrt(ku · kv)) - 1`.

@@ -11,9 +11,12 @@
 //!
 //! The paper splits at midpoints only, so a patch gets `2^L` cells per side and
 //! loses up to 4× in triangles against a uniform grid of the right size. Here the first
-//! split of a patch is `ku × kv` (each ≤ 8; rectangles too, for patches that bend more
-//! one way) for the pair that gives the fewest leaves (tried in turn, skipping pairs
-//! that cannot win), and every later split is at midpoints as in the paper. Parameters are
+//! split of a patch is `ku × kv` (each ≤ 8, and `|ku - kv| ≤ 1`: squares and the
+//! rectangles next to them) for the pair that gives the fewest leaves (tried in turn,
+//! skipping pairs that cannot win), and every later split is at midpoints as in the
+//! paper. Trying all 64 pairs instead gives the same triangles within ±5% (car, rook,
+//! Spot, bishop at 3e-3 to 3e-4 of the diagonal; fewer on some) for 1.5–3× the bound
+//! evaluations, which are the cost of the method. Parameters are
 //! integers in units of `1 / (840 · 2^max_depth)` (840 = lcm(1..=8)), so keys stay exact.
 //!
 //! # Flatness test with a guaranteed bound
@@ -41,6 +44,15 @@ use crate::mesh::Mesh;
 pub const MAX_BASE_SPLIT: u32 = 8;
 /// lcm(1..=MAX_BASE_SPLIT): every first split divides it.
 const BASE_GRID: u32 = 840;
+
+/// The first splits tried, in order (ties go to the earlier): the squares `k × k`, then
+/// the rectangles `k × (k + 1)` and `(k + 1) × k` by `ku`, then `kv`. The GPU numbers
+/// them the same way ([`crate::gpu_types::cc_trial_split`]).
+pub fn first_splits() -> impl Iterator<Item = (u32, u32)> {
+    let squares = (1..=MAX_BASE_SPLIT).map(|k| (k, k));
+    let rectangles = (1..MAX_BASE_SPLIT).flat_map(|k| [(k, k + 1), (k + 1, k)]);
+    squares.chain(rectangles)
+}
 
 /// Parameters of the adaptive method.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
@@ -191,14 +203,10 @@ pub fn tessellate_adaptive(model: &SurfaceModel, params: &CcParams) -> Result<Cc
                 h,
             })
         };
-        // Square splits first, then rectangles that could still beat the best so far
-        // (a split into ku·kv cells has at least that many leaves).
+        // Square splits first, then near-square rectangles, each only if it could still
+        // beat the best so far (a split into ku·kv cells has at least that many leaves).
         let mut best = (usize::MAX, (1, 1));
-        let squares = (1..=MAX_BASE_SPLIT).map(|k| (k, k));
-        let rectangles = (1..=MAX_BASE_SPLIT)
-            .flat_map(|ku| (1..=MAX_BASE_SPLIT).map(move |kv| (ku, kv)))
-            .filter(|(ku, kv)| ku != kv);
-        for split in squares.chain(rectangles) {
+        for split in first_splits() {
             if (split.0 * split.1) as usize >= best.0 {
                 continue;
             }

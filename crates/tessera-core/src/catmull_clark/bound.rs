@@ -94,8 +94,8 @@ const QUADRANT_SIDES: [u32; 4] = [
 const ROUNDING_RELATIVE: f64 = 64.0 * f32::EPSILON as f64;
 const ROUNDING_ABSOLUTE: f64 = 8.0 * f32::EPSILON as f64;
 
-/// An orthonormal pair spanning the plane normal to the unit vector `n` (the formula of
-/// Duff et al. 2017; the kernel computes the same).
+/// An orthonormal pair `(e1, e2)` spanning the plane normal to the unit vector `n`, with
+/// `e1 × e2 = n` (the formula of Duff et al. 2017; the kernel computes the same).
 pub fn orthonormal_pair(n: DVec3) -> (DVec3, DVec3) {
     let sign = if n.z >= 0.0 { 1.0 } else { -1.0 };
     let a = -1.0 / (sign + n.z);
@@ -221,18 +221,18 @@ impl BoundSum {
             self.lo = self.lo.min(h);
             self.hi = self.hi.max(h);
         }
+        // n · (a × b) > 0 for every u-step a and v-step b: with (e1, e2, n) right-handed
+        // that is the perp-dot of their projections, which is cheaper.
+        let mut du = [DVec2::ZERO; 12];
+        let mut dv = [DVec2::ZERO; 12];
         for j in 0..4 {
             for k in 0..3 {
-                let a = shape[4 * j + k + 1] - shape[4 * j + k];
-                for jj in 0..3 {
-                    for kk in 0..4 {
-                        let b = shape[4 * (jj + 1) + kk] - shape[4 * jj + kk];
-                        if self.normal.dot(a.cross(b)) <= 0.0 {
-                            return false;
-                        }
-                    }
-                }
+                du[3 * j + k] = project(self.plane, shape[4 * j + k + 1] - shape[4 * j + k]);
+                dv[4 * k + j] = project(self.plane, shape[4 * (k + 1) + j] - shape[4 * k + j]);
             }
+        }
+        if du.iter().any(|a| dv.iter().any(|b| a.perp_dot(*b) <= 0.0)) {
+            return false;
         }
         for (s, &(start_corner, _)) in SIDES.iter().enumerate() {
             if sides & (1 << s) == 0 {
@@ -528,4 +528,31 @@ impl Walk<'_> {
 /// Lower-left corner of quadrant `c` in units of half the parent.
 pub fn quadrant_offset(c: usize) -> (u32, u32) {
     [(0, 0), (1, 0), (1, 1), (0, 1)][c]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_orthonormal_pair_is_right_handed() {
+        // Both branches of the formula, and near its seam at n = -z.
+        for n in [
+            DVec3::Z,
+            -DVec3::Z,
+            DVec3::new(0.3, -0.5, 0.8),
+            DVec3::new(-0.2, 0.1, -0.97),
+            DVec3::new(1e-9, 0.0, -1.0),
+            DVec3::X,
+        ] {
+            let n = n.normalize();
+            let (e1, e2) = orthonormal_pair(n);
+            assert!((e1.cross(e2) - n).length() < 1e-12, "{n}");
+            assert!(e1.dot(n).abs() < 1e-12 && e2.dot(n).abs() < 1e-12);
+            // The slab test's orientation check reads n · (a × b) off the projections.
+            let (a, b) = (DVec3::new(0.4, 1.0, -2.0), DVec3::new(-0.7, 0.2, 0.5));
+            let (pa, pb) = (project((e1, e2), a), project((e1, e2), b));
+            assert!((pa.perp_dot(pb) - n.dot(a.cross(b))).abs() < 1e-12);
+        }
+    }
 }

@@ -34,7 +34,7 @@ pub mod vertex_hash;
 
 use std::path::Path;
 
-pub use adaptive::{tessellate_adaptive, CcParams, CcTessellation};
+pub use adaptive::{first_splits, tessellate_adaptive, CcParams, CcTessellation};
 pub use control_mesh::{BoundaryRule, ControlMesh};
 pub use patch::{PatchSurface, SurfaceModel, SurfacePoint};
 pub use topology::PatchMesh;

@@ -382,18 +382,48 @@ impl CcStage {
         _queue: &wgpu::Queue,
         encoder: &mut wgpu::CommandEncoder,
     ) {
+        self.record(encoder, None);
+    }
+
+    /// As [`prepare`](Self::prepare), writing a timestamp into `stamps` after each phase
+    /// (the device needs `TIMESTAMP_QUERY_INSIDE_ENCODERS`): for profiling. Returns the
+    /// phase names, one per timestamp after the first.
+    pub fn prepare_timed(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        stamps: &wgpu::QuerySet,
+    ) -> Vec<String> {
+        let mut names = Vec::new();
+        self.record(encoder, Some((stamps, &mut names)));
+        names
+    }
+
+    fn record(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        mut stamps: Option<(&wgpu::QuerySet, &mut Vec<String>)>,
+    ) {
+        let mut stamp = |encoder: &mut wgpu::CommandEncoder, name: &str| {
+            if let Some((set, names)) = stamps.as_mut() {
+                if !name.is_empty() {
+                    names.push(name.to_string());
+                }
+                encoder.write_timestamp(set, names.len() as u32);
+            }
+        };
         let b = &self.buffers;
         let k = &self.kernels;
         let binds = &self.binds;
+        stamp(encoder, "");
         encoder.clear_buffer(&self.state, 0, None);
         encoder.clear_buffer(&b.hash.status, 0, None);
-        {
-            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some("tessera cc marking"),
-                timestamp_writes: None,
-            });
-            let p = self.patch_count;
-            for round in 0..=CC_SEARCH_ROUNDS {
+        let p = self.patch_count;
+        for round in 0..=CC_SEARCH_ROUNDS {
+            {
+                let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                    label: Some("tessera cc marking"),
+                    timestamp_writes: None,
+                });
                 k.roots_count.dispatch(&mut pass, &binds.roots_count, p, 64);
                 self.root_scan.record(&mut pass, &k.scan);
                 k.roots_emit.dispatch(&mut pass, &binds.roots_emit, p, 64);
@@ -403,7 +433,7 @@ impl CcStage {
                     let parity = level % 2;
                     k.mark
                         .dispatch_indirect(&mut pass, &binds.mark[parity], &self.args, LIST_ARGS);
-                    b.flag_scan.record(&mut pass, &k.scan);
+                    if std::env::var_os("NOSCAN").is_none() { b.flag_scan.record(&mut pass, &k.scan); }
                     k.split.dispatch_indirect(
                         &mut pass,
                         &binds.split[parity],
@@ -418,11 +448,20 @@ impl CcStage {
                     k.next_round.dispatch(&mut pass, &binds.next_round, 1, 1);
                 }
             }
+            stamp(encoder, &format!("marking round {round}"));
+        }
+        {
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("tessera cc leaf keys"),
+                timestamp_writes: None,
+            });
             k.leaf_keys
                 .dispatch_indirect(&mut pass, &binds.leaf_keys, &self.args, LEAF_ARGS);
         }
+        stamp(encoder, "leaf keys");
         // The hash clears its table; the keys kernel has set how many items.
         b.hash.record_bound(encoder, &k.hash, &binds.hash);
+        stamp(encoder, "vertex hash");
         {
             let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                 label: Some("tessera cc vertices"),
@@ -433,6 +472,7 @@ impl CcStage {
         }
         k.eval
             .record_bound(encoder, &binds.eval, b.hash.item_capacity);
+        stamp(encoder, "vertex evaluation");
         {
             let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                 label: Some("tessera cc polygons"),
@@ -452,6 +492,7 @@ impl CcStage {
             k.triangulate_finish
                 .dispatch(&mut pass, &binds.triangulate_finish, 1, 1);
         }
+        stamp(encoder, "polygons and triangles");
         let state_size = std::mem::size_of::<CcState>() as u64;
         let hash_size = std::mem::size_of::<CcHashStatus>() as u64;
         encoder.copy_buffer_to_buffer(&self.state, 0, &self.status_readback, 0, state_size);
