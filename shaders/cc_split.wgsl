@@ -66,6 +66,9 @@ fn finish() {
         }
         // The leaf kernels run over min(leaves, capacity).
         cc_write_args(3u, min(cc_state.leaves, cc_params.leaf_capacity));
+        // The hash runs over their four corner keys each; at least one invocation, which
+        // writes the counts even when there are none.
+        cc_write_args(6u, max(4u * min(cc_state.leaves, cc_params.leaf_capacity), 1u));
     }
     let next = 4u * split;
     atomicMax(&cc_state.need_cells, next);

@@ -12,12 +12,16 @@ struct ScanParams {
     // 0xffffffff: all n. Lists sized for their capacity are then scanned only as far as
     // they are filled; values beyond are left as they are.
     live_slot: u32,
+    // Levels of the whole scan (read by `dispatch_args` on the first level).
+    levels: u32,
 }
 
 @group(0) @binding(0) var<uniform> scan: ScanParams;
 @group(0) @binding(1) var<storage, read_write> data: array<u32>;
 @group(0) @binding(2) var<storage, read_write> sums: array<u32>;
 @group(0) @binding(3) var<storage, read> live: array<u32>;
+// Indirect dispatch arguments, three words per level.
+@group(0) @binding(4) var<storage, read_write> level_args: array<u32>;
 
 fn scan_len() -> u32 {
     if scan.live_slot == 0xffffffffu {
@@ -96,5 +100,20 @@ fn add_offsets(
     }
     if i0 + 1u < n {
         data[i0 + 1u] += add;
+    }
+}
+
+// One invocation, before a scan bounded by a live count: the workgroups each level needs
+// for that count, so that a list sized for its capacity costs what it holds (as
+// `kernel::groups_2d`).
+@compute @workgroup_size(1)
+fn dispatch_args() {
+    var count = scan_len();
+    for (var l = 0u; l < scan.levels; l++) {
+        let g = max((count + BLOCK - 1u) / BLOCK, 1u);
+        level_args[3u * l] = min(g, 32768u);
+        level_args[3u * l + 1u] = (g + 32767u) / 32768u;
+        level_args[3u * l + 2u] = 1u;
+        count = g;
     }
 }

@@ -22,6 +22,8 @@ var<private> bs_second: vec3f;
 var<private> bs_dev: f32;
 var<private> bs_dev_side: f32;
 var<private> bs_has_vertex: bool;
+// Whether the box may reach a vertex, so that bs_dev is needed.
+var<private> bs_track_dev: bool;
 var<private> bs_slab: bool;
 var<private> bs_normal: vec3f;
 var<private> bs_e1: vec3f;
@@ -159,11 +161,26 @@ fn cc_slab_piece(sides: u32) -> bool {
             dv[4u * k + j] = cc_project(bs_net[4u * (k + 1u) + j] - bs_net[4u * k + j]);
         }
     }
-    for (var a = 0u; a < 12u; a++) {
-        for (var b = 0u; b < 12u; b++) {
-            if cc_perp_dot(du[a], dv[b]) <= 0.0 {
-                return false;
-            }
+    // In linear passes (`bound::orientation_kept`): every a left of dv[0], so turning
+    // counter-clockwise orders them; then every b left of the first and the last a.
+    var first = du[0];
+    var last = du[0];
+    let b0 = dv[0];
+    for (var k = 0u; k < 12u; k++) {
+        let a = du[k];
+        if cc_perp_dot(a, b0) <= 0.0 {
+            return false;
+        }
+        if cc_perp_dot(a, first) > 0.0 {
+            first = a;
+        }
+        if cc_perp_dot(last, a) > 0.0 {
+            last = a;
+        }
+    }
+    for (var k = 0u; k < 12u; k++) {
+        if cc_perp_dot(first, dv[k]) <= 0.0 || cc_perp_dot(last, dv[k]) <= 0.0 {
+            return false;
         }
     }
     for (var s = 0u; s < 4u; s++) {
@@ -195,18 +212,20 @@ fn bound_piece(rect: vec4f, sides: u32) {
     let sd = cc_second_derivatives();
     bs_second = vec3f(max(bs_second.x, sd.x / (fu * fu)), max(bs_second.y, sd.y / (fv * fv)),
         max(bs_second.z, sd.z / (fu * fv)));
-    for (var j = 0u; j < 4u; j++) {
-        for (var i = 0u; i < 4u; i++) {
-            let u = rect.x + fu * f32(i) / 3.0;
-            let v = rect.z + fv * f32(j) / 3.0;
-            let e = length(bs_net[4u * j + i] + bs_offset - cc_bilinear(u, v));
-            bs_dev = max(bs_dev, e);
-            let on_side = (i == 0u && (sides & CC_SIDE_LEFT) != 0u)
-                || (i == 3u && (sides & CC_SIDE_RIGHT) != 0u)
-                || (j == 0u && (sides & CC_SIDE_BOTTOM) != 0u)
-                || (j == 3u && (sides & CC_SIDE_TOP) != 0u);
-            if on_side {
-                bs_dev_side = max(bs_dev_side, e);
+    if bs_track_dev {
+        for (var j = 0u; j < 4u; j++) {
+            for (var i = 0u; i < 4u; i++) {
+                let u = rect.x + fu * f32(i) / 3.0;
+                let v = rect.z + fv * f32(j) / 3.0;
+                let e = length(bs_net[4u * j + i] + bs_offset - cc_bilinear(u, v));
+                bs_dev = max(bs_dev, e);
+                let on_side = (i == 0u && (sides & CC_SIDE_LEFT) != 0u)
+                    || (i == 3u && (sides & CC_SIDE_RIGHT) != 0u)
+                    || (j == 0u && (sides & CC_SIDE_BOTTOM) != 0u)
+                    || (j == 3u && (sides & CC_SIDE_TOP) != 0u);
+                if on_side {
+                    bs_dev_side = max(bs_dev_side, e);
+                }
             }
         }
     }
@@ -462,6 +481,8 @@ fn cc_box_bound(p: u32, bx: vec4u, c: array<vec3f, 4>) -> f32 {
     walk_len = 0u;
     walk_overflow = false;
     bound_start(c);
+    // A patch without a vertex is one Bézier piece.
+    bs_track_dev = (cc_nodes[cc_roots[p]].kind & CC_NODE_KIND_MASK) != CC_NODE_BEZIER;
     walk_enter(CcWalkEntry(cc_roots[p], 0u, 0u, 0u, CC_WALK_ONE, false, vec4f(0.0), 0u));
     // Bounded: every split node is pushed once, and trees are finite; the cap guards a
     // corrupt upload.

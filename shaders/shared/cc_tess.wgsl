@@ -26,7 +26,8 @@ struct CcCounters {
 @group(0) @binding(51) var<storage, read_write> cc_state: CcCounters;
 // Per patch: (leaves, trial) of the best first split so far.
 @group(0) @binding(56) var<storage, read_write> best: array<vec2u>;
-// Indirect dispatch arguments: [0..3] the current cell list, [3..6] the leaves.
+// Indirect dispatch arguments: [0..3] the current cell list, [3..6] the leaves, [6..9]
+// the hash items (four corner keys per leaf).
 @group(0) @binding(58) var<storage, read_write> args: array<u32>;
 
 fn cc_invocation(gid: vec3u, groups: vec3u) -> u32 {
@@ -35,10 +36,10 @@ fn cc_invocation(gid: vec3u, groups: vec3u) -> u32 {
 
 // `cc_trial_split`: (ku, kv) of trial t.
 fn cc_trial_split(t: u32) -> vec2u {
-    if t < 8u {
-        return vec2u(t + 1u, t + 1u);
+    if t < 4u {
+        return vec2u(2u * t + 1u);
     }
-    let k = (t - 8u) / 2u + 1u;
+    let k = (t - 4u) / 2u + 1u;
     return select(vec2u(k + 1u, k), vec2u(k, k + 1u), t % 2u == 0u);
 }
 

@@ -310,21 +310,21 @@ pub struct CcCell {
     pub j: u32,
 }
 
-/// First splits tried per patch: 8 squares, then the 14 near-square rectangles.
-pub const CC_TRIALS: u32 = 22;
+/// First splits tried per patch: 4 odd squares, then the 14 near-square rectangles.
+pub const CC_TRIALS: u32 = 18;
 /// Rounds of the first-split search (trials grouped by `ku · kv`), then the final one.
 pub const CC_SEARCH_ROUNDS: u32 = 8;
 /// No patch across an edge (an open boundary or a hole).
 pub const CC_NO_NEIGHBOUR: u32 = u32::MAX;
 
 /// `(ku, kv)` of trial `t`, in the order the CPU reference tries them
-/// ([`crate::catmull_clark::first_splits`]): squares `1..=8`, then `k × (k + 1)` and
-/// `(k + 1) × k` for `k = 1..=7`.
+/// ([`crate::catmull_clark::first_splits`]): squares `1, 3, 5, 7`, then `k × (k + 1)`
+/// and `(k + 1) × k` for `k = 1..=7`.
 pub fn cc_trial_split(t: u32) -> (u32, u32) {
-    if t < 8 {
-        return (t + 1, t + 1);
+    if t < 4 {
+        return (2 * t + 1, 2 * t + 1);
     }
-    let k = (t - 8) / 2 + 1;
+    let k = (t - 4) / 2 + 1;
     if t.is_multiple_of(2) {
         (k, k + 1)
     } else {

@@ -11,6 +11,7 @@ use crate::kernel::{storage, Kernel};
 pub struct ScanKernels {
     scan_blocks: Kernel,
     add_offsets: Kernel,
+    dispatch_args: Kernel,
 }
 
 impl ScanKernels {
@@ -18,6 +19,7 @@ impl ScanKernels {
         ScanKernels {
             scan_blocks: Kernel::new(device, "scan.wgsl", "scan_blocks"),
             add_offsets: Kernel::new(device, "scan.wgsl", "add_offsets"),
+            dispatch_args: Kernel::new(device, "scan.wgsl", "dispatch_args"),
         }
     }
 }
@@ -35,6 +37,9 @@ struct Level {
 /// A scan of the first `n` values of one buffer, recorded as many times as needed.
 pub struct PrefixSum {
     levels: Vec<Level>,
+    /// For a scan bounded by a live count: the kernel's bind group writing each level's
+    /// dispatch size, and the buffer it writes.
+    indirect: Option<(wgpu::BindGroup, wgpu::Buffer)>,
 }
 
 impl PrefixSum {
@@ -63,10 +68,26 @@ impl PrefixSum {
         n: u32,
         live: Option<(&wgpu::Buffer, u32)>,
     ) -> Self {
+        let first_n = n;
         let block = SCAN_BLOCK as u32;
         let mut levels: Vec<Level> = Vec::new();
         let mut n = n;
         let no_live = storage(device, "tessera scan no live count", 4);
+        let mut level_count = 1;
+        while n.div_ceil(block).max(1) > 1 {
+            n = n.div_ceil(block);
+            level_count += 1;
+        }
+        n = first_n;
+        let args = live.map(|_| {
+            device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("tessera scan dispatch args"),
+                size: 12 * level_count as u64,
+                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::INDIRECT,
+                mapped_at_creation: false,
+            })
+        });
+        let mut indirect = None;
         loop {
             let count = n.div_ceil(block).max(1);
             // Only the first level is bounded by the live count; the block sums above it
@@ -77,12 +98,18 @@ impl PrefixSum {
             };
             let uniform = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
                 label: Some("tessera scan params"),
-                contents: bytemuck::bytes_of(&[n, slot, 0, 0]),
+                contents: bytemuck::bytes_of(&[n, slot, level_count, 0]),
                 usage: wgpu::BufferUsages::UNIFORM,
             });
             let sums = storage(device, "tessera scan sums", 4 * count as u64);
             let input = levels.last().map_or(data, |l| &l._sums);
             let entries = [(0, &uniform), (1, input), (2, &sums), (3, live_buffer)];
+            if let (true, Some(args)) = (levels.is_empty(), &args) {
+                let bind = kernels
+                    .dispatch_args
+                    .bind(device, &[(0, &uniform), (3, live_buffer), (4, args)]);
+                indirect = Some((bind, args.clone()));
+            }
             let level = Level {
                 n,
                 blocks: kernels.scan_blocks.bind(device, &entries),
@@ -92,7 +119,7 @@ impl PrefixSum {
             };
             levels.push(level);
             if count == 1 {
-                return PrefixSum { levels };
+                return PrefixSum { levels, indirect };
             }
             n = count;
         }
@@ -100,8 +127,24 @@ impl PrefixSum {
 
     /// Records the scan into `pass`: every level's blocks upward, then the offsets back
     /// down (the top level is a single block and needs none).
+    /// A scan bounded by a live count first writes each level's dispatch size for it
+    /// and dispatches indirectly.
     pub fn record(&self, pass: &mut wgpu::ComputePass, kernels: &ScanKernels) {
         let block = SCAN_BLOCK as u32;
+        if let Some((bind, args)) = &self.indirect {
+            kernels.dispatch_args.dispatch(pass, bind, 1, 1);
+            for (l, level) in self.levels.iter().enumerate() {
+                kernels
+                    .scan_blocks
+                    .dispatch_indirect(pass, &level.blocks, args, 12 * l as u64);
+            }
+            for (l, level) in self.levels.iter().enumerate().rev().skip(1) {
+                kernels
+                    .add_offsets
+                    .dispatch_indirect(pass, &level.add, args, 12 * l as u64);
+            }
+            return;
+        }
         for level in &self.levels {
             kernels
                 .scan_blocks

@@ -13,8 +13,8 @@
 //! loses up to 4× in triangles against a uniform grid of the right size. Here the first
 //! split of a patch is `ku × kv` (each ≤ 8, and `|ku - kv| ≤ 1`: squares and the
 //! rectangles next to them) for the pair that gives the fewest leaves (tried in turn,
-//! skipping pairs that cannot win), and every later split is at midpoints as in the
-//! paper. Trying all 64 pairs instead gives the same triangles within ±5% (car, rook,
+//! skipping pairs that cannot win, [`first_splits`]), and every later split is at
+//! midpoints as in the paper. Trying all 64 pairs instead gives the same triangles within ±5% (car, rook,
 //! Spot, bishop at 3e-3 to 3e-4 of the diagonal; fewer on some) for 1.5–3× the bound
 //! evaluations, which are the cost of the method. Parameters are
 //! integers in units of `1 / (840 · 2^max_depth)` (840 = lcm(1..=8)), so keys stay exact.
@@ -45,11 +45,17 @@ pub const MAX_BASE_SPLIT: u32 = 8;
 /// lcm(1..=MAX_BASE_SPLIT): every first split divides it.
 const BASE_GRID: u32 = 840;
 
-/// The first splits tried, in order (ties go to the earlier): the squares `k × k`, then
-/// the rectangles `k × (k + 1)` and `(k + 1) × k` by `ku`, then `kv`. The GPU numbers
-/// them the same way ([`crate::gpu_types::cc_trial_split`]).
+/// The first splits tried, in order (ties go to the earlier): the odd squares `k × k`,
+/// then the rectangles `k × (k + 1)` and `(k + 1) × k` by `ku`, then `kv`. The GPU
+/// numbers them the same way ([`crate::gpu_types::cc_trial_split`]).
+///
+/// An even square `2k × 2k` never wins against `k × k`, so it is not tried: its cells
+/// are the children of `k × k`'s, the same boxes with the same bounds. If the `k × k`
+/// cells all pass, that split has `k²` leaves against at least `4k²`; otherwise
+/// `2k × 2k` grows the same trees with one more split allowed at the bottom, which only
+/// adds leaves, and a tie goes to `k × k`.
 pub fn first_splits() -> impl Iterator<Item = (u32, u32)> {
-    let squares = (1..=MAX_BASE_SPLIT).map(|k| (k, k));
+    let squares = (1..=MAX_BASE_SPLIT).step_by(2).map(|k| (k, k));
     let rectangles = (1..MAX_BASE_SPLIT).flat_map(|k| [(k, k + 1), (k + 1, k)]);
     squares.chain(rectangles)
 }
@@ -181,6 +187,16 @@ fn mark(
 
 /// Adaptive tessellation of every (non-hole) patch to within `params.tolerance`.
 pub fn tessellate_adaptive(model: &SurfaceModel, params: &CcParams) -> Result<CcTessellation> {
+    let splits: Vec<(u32, u32)> = first_splits().collect();
+    tessellate_with_splits(model, params, &splits)
+}
+
+/// [`tessellate_adaptive`] trying these first splits in this order.
+fn tessellate_with_splits(
+    model: &SurfaceModel,
+    params: &CcParams,
+    splits: &[(u32, u32)],
+) -> Result<CcTessellation> {
     params.validate(model)?;
     let n = BASE_GRID << params.max_depth;
     let mut eval = Evaluator {
@@ -206,7 +222,7 @@ pub fn tessellate_adaptive(model: &SurfaceModel, params: &CcParams) -> Result<Cc
         // Square splits first, then near-square rectangles, each only if it could still
         // beat the best so far (a split into ku·kv cells has at least that many leaves).
         let mut best = (usize::MAX, (1, 1));
-        for split in first_splits() {
+        for &split in splits {
             if (split.0 * split.1) as usize >= best.0 {
                 continue;
             }
@@ -428,5 +444,68 @@ pub fn out_vertex(sp: SurfacePoint, patch: usize, u: f64, v: f64) -> OutVertex {
         normal: sp.normal.as_vec3().to_array(),
         uv: [u as f32, v as f32],
         patch: patch as u32,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::catmull_clark::TREE_DEPTH;
+    use crate::io::obj::parse_obj;
+    use std::path::Path;
+
+    #[test]
+    fn even_square_first_splits_never_win() {
+        // A cube (valence-3 vertices) and a 3×3 grid bent into a saddle (regular
+        // patches and a boundary).
+        let cube = parse_obj(
+            Path::new("cube.obj"),
+            b"v -1 -1 -1\nv 1 -1 -1\nv 1 1 -1\nv -1 1 -1\nv -1 -1 1\nv 1 -1 1\nv 1 1 1\nv -1 1 1\n\
+             f 1 4 3 2\nf 5 6 7 8\nf 1 2 6 5\nf 2 3 7 6\nf 3 4 8 7\nf 4 1 5 8\n",
+        )
+        .expect("cube");
+        let mut saddle = String::new();
+        for j in 0..4 {
+            for i in 0..4 {
+                let (x, y) = (i as f64 - 1.5, j as f64 - 1.5);
+                saddle += &format!("v {x} {y} {}\n", 0.4 * x * y);
+            }
+        }
+        for j in 0..3 {
+            for i in 0..3 {
+                let v = 4 * j + i + 1;
+                saddle += &format!("f {} {} {} {}\n", v, v + 1, v + 5, v + 4);
+            }
+        }
+        let saddle = parse_obj(Path::new("saddle.obj"), saddle.as_bytes()).expect("saddle");
+        let with_even: Vec<(u32, u32)> = (1..=MAX_BASE_SPLIT)
+            .map(|k| (k, k))
+            .chain(first_splits().filter(|(ku, kv)| ku != kv))
+            .collect();
+        // Leaves per patch at the finest: past 4, 2 × 2 is in contention.
+        let mut most = 0;
+        let mut searched = false;
+        for control in [cube, saddle] {
+            let model = SurfaceModel::new(PatchMesh::new(&control).expect("valid"), TREE_DEPTH);
+            for rel in [1e-2, 2e-3, 5e-4, 2e-4] {
+                let params = CcParams {
+                    tolerance: rel * control.bbox_diag(),
+                    max_depth: 4,
+                };
+                let ours = tessellate_adaptive(&model, &params).expect("ours");
+                let all = tessellate_with_splits(&model, &params, &with_even).expect("all");
+                most = most.max(ours.leaves / model.mesh.patch_count());
+                // The search matters here: midpoint splits alone give another mesh.
+                let midpoints = tessellate_with_splits(&model, &params, &[(1, 1)]).expect("1x1");
+                searched |= midpoints.leaves != ours.leaves;
+                assert_eq!(ours.leaves, all.leaves, "{rel}");
+                assert_eq!(ours.mesh.indices, all.mesh.indices, "{rel}");
+            }
+        }
+        assert!(
+            most > 4,
+            "the test must split patches finely ({most} leaves per patch)"
+        );
+        assert!(searched, "the first split must matter somewhere");
     }
 }

@@ -170,6 +170,22 @@ impl CcVertexEval {
         });
         self.kernel.dispatch(&mut pass, bind, max_points, 64);
     }
+
+    /// [`record_bound`](Self::record_bound) with the number of workgroups read from
+    /// `args` at `offset` (indirect dispatch arguments written by an earlier kernel).
+    pub fn record_indirect(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        bind: &wgpu::BindGroup,
+        args: &wgpu::Buffer,
+        offset: u64,
+    ) {
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some("tessera cc_vertex_eval"),
+            timestamp_writes: None,
+        });
+        self.kernel.dispatch_indirect(&mut pass, bind, args, offset);
+    }
 }
 
 /// The vertex-hash kernels (`cc_hash_insert.wgsl`, `cc_hash_number.wgsl`) and the scan.
@@ -231,7 +247,14 @@ impl CcVertexHash {
         let items = item_capacity.max(1) as u64;
         let slot_bytes = std::mem::size_of::<CcHashSlot>() as u64;
         let offsets = storage(device, "tessera cc hash offsets", 4 * items);
-        let prefix = PrefixSum::new(device, &kernels.scan, &offsets, items as u32);
+        let status = storage(
+            device,
+            "tessera cc hash status",
+            std::mem::size_of::<CcHashStatus>() as u64,
+        );
+        // Scanned as far as there are items (CcHashStatus::items, word 0).
+        let prefix =
+            PrefixSum::with_live_count(device, &kernels.scan, &offsets, items as u32, (&status, 0));
         CcVertexHash {
             capacity,
             item_capacity: items as u32,
@@ -244,11 +267,7 @@ impl CcVertexHash {
             offsets,
             ids: storage(device, "tessera cc vertex ids", 4 * items),
             unique_keys: storage(device, "tessera cc unique keys", 8 * items),
-            status: storage(
-                device,
-                "tessera cc hash status",
-                std::mem::size_of::<CcHashStatus>() as u64,
-            ),
+            status,
             prefix,
         }
     }
@@ -307,18 +326,45 @@ impl CcVertexHash {
         kernels: &CcHashKernels,
         binds: &CcHashBinds,
     ) {
+        self.record_dispatch(encoder, kernels, binds, None);
+    }
+
+    /// [`record_bound`](Self::record_bound) with the number of workgroups read from
+    /// `args` at `offset` (indirect dispatch arguments for the item count an earlier
+    /// kernel wrote), so that a run costs what it holds rather than the capacity.
+    pub fn record_indirect(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        kernels: &CcHashKernels,
+        binds: &CcHashBinds,
+        args: &wgpu::Buffer,
+        offset: u64,
+    ) {
+        self.record_dispatch(encoder, kernels, binds, Some((args, offset)));
+    }
+
+    fn record_dispatch(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        kernels: &CcHashKernels,
+        binds: &CcHashBinds,
+        args: Option<(&wgpu::Buffer, u64)>,
+    ) {
         encoder.clear_buffer(&self.table, 0, None);
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
             label: Some("tessera cc vertex hash"),
             timestamp_writes: None,
         });
         let n = self.item_capacity;
-        kernels.insert.dispatch(&mut pass, &binds.insert, n, 64);
-        kernels
-            .mark_first
-            .dispatch(&mut pass, &binds.mark_first, n, 64);
+        let run = |pass: &mut wgpu::ComputePass, kernel: &Kernel, bind: &wgpu::BindGroup| match args
+        {
+            Some((buffer, offset)) => kernel.dispatch_indirect(pass, bind, buffer, offset),
+            None => kernel.dispatch(pass, bind, n, 64),
+        };
+        run(&mut pass, &kernels.insert, &binds.insert);
+        run(&mut pass, &kernels.mark_first, &binds.mark_first);
         self.prefix.record(&mut pass, &kernels.scan);
-        kernels.assign.dispatch(&mut pass, &binds.assign, n, 64);
+        run(&mut pass, &kernels.assign, &binds.assign);
     }
 
     /// After an overflow: a table twice as large (and at least twice the items), same

@@ -91,6 +91,8 @@ mod slot {
 /// Offsets into the dispatch-arguments buffer.
 const LIST_ARGS: u64 = 0;
 const LEAF_ARGS: u64 = 12;
+/// ... and [6..9] the hash items (four corner keys per leaf).
+const ITEM_ARGS: u64 = 24;
 
 /// Every kernel of the stage, compiled once per device.
 pub struct CcKernels {
@@ -289,7 +291,7 @@ impl CcStage {
         let root_scan = PrefixSum::new(device, &kernels.scan, &root_offsets, patch_count + 1);
         let args = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("tessera cc dispatch args"),
-            size: 24,
+            size: 36,
             usage: wgpu::BufferUsages::STORAGE
                 | wgpu::BufferUsages::INDIRECT
                 | wgpu::BufferUsages::COPY_DST,
@@ -433,7 +435,9 @@ impl CcStage {
                     let parity = level % 2;
                     k.mark
                         .dispatch_indirect(&mut pass, &binds.mark[parity], &self.args, LIST_ARGS);
-                    if std::env::var_os("NOSCAN").is_none() { b.flag_scan.record(&mut pass, &k.scan); }
+                    if std::env::var_os("NOSCAN").is_none() {
+                        b.flag_scan.record(&mut pass, &k.scan);
+                    }
                     k.split.dispatch_indirect(
                         &mut pass,
                         &binds.split[parity],
@@ -460,18 +464,24 @@ impl CcStage {
         }
         stamp(encoder, "leaf keys");
         // The hash clears its table; the keys kernel has set how many items.
-        b.hash.record_bound(encoder, &k.hash, &binds.hash);
+        b.hash
+            .record_indirect(encoder, &k.hash, &binds.hash, &self.args, ITEM_ARGS);
         stamp(encoder, "vertex hash");
         {
             let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                 label: Some("tessera cc vertices"),
                 timestamp_writes: None,
             });
-            k.gather_points
-                .dispatch(&mut pass, &binds.gather_points, b.hash.item_capacity, 64);
+            k.gather_points.dispatch_indirect(
+                &mut pass,
+                &binds.gather_points,
+                &self.args,
+                ITEM_ARGS,
+            );
         }
+        // At most one vertex per item.
         k.eval
-            .record_bound(encoder, &binds.eval, b.hash.item_capacity);
+            .record_indirect(encoder, &binds.eval, &self.args, ITEM_ARGS);
         stamp(encoder, "vertex evaluation");
         {
             let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
