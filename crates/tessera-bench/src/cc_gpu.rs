@@ -11,10 +11,12 @@ use tessera_core::catmull_clark::{
     surface_samples, tessellate_adaptive, tessellate_uniform, CcParams, PatchMesh, SurfaceModel,
     MAX_DEPTH, TREE_DEPTH,
 };
+use tessera_core::gpu_types::CC_SEARCH_ROUNDS;
 use tessera_core::io::load_control_mesh;
 use tessera_core::measure::measure_error;
 use tessera_wgpu::catmull_clark::CcStage;
 use tessera_wgpu::headless::Gpu;
+use tessera_wgpu::wgpu;
 
 #[derive(Serialize)]
 struct Row {
@@ -36,11 +38,68 @@ struct Row {
     uniform_triangles: usize,
     uniform_ms: f64,
     gpu_over_uniform: f64,
+    /// Where the GPU time goes (timestamps after each phase, one run), if the adapter
+    /// has timestamp queries: (phase, ms).
+    phases: Vec<(String, f64)>,
 }
 
 fn median(mut v: Vec<f64>) -> f64 {
     v.sort_by(f64::total_cmp);
     v[v.len() / 2]
+}
+
+/// One run with a timestamp after each phase of the stage script: (phase, ms). The
+/// search rounds are summed, the final marking round kept apart. Empty without
+/// timestamp queries.
+fn gpu_phases(gpu: &Gpu, stage: &CcStage) -> Vec<(String, f64)> {
+    let needed = wgpu::Features::TIMESTAMP_QUERY | wgpu::Features::TIMESTAMP_QUERY_INSIDE_ENCODERS;
+    if !gpu.device.features().contains(needed) {
+        return Vec::new();
+    }
+    let slots = 64u32;
+    let set = gpu.device.create_query_set(&wgpu::QuerySetDescriptor {
+        label: Some("tessera bench phases"),
+        ty: wgpu::QueryType::Timestamp,
+        count: slots,
+    });
+    let buffer = |usage| {
+        gpu.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("tessera bench timestamps"),
+            size: 8 * slots as u64,
+            usage,
+            mapped_at_creation: false,
+        })
+    };
+    let resolve = buffer(wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC);
+    let read = buffer(wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST);
+    let mut encoder = gpu.device.create_command_encoder(&Default::default());
+    let names = stage.prepare_timed(&mut encoder, &set);
+    let n = names.len() as u32 + 1;
+    encoder.resolve_query_set(&set, 0..n, &resolve, 0);
+    encoder.copy_buffer_to_buffer(&resolve, 0, &read, 0, 8 * n as u64);
+    gpu.queue.submit([encoder.finish()]);
+    let bytes = gpu.map_and_copy(&read).expect("timestamps");
+    let ticks: Vec<u64> = bytes[..8 * n as usize]
+        .chunks_exact(8)
+        .map(|c| u64::from_le_bytes(c.try_into().expect("8 bytes")))
+        .collect();
+    let period = gpu.queue.get_timestamp_period() as f64;
+    let mut phases: Vec<(String, f64)> = Vec::new();
+    for (k, name) in names.iter().enumerate() {
+        let ms = ticks[k + 1].saturating_sub(ticks[k]) as f64 * period / 1e6;
+        let name = if name.starts_with("marking round") && k < CC_SEARCH_ROUNDS as usize {
+            "first-split search".to_string()
+        } else if name.starts_with("marking round") {
+            "final marking".to_string()
+        } else {
+            name.clone()
+        };
+        match phases.last_mut() {
+            Some(last) if last.0 == name => last.1 += ms,
+            _ => phases.push((name, ms)),
+        }
+    }
+    phases
 }
 
 /// Median time of the recorded stage run to completion (after a first run that grew the
@@ -50,7 +109,7 @@ fn gpu_time(
     model: &SurfaceModel,
     params: &CcParams,
     repeats: usize,
-) -> (f64, tessera_core::Mesh) {
+) -> (f64, tessera_core::Mesh, Vec<(String, f64)>) {
     let mut stage = CcStage::new(&gpu.device, model, params).expect("stage");
     let status = stage.run_blocking(&gpu.device, &gpu.queue).expect("run");
     let mesh = stage
@@ -65,12 +124,17 @@ fn gpu_time(
         gpu.wait().expect("gpu");
         times.push(t.elapsed().as_secs_f64() * 1e3);
     }
+    let phases = gpu_phases(gpu, &stage);
     gpu.check().expect("no wgpu errors");
-    (median(times), mesh)
+    (median(times), mesh, phases)
 }
 
 pub fn run(assets: &Path, out_dir: &Path, quick: bool) {
-    let gpu = Gpu::new().expect("a wgpu adapter");
+    // Timestamps where the adapter has them, for the phase breakdown.
+    let gpu = Gpu::with_optional_features(
+        wgpu::Features::TIMESTAMP_QUERY | wgpu::Features::TIMESTAMP_QUERY_INSIDE_ENCODERS,
+    )
+    .expect("a wgpu adapter");
     let device = gpu.adapter_name();
     let repeats = if quick { 1 } else { 3 };
     let models: &[&str] = if quick {
@@ -94,7 +158,7 @@ pub fn run(assets: &Path, out_dir: &Path, quick: bool) {
                 tolerance: rel * diag,
                 max_depth: MAX_DEPTH,
             };
-            let (gpu_ms, mesh) = gpu_time(&gpu, &model, &params, repeats);
+            let (gpu_ms, mesh, phases) = gpu_time(&gpu, &model, &params, repeats);
             let e = measure_error(&samples, &mesh);
             let cpu_ms = median(
                 (0..repeats)
@@ -142,6 +206,7 @@ pub fn run(assets: &Path, out_dir: &Path, quick: bool) {
                 uniform_triangles,
                 uniform_ms,
                 gpu_over_uniform: gpu_ms / uniform_ms,
+                phases,
             };
             eprintln!(
                 "cc gpu {} {rel:e}: {} tris, gpu {:.1} ms, cpu {:.1} ms, uniform n={} {:.1} ms",
@@ -177,6 +242,27 @@ fn table(rows: &[Row]) -> String {
             r.uniform_ms,
             r.gpu_over_uniform
         );
+    }
+    if rows.iter().any(|r| !r.phases.is_empty()) {
+        s += "\nWhere the GPU time goes (ms, timestamps after each phase of one run):\n\n| model | ε |";
+        let names: Vec<&str> = rows
+            .iter()
+            .find(|r| !r.phases.is_empty())
+            .map(|r| r.phases.iter().map(|(n, _)| n.as_str()).collect())
+            .unwrap_or_default();
+        for n in &names {
+            s += &format!(" {n} |");
+        }
+        s += "\n|---|---|";
+        s += &"---|".repeat(names.len());
+        s += "\n";
+        for r in rows.iter().filter(|r| !r.phases.is_empty()) {
+            s += &format!("| {} | {:.0e} |", r.model, r.tolerance_rel);
+            for (_, ms) in &r.phases {
+                s += &format!(" {ms:.1} |");
+            }
+            s += "\n";
+        }
     }
     s
 }
