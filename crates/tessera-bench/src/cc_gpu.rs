@@ -56,7 +56,7 @@ fn gpu_phases(gpu: &Gpu, stage: &CcStage) -> Vec<(String, f64)> {
     if !gpu.device.features().contains(needed) {
         return Vec::new();
     }
-    let slots = 64u32;
+    let slots = CcStage::TIMED_PHASES + 1;
     let set = gpu.device.create_query_set(&wgpu::QuerySetDescriptor {
         label: Some("tessera bench phases"),
         ty: wgpu::QueryType::Timestamp,

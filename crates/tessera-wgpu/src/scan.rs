@@ -126,9 +126,10 @@ impl PrefixSum {
     }
 
     /// Records the scan into `pass`: every level's blocks upward, then the offsets back
-    /// down (the top level is a single block and needs none).
-    /// A scan bounded by a live count first writes each level's dispatch size for it
-    /// and dispatches indirectly.
+    /// down (the top level is a single block and needs none). A scan bounded by a live
+    /// count first writes each level's dispatch size for that count (`dispatch_args`, a
+    /// one-invocation kernel) and dispatches indirectly, so that a list sized for its
+    /// capacity costs what it holds.
     pub fn record(&self, pass: &mut wgpu::ComputePass, kernels: &ScanKernels) {
         let block = SCAN_BLOCK as u32;
         if let Some((bind, args)) = &self.indirect {

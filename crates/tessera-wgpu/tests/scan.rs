@@ -1,4 +1,5 @@
-//! The GPU prefix sum against its CPU twin, across one, two and three levels of blocks.
+//! The GPU prefix sum against its CPU twin, across one, two and three levels of blocks,
+//! over a whole buffer and as far as a count written on the GPU.
 
 use tessera_core::scan::exclusive_scan;
 use tessera_wgpu::headless::Gpu;
@@ -36,6 +37,55 @@ fn gpu_scan_matches_the_cpu_twin_at_every_level_count() {
         exclusive_scan(&mut want);
         assert_eq!(&got[..n], &want[..], "n = {n}");
         assert_eq!(got[n], 0xdead_beef, "n = {n}: wrote past the end");
+    }
+    gpu.check().expect("no wgpu validation errors");
+}
+
+#[test]
+fn a_scan_bounded_by_a_live_count_scans_that_many_and_leaves_the_rest() {
+    let gpu = Gpu::new().expect("a wgpu adapter (CI installs Mesa's lavapipe)");
+    let kernels = ScanKernels::new(&gpu.device);
+    // Three levels of blocks for the capacity; the live count (a word written on the
+    // GPU, here at slot 1) sets how many values are scanned and how many workgroups
+    // run (indirect dispatch).
+    let n = 300_000usize;
+    let values: Vec<u32> = (0..n as u32)
+        .map(|i| i.wrapping_mul(2_654_435_761) >> 28)
+        .collect();
+    for live in [0u32, 1, 511, 512, 70_000, 299_999] {
+        let buffer = gpu
+            .device
+            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("scan test"),
+                contents: bytemuck::cast_slice(&values),
+                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+            });
+        let counts = gpu
+            .device
+            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("live count"),
+                contents: bytemuck::cast_slice(&[7u32, live]),
+                usage: wgpu::BufferUsages::STORAGE,
+            });
+        let scan =
+            PrefixSum::with_live_count(&gpu.device, &kernels, &buffer, n as u32, (&counts, 1));
+        let mut encoder = gpu.device.create_command_encoder(&Default::default());
+        {
+            let mut pass = encoder.begin_compute_pass(&Default::default());
+            scan.record(&mut pass, &kernels);
+        }
+        gpu.queue.submit([encoder.finish()]);
+        let got: Vec<u32> = gpu.read_pod(&buffer, n).expect("readback");
+        // `live + 1` values: the list and the total after it.
+        let scanned = (live as usize + 1).min(n);
+        let mut want = values[..scanned].to_vec();
+        exclusive_scan(&mut want);
+        assert_eq!(&got[..scanned], &want[..], "live = {live}");
+        assert_eq!(
+            &got[scanned..],
+            &values[scanned..],
+            "live = {live}: touched the rest"
+        );
     }
     gpu.check().expect("no wgpu validation errors");
 }

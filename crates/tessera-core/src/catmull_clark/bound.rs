@@ -118,8 +118,8 @@ pub struct BoundSum {
     dev: f64,
     dev_side: f64,
     has_vertex: bool,
-    /// Whether the box may reach a vertex, so that `dev` is needed (not on patches
-    /// without one: a quarter of the work of a piece saved).
+    /// Whether the box may reach a vertex, so that `dev` is needed (never on a patch
+    /// without one, whose cells then skip the 16 deviations per piece).
     track_dev: bool,
     // Slab.
     slab: bool,

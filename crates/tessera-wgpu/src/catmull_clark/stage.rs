@@ -254,6 +254,10 @@ fn state_bytes(patches: u32) -> u64 {
 }
 
 impl CcStage {
+    /// Phases [`prepare_timed`](Self::prepare_timed) times: every marking round, leaf
+    /// keys, vertex hash, vertex evaluation, polygons and triangles.
+    pub const TIMED_PHASES: u32 = CC_SEARCH_ROUNDS + 1 + 4;
+
     /// Uploads `model` and sizes the buffers with a first guess.
     pub fn new(device: &wgpu::Device, model: &SurfaceModel, params: &CcParams) -> Result<Self> {
         let caps = CcCapacities::guess(model.mesh.patch_count() as u32);
@@ -387,9 +391,11 @@ impl CcStage {
         self.record(encoder, None);
     }
 
-    /// As [`prepare`](Self::prepare), writing a timestamp into `stamps` after each phase
-    /// (the device needs `TIMESTAMP_QUERY_INSIDE_ENCODERS`): for profiling. Returns the
-    /// phase names, one per timestamp after the first.
+    /// As [`prepare`](Self::prepare), writing a timestamp into `stamps` before the first
+    /// phase and after each (for profiling; the device needs
+    /// `TIMESTAMP_QUERY_INSIDE_ENCODERS`, and `stamps` at least
+    /// [`TIMED_PHASES`](Self::TIMED_PHASES)` + 1` queries). Returns the phase names, one
+    /// per timestamp after the first.
     pub fn prepare_timed(
         &self,
         encoder: &mut wgpu::CommandEncoder,
@@ -435,9 +441,7 @@ impl CcStage {
                     let parity = level % 2;
                     k.mark
                         .dispatch_indirect(&mut pass, &binds.mark[parity], &self.args, LIST_ARGS);
-                    if std::env::var_os("NOSCAN").is_none() {
-                        b.flag_scan.record(&mut pass, &k.scan);
-                    }
+                    b.flag_scan.record(&mut pass, &k.scan);
                     k.split.dispatch_indirect(
                         &mut pass,
                         &binds.split[parity],
