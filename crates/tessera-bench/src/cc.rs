@@ -3,12 +3,11 @@
 //! `OUT/catmull_clark_cpu.{json,md}`.
 
 use std::path::Path;
-use std::time::Instant;
 
 use serde::Serialize;
 use tessera_core::catmull_clark::{
-    surface_samples, tessellate_adaptive, tessellate_uniform, CcParams, CcTessellation, PatchMesh,
-    SurfaceModel, MAX_DEPTH, TREE_DEPTH,
+    surface_samples, tessellate_adaptive, tessellate_uniform, CcParams, PatchMesh, SurfaceModel,
+    MAX_DEPTH, TREE_DEPTH,
 };
 use tessera_core::io::load_control_mesh;
 use tessera_core::measure::{measure_error, ErrorStats};
@@ -53,18 +52,6 @@ const MODELS: [(&str, bool); 10] = [
     ("opensubdiv/catmark_xord_interior.obj", false),
 ];
 
-fn median_ms(repeats: usize, mut f: impl FnMut() -> CcTessellation) -> (f64, CcTessellation) {
-    let mut times = Vec::new();
-    let mut last = None;
-    for _ in 0..repeats {
-        let t = Instant::now();
-        last = Some(f());
-        times.push(t.elapsed().as_secs_f64() * 1e3);
-    }
-    times.sort_by(f64::total_cmp);
-    (times[times.len() / 2], last.expect("repeats ≥ 1"))
-}
-
 pub fn run(assets: &Path, out_dir: &Path, quick: bool) {
     let tolerances: &[f64] = if quick { &[3e-3] } else { &[3e-3, 1e-3, 3e-4] };
     let repeats = if quick { 1 } else { 3 };
@@ -81,7 +68,7 @@ pub fn run(assets: &Path, out_dir: &Path, quick: bool) {
             while uniform.len() < n as usize {
                 let k = uniform.len() as u32 + 1;
                 let (ms, t) =
-                    median_ms(repeats, || tessellate_uniform(&model, k).expect("uniform"));
+                    crate::median_time(repeats, || tessellate_uniform(&model, k).expect("uniform"));
                 uniform.push((
                     t.mesh.triangle_count(),
                     measure_error(&samples, &t.mesh),
@@ -96,7 +83,7 @@ pub fn run(assets: &Path, out_dir: &Path, quick: bool) {
                 tolerance,
                 max_depth: MAX_DEPTH,
             };
-            let (ms, out) = median_ms(repeats, || {
+            let (ms, out) = crate::median_time(repeats, || {
                 tessellate_adaptive(&model, &params).expect("adaptive")
             });
             let e = measure_error(&samples, &out.mesh);
@@ -145,9 +132,7 @@ pub fn run(assets: &Path, out_dir: &Path, quick: bool) {
             rows.push(row);
         }
     }
-    let json = serde_json::to_string_pretty(&rows).expect("rows serialize");
-    std::fs::write(out_dir.join("catmull_clark_cpu.json"), json).expect("write json");
-    std::fs::write(out_dir.join("catmull_clark_cpu.md"), table(&rows)).expect("write md");
+    crate::write_results(out_dir, "catmull_clark_cpu", &rows, table(&rows));
 }
 
 fn table(rows: &[Row]) -> String {

@@ -7,6 +7,8 @@ use std::path::Path;
 use std::time::Instant;
 
 use serde::Serialize;
+
+use crate::median;
 use tessera_core::catmull_clark::{
     surface_samples, tessellate_adaptive, tessellate_uniform, CcParams, PatchMesh, SurfaceModel,
     MAX_DEPTH, TREE_DEPTH,
@@ -41,11 +43,6 @@ struct Row {
     /// Where the GPU time goes (timestamps after each phase, one run), if the adapter
     /// has timestamp queries: (phase, ms).
     phases: Vec<(String, f64)>,
-}
-
-fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(f64::total_cmp);
-    v[v.len() / 2]
 }
 
 /// One run with a timestamp after each phase of the stage script: (phase, ms). The
@@ -215,9 +212,7 @@ pub fn run(assets: &Path, out_dir: &Path, quick: bool) {
             rows.push(row);
         }
     }
-    let json = serde_json::to_string_pretty(&rows).expect("rows serialize");
-    std::fs::write(out_dir.join("catmull_clark_gpu.json"), json).expect("write json");
-    std::fs::write(out_dir.join("catmull_clark_gpu.md"), table(&rows)).expect("write md");
+    crate::write_results(out_dir, "catmull_clark_gpu", &rows, table(&rows));
 }
 
 fn table(rows: &[Row]) -> String {

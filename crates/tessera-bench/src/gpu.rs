@@ -8,6 +8,8 @@ use std::time::Instant;
 
 use glam::Vec3;
 use serde::Serialize;
+
+use crate::median;
 use tessera_core::bezier::{
     tessellate_adaptive, AdaptiveParams, BezierModel, EdgeTest, PreparedBezier,
 };
@@ -62,11 +64,6 @@ fn single_patch(base: &BezierModel) -> BezierModel {
     let net = base.nets[4];
     let points: Vec<Vec3> = net.iter().map(|&i| base.points[i as usize]).collect();
     BezierModel::from_nets(points, vec![std::array::from_fn(|k| k as u32)])
-}
-
-fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(f64::total_cmp);
-    v[v.len() / 2]
 }
 
 pub fn run(assets: &Path, out_dir: &Path, quick: bool) {
@@ -178,9 +175,7 @@ pub fn run(assets: &Path, out_dir: &Path, quick: bool) {
         repeats,
         rows,
     };
-    let json = serde_json::to_string_pretty(&report).expect("serialize");
-    std::fs::write(out_dir.join("bezier_gpu.json"), json).expect("write json");
-    std::fs::write(out_dir.join("bezier_gpu.md"), table(&report)).expect("write md");
+    crate::write_results(out_dir, "bezier_gpu", &report, table(&report));
 }
 
 fn table(r: &GpuReport) -> String {

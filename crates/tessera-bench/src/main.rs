@@ -63,7 +63,14 @@ impl Row {
     }
 }
 
-fn median_time(repeats: usize, mut f: impl FnMut() -> Tessellation) -> (f64, Tessellation) {
+/// The median of some timings.
+pub(crate) fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    v[v.len() / 2]
+}
+
+/// Median time in ms of `repeats` runs of `f`, and the last run's result.
+pub(crate) fn median_time<T>(repeats: usize, mut f: impl FnMut() -> T) -> (f64, T) {
     let mut times = Vec::with_capacity(repeats);
     let mut last = None;
     for _ in 0..repeats {
@@ -72,8 +79,19 @@ fn median_time(repeats: usize, mut f: impl FnMut() -> Tessellation) -> (f64, Tes
         times.push(t.elapsed().as_secs_f64() * 1e3);
         last = Some(out);
     }
-    times.sort_by(f64::total_cmp);
-    (times[times.len() / 2], last.expect("repeats > 0"))
+    (median(times), last.expect("repeats > 0"))
+}
+
+/// Writes `OUT/NAME.json` and `OUT/NAME.md` (the table `cargo xtask bench` pastes).
+pub(crate) fn write_results(
+    out_dir: &Path,
+    name: &str,
+    rows: &impl serde::Serialize,
+    table: String,
+) {
+    let json = serde_json::to_string_pretty(rows).expect("rows serialize");
+    std::fs::write(out_dir.join(format!("{name}.json")), json).expect("write json");
+    std::fs::write(out_dir.join(format!("{name}.md")), table).expect("write md");
 }
 
 fn main() {
@@ -178,9 +196,7 @@ fn main() {
         rows.extend(uniform);
     }
     std::fs::create_dir_all(&out_dir).expect("create bench output folder");
-    let json = serde_json::to_string_pretty(&rows).expect("serialize");
-    std::fs::write(out_dir.join("bezier_cpu.json"), json).expect("write json");
-    std::fs::write(out_dir.join("bezier_cpu.md"), table(&rows)).expect("write md");
+    write_results(&out_dir, "bezier_cpu", &rows, table(&rows));
     println!("{}", table(&rows));
 }
 
