@@ -126,7 +126,7 @@ fn gpu_time(
     (median(times), mesh, phases)
 }
 
-pub fn run(assets: &Path, out_dir: &Path, quick: bool) {
+pub fn run(assets: &Path, out_dir: &Path, quick: bool, model_filter: Option<&str>) {
     // Timestamps where the adapter has them, for the phase breakdown.
     let gpu = Gpu::with_optional_features(
         wgpu::Features::TIMESTAMP_QUERY | wgpu::Features::TIMESTAMP_QUERY_INSIDE_ENCODERS,
@@ -145,7 +145,10 @@ pub fn run(assets: &Path, out_dir: &Path, quick: bool) {
         ]
     };
     let mut rows = Vec::new();
-    for file in models {
+    for file in models
+        .iter()
+        .filter(|f| model_filter.is_none_or(|m| f.contains(m)))
+    {
         let control = load_control_mesh(&assets.join(file)).expect("shipped mesh");
         let model = SurfaceModel::new(PatchMesh::new(&control).expect("valid"), TREE_DEPTH);
         let diag = control.bbox_diag();

@@ -109,6 +109,12 @@ fn main() {
         .position(|a| a == "--only")
         .and_then(|i| args.get(i + 1))
         .cloned();
+    // `--model NAME`: only the Catmull-Clark GPU models whose file name contains NAME.
+    let model = args
+        .iter()
+        .position(|a| a == "--model")
+        .and_then(|i| args.get(i + 1))
+        .cloned();
     std::fs::create_dir_all(&out_dir).expect("create bench output folder");
     // `--only gpu|cpu|cc|ccgpu`: one part of the bench (cpu is the Bézier CPU table).
     let part = |name: &str| only.as_deref().is_none_or(|o| o == name);
@@ -119,7 +125,7 @@ fn main() {
         cc::run(&assets.join(".."), &out_dir, quick);
     }
     if part("ccgpu") {
-        cc_gpu::run(&assets.join(".."), &out_dir, quick);
+        cc_gpu::run(&assets.join(".."), &out_dir, quick, model.as_deref());
     }
     if !part("cpu") {
         return;
