@@ -37,17 +37,16 @@ fn main(@builtin(global_invocation_id) gid: vec3u, @builtin(num_workgroups) grou
     let depth = cell.trial_depth >> 8u;
     let leaf = bound <= cc_params.tolerance || depth >= cc_params.max_depth;
     flags[c] = select(1u, 0u, leaf);
+    let t = cell.trial_depth & 0xffu;
     if !leaf {
         // A trial ends with ku·kv + 3 · (its splits) leaves: each split turns one cell
         // into four.
-        let t = cell.trial_depth & 0xffu;
-        atomicAdd(&cc_state.trials[cell.patch_id * CC_TRIALS + t], 1u);
+        atomicAdd(&cc_state.trials[cc_trial_slot(0u, cell.patch_id, t)], 1u);
     } else {
-        if cc_state.round >= CC_SEARCH_ROUNDS {
-            atomicMax(&cc_state.max_bound_bits, bitcast<u32>(min(bound, CC_INFINITY)));
-            if bound > cc_params.tolerance {
-                atomicAdd(&cc_state.unmet, 1u);
-            }
+        // What the output will guarantee if this trial is the patch's best.
+        atomicMax(&cc_state.trials[cc_trial_slot(1u, cell.patch_id, t)], bitcast<u32>(min(bound, CC_INFINITY)));
+        if bound > cc_params.tolerance {
+            atomicAdd(&cc_state.trials[cc_trial_slot(2u, cell.patch_id, t)], 1u);
         }
     }
 }

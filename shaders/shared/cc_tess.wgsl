@@ -5,7 +5,9 @@
 #include "shared/types.wgsl"
 #include "shared/cc_patch.wgsl"
 
-// `tessera_core::gpu_types::CcState`, then the leaf count of every (patch, trial).
+// `tessera_core::gpu_types::CcState`, then per (patch, trial) three arrays of
+// `patch_count · CC_TRIALS` words: splits so far, the largest leaf bound (f32 bits) and
+// the leaves over the tolerance (see `cc_trial_slot`).
 struct CcCounters {
     round: u32,
     count: u32,
@@ -17,8 +19,8 @@ struct CcCounters {
     unmet: atomic<u32>,
     max_bound_bits: atomic<u32>,
     vertices: u32,
-    pad0: u32,
-    pad1: u32,
+    search_leaves: u32,
+    pad: u32,
     trials: array<atomic<u32>>,
 }
 
@@ -131,6 +133,12 @@ fn cc_edge_canonical(topo: CcPatchTopo, k: u32, t: u32) -> u32 {
     return select(cc_params.grid - t, t, topo.quad[k] < topo.quad[(k + 1u) % 4u]);
 }
 
+// Where trial t of patch p keeps its splits (`array` 0), its largest leaf bound (1) and
+// its leaves over the tolerance (2) in `cc_state.trials`.
+fn cc_trial_slot(array: u32, p: u32, t: u32) -> u32 {
+    return (array * cc_params.patch_count + p) * CC_TRIALS + t;
+}
+
 // Best (leaves, trial) before this round.
 fn best_before(p: u32) -> vec2u {
     if cc_state.round == 0u {
@@ -147,16 +155,11 @@ fn needed(t: u32, b: vec2u) -> bool {
     return area < b.x || (area == b.x && t < b.y);
 }
 
-// The trials of patch p in this round, as a bit tried (bit t): in search rounds those of
-// the round that are needed, in the final round the best one.
+// The trials of patch p in this round, as a bit tried (bit t): those of the round that
+// could still beat or tie its best so far.
 fn round_trials(p: u32) -> vec2u {
     var tried = vec2u(0u);
-    if cc_roots[p] == CC_NO_ROOT {
-        return tried;
-    }
-    if cc_state.round >= CC_SEARCH_ROUNDS {
-        let t = best[p].y;
-        tried[t / 32u] = 1u << (t % 32u);
+    if cc_roots[p] == CC_NO_ROOT || cc_state.round >= CC_SEARCH_ROUNDS {
         return tried;
     }
     let b = best_before(p);
@@ -172,7 +175,9 @@ fn cc_has_trial(tried: vec2u, t: u32) -> bool {
     return (tried[t / 32u] & (1u << (t % 32u))) != 0u;
 }
 
-// Indirect dispatch arguments for `items` invocations of 64 (as `kernel::groups_2d`).
+// Indirect dispatch arguments for `items` invocations of 64 (as `kernel::groups_2d`), at
+// word `base`: 0 the current cell list, 3 the leaves, 6 the hash items, 9 the search's
+// leaves.
 fn cc_write_args(base: u32, items: u32) {
     let g = (items + 63u) / 64u;
     args[base] = min(g, 32768u);

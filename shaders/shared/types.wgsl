@@ -156,4 +156,8 @@ struct CcTessParams {
     leaf_capacity: u32,
     poly_capacity: u32,
     index_capacity: u32,
+    search_leaf_capacity: u32,
+    pad0: u32,
+    pad1: u32,
+    pad2: u32,
 }

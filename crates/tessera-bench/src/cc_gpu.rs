@@ -13,7 +13,6 @@ use tessera_core::catmull_clark::{
     surface_samples, tessellate_adaptive, tessellate_uniform, CcParams, PatchMesh, SurfaceModel,
     MAX_DEPTH, TREE_DEPTH,
 };
-use tessera_core::gpu_types::CC_SEARCH_ROUNDS;
 use tessera_core::io::load_control_mesh;
 use tessera_core::measure::measure_error;
 use tessera_wgpu::catmull_clark::CcStage;
@@ -45,9 +44,8 @@ struct Row {
     phases: Vec<(String, f64)>,
 }
 
-/// One run with a timestamp after each phase of the stage script: (phase, ms). The
-/// search rounds are summed, the final marking round kept apart. Empty without
-/// timestamp queries.
+/// One run with a timestamp after each phase of the stage script: (phase, ms), the
+/// search rounds summed. Empty without timestamp queries.
 fn gpu_phases(gpu: &Gpu, stage: &CcStage) -> Vec<(String, f64)> {
     let needed = wgpu::Features::TIMESTAMP_QUERY | wgpu::Features::TIMESTAMP_QUERY_INSIDE_ENCODERS;
     if !gpu.device.features().contains(needed) {
@@ -84,10 +82,8 @@ fn gpu_phases(gpu: &Gpu, stage: &CcStage) -> Vec<(String, f64)> {
     let mut phases: Vec<(String, f64)> = Vec::new();
     for (k, name) in names.iter().enumerate() {
         let ms = ticks[k + 1].saturating_sub(ticks[k]) as f64 * period / 1e6;
-        let name = if name.starts_with("marking round") && k < CC_SEARCH_ROUNDS as usize {
+        let name = if name.starts_with("search round") {
             "first-split search".to_string()
-        } else if name.starts_with("marking round") {
-            "final marking".to_string()
         } else {
             name.clone()
         };

@@ -364,18 +364,24 @@ pub struct CcTessParams {
     pub leaf_capacity: u32,
     pub poly_capacity: u32,
     pub index_capacity: u32,
+    /// Leaves of every trial of the search, kept until the best one is known.
+    pub search_leaf_capacity: u32,
+    pub pad: [u32; 3],
 }
 
-/// Counters of the adaptive Catmull-Clark kernels (followed in the same buffer by the
-/// leaf count of every trial of every patch), read back to check capacities.
+/// Counters of the adaptive Catmull-Clark kernels, read back to check capacities. In
+/// the same buffer follow, per (patch, trial): the splits so far, the largest leaf
+/// bound (f32 bits) and the leaves over the tolerance (three arrays of
+/// `patches · CC_TRIALS` words).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable, PartialEq, Eq)]
 pub struct CcState {
-    /// Current round of the first-split search; [`CC_SEARCH_ROUNDS`] is the final one.
+    /// Current round of the first-split search ([`CC_SEARCH_ROUNDS`] after it).
     pub round: u32,
     /// Cells in the current list.
     pub count: u32,
-    /// Leaves of the final round so far (also beyond capacity: what is needed).
+    /// Leaves of the output: those of each patch's best trial (also beyond capacity:
+    /// what is needed).
     pub leaves: u32,
     /// Non-zero if some buffer was too small (nothing was written out of bounds).
     pub overflow: u32,
@@ -390,5 +396,7 @@ pub struct CcState {
     pub max_bound_bits: u32,
     /// Distinct output vertices.
     pub vertices: u32,
-    pub pad: [u32; 2],
+    /// Leaves of every trial of the search so far (also beyond capacity).
+    pub search_leaves: u32,
+    pub pad: u32,
 }

@@ -72,6 +72,10 @@ pub const SOURCES: &[(&str, &str)] = &[
         include_str!("../../../shaders/cc_choose.wgsl"),
     ),
     (
+        "cc_collect.wgsl",
+        include_str!("../../../shaders/cc_collect.wgsl"),
+    ),
+    (
         "cc_leaf_keys.wgsl",
         include_str!("../../../shaders/cc_leaf_keys.wgsl"),
     ),

@@ -148,6 +148,21 @@ fn gpu_adaptive_matches_the_cpu_reference() {
             "{name}: the comparison misses a different mesh"
         );
     }
+    // Depth-limited leaves over the tolerance: counted and bounded as on the CPU.
+    let model = model("catmull_clark/spot_control_mesh.obj");
+    let params = CcParams {
+        tolerance: 3e-4 * size(&model),
+        max_depth: 1,
+    };
+    let cpu = tessellate_adaptive(&model, &params).expect("cpu");
+    let (mesh, status) = run(&gpu, &model, &params, None);
+    assert!(
+        cpu.unmet > 0,
+        "the case must stop leaves at the depth limit"
+    );
+    assert_eq!(status.state.unmet as usize, cpu.unmet, "unmet");
+    assert!((status.max_bound() as f64 - cpu.max_bound).abs() <= 1e-5 * cpu.max_bound);
+    same_mesh(&mesh, &cpu.mesh, size(&model)).expect("depth-limited mesh");
 }
 
 #[test]
@@ -164,6 +179,7 @@ fn tiny_capacities_grow_to_the_same_mesh_and_runs_are_byte_identical() {
     let tiny = CcCapacities {
         cells: 1,
         leaves: 1,
+        search_leaves: 1,
         poly: 1,
         indices: 1,
         hash_slots: 1,

@@ -221,12 +221,15 @@ fn tessellate_with_splits(
         };
         // Square splits first, then near-square rectangles, each only if it could still
         // beat the best so far (a split into ku·kv cells has at least that many leaves).
-        let mut best = (usize::MAX, (1, 1));
+        // The leaves of the best so far are kept, so it is not marked a second time.
+        let mut best = usize::MAX;
+        let mut best_leaves: Vec<(Cell, f64)> = Vec::new();
+        let mut trial_leaves: Vec<(Cell, f64)> = Vec::new();
         for &split in splits {
-            if (split.0 * split.1) as usize >= best.0 {
+            if (split.0 * split.1) as usize >= best {
                 continue;
             }
-            let mut count = 0usize;
+            trial_leaves.clear();
             for cell in base_cells(split) {
                 mark(
                     &mut eval,
@@ -234,31 +237,23 @@ fn tessellate_with_splits(
                     cell,
                     params.max_depth,
                     params.tolerance,
-                    &mut |_, _| count += 1,
+                    &mut |c, bound| trial_leaves.push((c, bound)),
                 );
-                if count >= best.0 {
+                if trial_leaves.len() >= best {
                     break;
                 }
             }
-            if count < best.0 {
-                best = (count, split);
+            if trial_leaves.len() < best {
+                best = trial_leaves.len();
+                std::mem::swap(&mut best_leaves, &mut trial_leaves);
             }
         }
-        for cell in base_cells(best.1) {
-            mark(
-                &mut eval,
-                p,
-                cell,
-                params.max_depth,
-                params.tolerance,
-                &mut |c, bound| {
-                    if bound > params.tolerance {
-                        out.unmet += 1;
-                    }
-                    out.max_bound = out.max_bound.max(bound);
-                    leaves.push((p, c));
-                },
-            );
+        for (c, bound) in best_leaves {
+            if bound > params.tolerance {
+                out.unmet += 1;
+            }
+            out.max_bound = out.max_bound.max(bound);
+            leaves.push((p, c));
         }
     }
     out.leaves = leaves.len();

@@ -8,9 +8,10 @@
 //! |---|---|---|---|
 //! | 1 | `cc_roots` count, scan, emit, finish | patch | root cells of the round, list size, dispatch |
 //! | 2 | `cc_mark` (indirect) | cell | flatness bound → split flag; leaves per (patch, split) |
-//! | 3 | scan, `cc_split` (indirect), finish | cell | next list (quadrants), leaves (final round) |
-//! | 4 | `cc_choose`, `next_round` | patch | best first split so far |
-//! |   | 2–3 repeat per level (`max_depth + 1`), 1–4 per round (8 search rounds + the final one) | | |
+//! | 3 | scan, `cc_split` (indirect), finish | cell | next list (quadrants), the search's leaves |
+//! | 4 | `cc_choose`, `next_round` | patch | best first split so far (after the last round: the run's bound) |
+//! |   | 2–3 repeat per level (`max_depth + 1`), 1–4 per round (8 rounds) | | |
+//! | 4b | `cc_collect` count, scan, emit, finish (indirect) | search leaf | leaves of each patch's best split |
 //! | 5 | `cc_leaf_keys` (indirect) | leaf | corner keys and points |
 //! | 6 | `cc_hash_*` (insert, number, gather) | corner | vertex ids, one point per vertex |
 //! | 7 | `cc_vertex_eval` | vertex | vertices (position, normal, patch u v, patch) |
@@ -19,7 +20,8 @@
 //!
 //! The first split of each patch (`ku × kv` cells, up to 8 × 8) is the one with the fewest
 //! leaves, as on the CPU; the search runs in rounds of growing `ku · kv`, and a patch
-//! skips the splits that cannot beat its best so far.
+//! skips the splits that cannot beat its best so far. Every trial's leaves are kept
+//! until the search is over, so the best split is not marked a second time.
 //!
 //! Capacities: every list, the leaves, polygons, indices and the hash table. Kernels
 //! never write past them; the counters record what the run needed, and
@@ -67,6 +69,7 @@ mod slot {
     pub const CELLS_IN: u32 = 53;
     pub const FLAGS: u32 = 54;
     pub const LEAVES: u32 = 55;
+    pub const SEARCH_LEAVES: u32 = 61;
     pub const BEST: u32 = 56;
     pub const ROOT_OFFSETS: u32 = 57;
     pub const ARGS: u32 = 58;
@@ -93,6 +96,8 @@ const LIST_ARGS: u64 = 0;
 const LEAF_ARGS: u64 = 12;
 /// ... and [6..9] the hash items (four corner keys per leaf).
 const ITEM_ARGS: u64 = 24;
+/// ... and [9..12] the search's leaves.
+const SEARCH_LEAF_ARGS: u64 = 36;
 
 /// Every kernel of the stage, compiled once per device.
 pub struct CcKernels {
@@ -104,6 +109,9 @@ pub struct CcKernels {
     split_finish: Kernel,
     choose: Kernel,
     next_round: Kernel,
+    collect_count: Kernel,
+    collect_emit: Kernel,
+    collect_finish: Kernel,
     leaf_keys: Kernel,
     gather_points: Kernel,
     polygon_count: Kernel,
@@ -127,6 +135,9 @@ impl CcKernels {
             split_finish: k("cc_split.wgsl", "finish"),
             choose: k("cc_choose.wgsl", "main"),
             next_round: k("cc_choose.wgsl", "next_round"),
+            collect_count: k("cc_collect.wgsl", "count"),
+            collect_emit: k("cc_collect.wgsl", "emit"),
+            collect_finish: k("cc_collect.wgsl", "finish"),
             leaf_keys: k("cc_leaf_keys.wgsl", "main"),
             gather_points: k("cc_hash_number.wgsl", "gather_points"),
             polygon_count: k("cc_polygon.wgsl", "count"),
@@ -147,6 +158,8 @@ pub struct CcCapacities {
     pub cells: u32,
     /// Leaves of the final tessellation.
     pub leaves: u32,
+    /// Leaves of every first split tried (those of the best are kept).
+    pub search_leaves: u32,
     /// Polygon vertices (leaf corners plus the points on their sides).
     pub poly: u32,
     /// Indices (3 per triangle).
@@ -162,6 +175,7 @@ impl CcCapacities {
         CcCapacities {
             cells: 64 * p,
             leaves: 16 * p,
+            search_leaves: 48 * p,
             poly: 96 * p,
             indices: 3 * 96 * p,
             hash_slots: 2 * 64 * p,
@@ -199,6 +213,7 @@ struct Buffers {
     cells: [wgpu::Buffer; 2],
     flags: wgpu::Buffer,
     leaves: wgpu::Buffer,
+    search_leaves: wgpu::Buffer,
     keys: wgpu::Buffer,
     item_points: wgpu::Buffer,
     vertex_points: wgpu::Buffer,
@@ -208,6 +223,7 @@ struct Buffers {
     hash: CcVertexHash,
     output: MeshBuffers,
     flag_scan: PrefixSum,
+    collect_scan: PrefixSum,
     poly_scan: PrefixSum,
 }
 
@@ -222,6 +238,9 @@ struct Binds {
     split_finish: wgpu::BindGroup,
     choose: wgpu::BindGroup,
     next_round: wgpu::BindGroup,
+    collect_count: wgpu::BindGroup,
+    collect_emit: wgpu::BindGroup,
+    collect_finish: wgpu::BindGroup,
     leaf_keys: wgpu::BindGroup,
     gather_points: wgpu::BindGroup,
     polygon_count: wgpu::BindGroup,
@@ -249,13 +268,15 @@ pub struct CcStage {
     binds: Binds,
 }
 
+/// The counters and, per (patch, trial), splits, largest leaf bound and leaves over the
+/// tolerance.
 fn state_bytes(patches: u32) -> u64 {
-    (std::mem::size_of::<CcState>() as u64) + 4 * (CC_TRIALS as u64) * patches.max(1) as u64
+    (std::mem::size_of::<CcState>() as u64) + 3 * 4 * (CC_TRIALS as u64) * patches.max(1) as u64
 }
 
 impl CcStage {
-    /// Phases [`prepare_timed`](Self::prepare_timed) times: every marking round, leaf
-    /// keys, vertex hash, vertex evaluation, polygons and triangles.
+    /// Phases [`prepare_timed`](Self::prepare_timed) times: every search round, leaf
+    /// collection, leaf keys, vertex hash, vertex evaluation, polygons and triangles.
     pub const TIMED_PHASES: u32 = CC_SEARCH_ROUNDS + 1 + 4;
 
     /// Uploads `model` and sizes the buffers with a first guess.
@@ -295,7 +316,7 @@ impl CcStage {
         let root_scan = PrefixSum::new(device, &kernels.scan, &root_offsets, patch_count + 1);
         let args = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("tessera cc dispatch args"),
-            size: 36,
+            size: 48,
             usage: wgpu::BufferUsages::STORAGE
                 | wgpu::BufferUsages::INDIRECT
                 | wgpu::BufferUsages::COPY_DST,
@@ -426,7 +447,7 @@ impl CcStage {
         encoder.clear_buffer(&self.state, 0, None);
         encoder.clear_buffer(&b.hash.status, 0, None);
         let p = self.patch_count;
-        for round in 0..=CC_SEARCH_ROUNDS {
+        for round in 0..CC_SEARCH_ROUNDS {
             {
                 let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                     label: Some("tessera cc marking"),
@@ -451,13 +472,33 @@ impl CcStage {
                     k.split_finish
                         .dispatch(&mut pass, &binds.split_finish, 1, 1);
                 }
-                if round < CC_SEARCH_ROUNDS {
-                    k.choose.dispatch(&mut pass, &binds.choose, p, 64);
-                    k.next_round.dispatch(&mut pass, &binds.next_round, 1, 1);
-                }
+                k.choose.dispatch(&mut pass, &binds.choose, p, 64);
+                k.next_round.dispatch(&mut pass, &binds.next_round, 1, 1);
             }
-            stamp(encoder, &format!("marking round {round}"));
+            stamp(encoder, &format!("search round {round}"));
         }
+        {
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("tessera cc leaf collection"),
+                timestamp_writes: None,
+            });
+            k.collect_count.dispatch_indirect(
+                &mut pass,
+                &binds.collect_count,
+                &self.args,
+                SEARCH_LEAF_ARGS,
+            );
+            b.collect_scan.record(&mut pass, &k.scan);
+            k.collect_emit.dispatch_indirect(
+                &mut pass,
+                &binds.collect_emit,
+                &self.args,
+                SEARCH_LEAF_ARGS,
+            );
+            k.collect_finish
+                .dispatch(&mut pass, &binds.collect_finish, 1, 1);
+        }
+        stamp(encoder, "leaf collection");
         {
             let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                 label: Some("tessera cc leaf keys"),
@@ -560,6 +601,7 @@ impl CcStage {
         let mut caps = CcCapacities {
             cells: grow(s.need_cells, old.cells),
             leaves: grow(s.leaves, old.leaves),
+            search_leaves: grow(s.search_leaves, old.search_leaves),
             poly: grow(s.need_poly, old.poly),
             indices: grow(s.need_indices, old.indices),
             hash_slots: old.hash_slots,
@@ -632,6 +674,11 @@ impl CcStage {
     }
 }
 
+/// The word of the state buffer at this byte offset of [`CcState`].
+fn state_word(offset: usize) -> u32 {
+    (offset / 4) as u32
+}
+
 fn status_size() -> u64 {
     (std::mem::size_of::<CcState>() + std::mem::size_of::<CcHashStatus>() + 4) as u64
 }
@@ -646,6 +693,8 @@ fn tess_params(patch_count: u32, params: &CcParams, caps: CcCapacities) -> CcTes
         leaf_capacity: caps.leaves,
         poly_capacity: caps.poly,
         index_capacity: caps.indices,
+        search_leaf_capacity: caps.search_leaves,
+        pad: [0; 3],
     }
 }
 
@@ -660,6 +709,7 @@ impl Buffers {
         let caps = CcCapacities {
             cells: caps.cells.max(1),
             leaves: caps.leaves.max(1),
+            search_leaves: caps.search_leaves.max(1),
             poly: caps.poly.max(4),
             indices: caps.indices.max(3),
             hash_slots: caps.hash_slots.max(1).next_power_of_two(),
@@ -672,6 +722,7 @@ impl Buffers {
         for (what, bytes) in [
             ("cell list", caps.cells as u64 * 16),
             ("leaf", caps.leaves as u64 * 16),
+            ("search leaf", caps.search_leaves as u64 * 16),
             ("polygon", caps.poly as u64 * 16),
             ("index", caps.indices as u64 * 4),
             (
@@ -690,26 +741,43 @@ impl Buffers {
             usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
         });
         let cell_bytes = std::mem::size_of::<CcCell>() as u64;
+        // Split flags of a cell list, then keep flags of the search's leaves.
         let flags = storage(
             device,
-            "tessera cc split flags",
-            4 * (caps.cells as u64 + 1),
+            "tessera cc flags",
+            4 * (caps.cells.max(caps.search_leaves) as u64 + 1),
         );
-        // Scanned as far as the list is filled (CcState::count, word 1).
-        let flag_scan =
-            PrefixSum::with_live_count(device, &kernels.scan, &flags, caps.cells + 1, (state, 1));
+        // Scanned as far as the list is filled (CcState::count), and as far as the search
+        // found leaves (CcState::search_leaves).
+        let flag_scan = PrefixSum::with_live_count(
+            device,
+            &kernels.scan,
+            &flags,
+            caps.cells + 1,
+            (state, state_word(std::mem::offset_of!(CcState, count))),
+        );
+        let collect_scan = PrefixSum::with_live_count(
+            device,
+            &kernels.scan,
+            &flags,
+            caps.search_leaves + 1,
+            (
+                state,
+                state_word(std::mem::offset_of!(CcState, search_leaves)),
+            ),
+        );
         let poly_offsets = storage(
             device,
             "tessera cc polygon offsets",
             4 * (caps.leaves as u64 + 1 + 4 * caps.leaves as u64),
         );
-        // As far as there are leaves (CcState::leaves, word 2).
+        // As far as there are leaves (CcState::leaves).
         let poly_scan = PrefixSum::with_live_count(
             device,
             &kernels.scan,
             &poly_offsets,
             caps.leaves + 1,
-            (state, 2),
+            (state, state_word(std::mem::offset_of!(CcState, leaves))),
         );
         let point_bytes = std::mem::size_of::<CcPoint>() as u64;
         Ok(Buffers {
@@ -721,6 +789,11 @@ impl Buffers {
             ],
             flags,
             leaves: storage(device, "tessera cc leaves", cell_bytes * caps.leaves as u64),
+            search_leaves: storage(
+                device,
+                "tessera cc search leaves",
+                cell_bytes * caps.search_leaves as u64,
+            ),
             keys: storage(device, "tessera cc keys", 8 * items as u64),
             item_points: storage(device, "tessera cc item points", point_bytes * items as u64),
             vertex_points: storage(
@@ -734,6 +807,7 @@ impl Buffers {
             hash: CcVertexHash::new(device, &kernels.hash, items, caps.hash_slots),
             output: MeshBuffers::with_capacity(device, items, caps.indices),
             flag_scan,
+            collect_scan,
             poly_scan,
         })
     }
@@ -762,6 +836,7 @@ impl Binds {
                 (slot::CELLS_OUT, &b.cells[1 - parity]),
                 (slot::FLAGS, &b.flags),
                 (slot::LEAVES, &b.leaves),
+                (slot::SEARCH_LEAVES, &b.search_leaves),
                 (slot::BEST, best),
                 (slot::ROOT_OFFSETS, root_offsets),
                 (slot::ARGS, args),
@@ -796,6 +871,9 @@ impl Binds {
             split_finish: k.split_finish.bind(device, &even),
             choose: k.choose.bind(device, &even),
             next_round: k.next_round.bind(device, &even),
+            collect_count: k.collect_count.bind(device, &even),
+            collect_emit: k.collect_emit.bind(device, &even),
+            collect_finish: k.collect_finish.bind(device, &even),
             leaf_keys: k.leaf_keys.bind(device, &even),
             gather_points: k.gather_points.bind(device, &even),
             polygon_count: k.polygon_count.bind(device, &even),
