@@ -1,7 +1,8 @@
 // One invocation per leaf: the canonical keys of its four corners (items 4·leaf + k,
 // in corner order) for the vertex hash, with the point each key stands for; invocation
 // 0 tells the hash how many items there are.
-// Twin: `gpu_pipeline::leaf_keys`.
+// Twin: the corner keys of `tessera_core::catmull_clark::keys::point_key`, as the CPU
+// reference adds them per leaf (`adaptive::tessellate_with_splits`, step 2).
 
 #include "shared/cc_tess.wgsl"
 

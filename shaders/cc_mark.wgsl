@@ -2,7 +2,7 @@
 // (`shared/cc_bound.wgsl`), and the decision: a leaf if the bound is within the tolerance
 // or the cell is at the deepest level, else split (flag 1, scanned next). Splits are
 // counted per (patch, trial) for the first-split search.
-// Twin: `gpu_pipeline::mark`.
+// Twin: `tessera_core::catmull_clark::adaptive::mark` (the bound: `bound::box_bound`).
 
 #include "shared/cc_tess.wgsl"
 #include "shared/cc_bound.wgsl"

@@ -8,7 +8,8 @@
 // halves, else there is none. On the patch boundary the points come from the patch
 // across the edge, whose own first split may differ: its root cells divide the edge in
 // steps of grid / k, and inside each step the same dyadic search applies.
-// Twin: `gpu_pipeline::side_points`.
+// The CPU reference builds the same polygons from sorted lines of marked points instead
+// (`Lines::between` in `tessera_core::catmull_clark::adaptive`, step 2).
 
 #include "shared/cc_tess.wgsl"
 #include "shared/cc_poly.wgsl"

@@ -3,7 +3,8 @@
 // or tie the patch's best so far (a split into ku·kv cells has at least ku·kv leaves);
 // in the final round, the cells of the best split. `count` writes each patch's number of
 // cells, the host scans them, `emit` writes the cells, `finish` starts the level loop.
-// Twin: `gpu_pipeline::{root_count, root_emit}`.
+// Twin: the first splits of `tessera_core::catmull_clark::adaptive::tessellate_with_splits`
+// (`base_cells`), grouped into rounds by `gpu_types::cc_trial_round`.
 
 #include "shared/cc_tess.wgsl"
 

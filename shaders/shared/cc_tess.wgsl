@@ -1,6 +1,7 @@
 // What the kernels of the adaptive Catmull-Clark pipeline share (bindings 50-59): the
 // parameters, the counters, the first-split trials, grid parameters and point keys.
-// Twins: `tessera_core::catmull_clark::gpu_pipeline`.
+// Twins: `tessera_core::gpu_types::{cc_trial_split, cc_trial_round}`,
+// `tessera_core::catmull_clark::keys::point_key`.
 
 #include "shared/types.wgsl"
 #include "shared/cc_patch.wgsl"
