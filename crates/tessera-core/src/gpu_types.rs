@@ -312,7 +312,7 @@ pub struct CcCell {
 
 /// First splits tried per patch: 4 odd squares, then the 14 near-square rectangles.
 pub const CC_TRIALS: u32 = 18;
-/// Rounds of the first-split search (trials grouped by `ku · kv`), then the final one.
+/// Rounds of the first-split search (trials grouped by `ku · kv`).
 pub const CC_SEARCH_ROUNDS: u32 = 8;
 /// No patch across an edge (an open boundary or a hole).
 pub const CC_NO_NEIGHBOUR: u32 = u32::MAX;
