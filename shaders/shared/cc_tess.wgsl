@@ -46,11 +46,12 @@ fn cc_trial_split(t: u32) -> vec2u {
     return select(vec2u(k + 1u, k), vec2u(k, k + 1u), t % 2u == 0u);
 }
 
+// `gpu_types::cc_trial_round`: ceil(sqrt(ku·kv)) - 1, at most the last round.
 fn cc_trial_round(t: u32) -> u32 {
     let s = cc_trial_split(t);
     let area = s.x * s.y;
     for (var r = 0u; r < CC_SEARCH_ROUNDS; r++) {
-        if area <= (r + 1u) * (r + 1u) {
+        if area <= (r + 1u) * (r + 1u) || r + 1u == CC_SEARCH_ROUNDS {
             return r;
         }
     }

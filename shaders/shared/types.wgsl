@@ -131,7 +131,7 @@ const CC_NO_SLOT: u32 = 0xffffffffu;
 
 // Adaptive Catmull-Clark tessellation (`tessera_core::gpu_types::{CcCell, ...}`).
 const CC_TRIALS: u32 = 18u;
-const CC_SEARCH_ROUNDS: u32 = 8u;
+const CC_SEARCH_ROUNDS: u32 = 5u;
 const CC_NO_NEIGHBOUR: u32 = 0xffffffffu;
 
 struct CcCell {

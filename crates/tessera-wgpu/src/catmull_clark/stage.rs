@@ -10,7 +10,7 @@
 //! | 2 | `cc_mark` (indirect) | cell | flatness bound → split flag; leaves per (patch, split) |
 //! | 3 | scan, `cc_split` (indirect), finish | cell | next list (quadrants), the search's leaves |
 //! | 4 | `cc_choose`, `next_round` | patch | best first split so far (after the last round: the run's bound) |
-//! |   | 2–3 repeat per level (`max_depth + 1`), 1–4 per round (8 rounds) | | |
+//! |   | 2–3 repeat per level (`max_depth + 1`), 1–4 per round (`CC_SEARCH_ROUNDS` = 5) | | |
 //! | 4b | `cc_collect` count, scan, emit, finish (indirect) | search leaf | leaves of each patch's best split |
 //! | 5 | `cc_leaf_keys` (indirect) | leaf | corner keys and points |
 //! | 6 | `cc_hash_*` (insert, number, gather) | corner | vertex ids, one point per vertex |
