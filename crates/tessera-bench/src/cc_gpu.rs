@@ -211,7 +211,13 @@ pub fn run(assets: &Path, out_dir: &Path, quick: bool, model_filter: Option<&str
             rows.push(row);
         }
     }
-    crate::write_results(out_dir, "catmull_clark_gpu", &rows, table(&rows));
+    // A run on some models only must not replace the table of all of them.
+    let name = if model_filter.is_some() {
+        "catmull_clark_gpu_subset"
+    } else {
+        "catmull_clark_gpu"
+    };
+    crate::write_results(out_dir, name, &rows, table(&rows));
 }
 
 fn table(rows: &[Row]) -> String {
