@@ -13,6 +13,7 @@ use tessera_core::io::export::{write_atomically, MeshFormat};
 use tessera_core::io::load_control_mesh;
 use tessera_core::measure::ErrorStats;
 use tessera_core::Error as CoreError;
+use tessera_wgpu::catmull_clark::CcStage;
 use tessera_wgpu::Error;
 
 use crate::cli::{Backend, Method, TessellateArgs};
@@ -277,7 +278,8 @@ pub fn run_gpu(
     timings: &mut GpuTimings,
 ) -> Result<CcTessellation, Error> {
     let gpu = crate::gpu::open(timings)?;
-    let (stage, status) = crate::gpu::run_cc(&gpu, model, params, timings)?;
+    let (stage, status) =
+        crate::gpu::run(&gpu, timings, || CcStage::new(&gpu.device, model, params))?;
     let t = Instant::now();
     let mesh = stage.read_mesh(&gpu.device, &gpu.queue, &status)?;
     timings.readback = ms(t);

@@ -5,12 +5,8 @@ use std::time::Instant;
 
 use crate::tessellate::ms;
 use serde::Serialize;
-use tessera_core::bezier::{AdaptiveParams, PreparedBezier};
-use tessera_core::catmull_clark::{CcParams, SurfaceModel};
-use tessera_core::gpu_types::BezierStatus;
-use tessera_wgpu::bezier::BezierStage;
-use tessera_wgpu::catmull_clark::{CcStage, CcStatus};
 use tessera_wgpu::headless::Gpu;
+use tessera_wgpu::stage::{run_blocking, GrowingStage};
 use tessera_wgpu::{wgpu, Result};
 
 /// Stages of a GPU run, ms. `tessellate` is the tessellation alone.
@@ -35,42 +31,21 @@ pub fn open(timings: &mut GpuTimings) -> Result<Gpu> {
     Ok(gpu)
 }
 
-/// Builds the stage and runs it: once to fit the buffers, once timed.
-pub fn run(
+/// Builds a stage and runs it: once to fit the buffers, once timed.
+pub fn run<S: GrowingStage>(
     gpu: &Gpu,
-    prep: &PreparedBezier,
-    params: &AdaptiveParams,
     timings: &mut GpuTimings,
-) -> Result<(BezierStage, BezierStatus)> {
+    build: impl FnOnce() -> Result<S>,
+) -> Result<(S, S::Status)> {
     let t = Instant::now();
-    let mut stage = BezierStage::new(&gpu.device, prep, params)?;
+    let mut stage = build()?;
     gpu.check()?;
     timings.pipelines_and_upload = ms(t);
     let t = Instant::now();
-    stage.run_blocking(&gpu.device, &gpu.queue)?;
+    run_blocking(&mut stage, &gpu.device, &gpu.queue)?;
     timings.first_run = ms(t);
-    timed_run(gpu, timings, |e| stage.prepare(&gpu.device, &gpu.queue, e))?;
-    let status = stage.read_status(&gpu.device)?;
-    gpu.check()?;
-    Ok((stage, status))
-}
-
-/// [`run`] for the adaptive Catmull-Clark stage.
-pub fn run_cc(
-    gpu: &Gpu,
-    model: &SurfaceModel,
-    params: &CcParams,
-    timings: &mut GpuTimings,
-) -> Result<(CcStage, CcStatus)> {
-    let t = Instant::now();
-    let mut stage = CcStage::new(&gpu.device, model, params)?;
-    gpu.check()?;
-    timings.pipelines_and_upload = ms(t);
-    let t = Instant::now();
-    stage.run_blocking(&gpu.device, &gpu.queue)?;
-    timings.first_run = ms(t);
-    timed_run(gpu, timings, |e| stage.prepare(&gpu.device, &gpu.queue, e))?;
-    let status = stage.read_status(&gpu.device)?;
+    timed_run(gpu, timings, |e| stage.record(&gpu.device, &gpu.queue, e))?;
+    let status = stage.status(&gpu.device)?;
     gpu.check()?;
     Ok((stage, status))
 }

@@ -106,7 +106,9 @@ pub fn render(args: RenderArgs) -> Result<(), Error> {
         };
         params.validate(&model)?;
         let gpu = crate::gpu::open(&mut timings)?;
-        let (stage, status) = crate::gpu::run_cc(&gpu, &model, &params, &mut timings)?;
+        let (stage, status) = crate::gpu::run(&gpu, &mut timings, || {
+            CcStage::new(&gpu.device, &model, &params)
+        })?;
         let counts = (status.indices / 3, status.vertices());
         let output = StageOutput::Cc(Box::new(stage));
         (
@@ -127,7 +129,9 @@ pub fn render(args: RenderArgs) -> Result<(), Error> {
         };
         params.validate()?;
         let gpu = crate::gpu::open(&mut timings)?;
-        let (stage, status) = crate::gpu::run(&gpu, &prep, &params, &mut timings)?;
+        let (stage, status) = crate::gpu::run(&gpu, &mut timings, || {
+            BezierStage::new(&gpu.device, &prep, &params)
+        })?;
         let counts = (status.indices / 3, status.vertices);
         (
             gpu,

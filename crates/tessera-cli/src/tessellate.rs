@@ -12,6 +12,7 @@ use tessera_core::bezier::{
 use tessera_core::io::export::{write_atomically, write_mesh, MeshFormat};
 use tessera_core::measure::{bezier_surface_samples, measure_error, ErrorStats};
 use tessera_core::Error as CoreError;
+use tessera_wgpu::bezier::BezierStage;
 use tessera_wgpu::Error;
 
 use crate::cli::{Backend, Cli, Command, Method, TessellateArgs};
@@ -228,7 +229,9 @@ fn tessellate(args: TessellateArgs) -> Result<(), Error> {
                 // The search runs the CPU twin, which makes the same mesh as the kernels.
                 params.threshold = threshold_for_triangles(&prep, params, diag, n)?.threshold;
             }
-            let (stage, status) = crate::gpu::run(gpu, &prep, &params, &mut gpu_timings)?;
+            let (stage, status) = crate::gpu::run(gpu, &mut gpu_timings, || {
+                BezierStage::new(&gpu.device, &prep, &params)
+            })?;
             let t = Instant::now();
             let mesh = stage.read_mesh(&gpu.device, &gpu.queue, &status)?;
             gpu_timings.readback = ms(t);

@@ -52,6 +52,7 @@ use crate::headless::{map_read, read_buffer};
 use crate::kernel::{storage, Kernel};
 use crate::output::MeshBuffers;
 use crate::scan::{PrefixSum, ScanKernels};
+use crate::stage::GrowingStage;
 
 /// Limits the stage needs, within what `adapter` offers: large storage buffers for big
 /// models; no more than 8 storage buffers per kernel, so WebGPU's defaults suffice there.
@@ -617,18 +618,7 @@ impl BezierStage {
         device: &wgpu::Device,
         queue: &wgpu::Queue,
     ) -> Result<BezierStatus> {
-        for _ in 0..4 {
-            let mut encoder = device.create_command_encoder(&Default::default());
-            self.prepare(device, queue, &mut encoder);
-            queue.submit([encoder.finish()]);
-            let status = self.read_status(device)?;
-            if !self.grow(device, &status)? {
-                return Ok(status);
-            }
-        }
-        Err(Error::Wgpu(
-            "output still overflows after growing 4 times".into(),
-        ))
+        crate::stage::run_blocking(self, device, queue)
     }
 
     /// Copies the output mesh back to the CPU (for files and tests). `status` is what
@@ -673,6 +663,25 @@ impl BezierStage {
             points_words,
             pole_words,
         })
+    }
+}
+
+impl GrowingStage for BezierStage {
+    type Status = BezierStatus;
+    const MAX_GROWTHS: u32 = 4;
+    fn record(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        encoder: &mut wgpu::CommandEncoder,
+    ) {
+        self.prepare(device, queue, encoder);
+    }
+    fn status(&self, device: &wgpu::Device) -> Result<BezierStatus> {
+        self.read_status(device)
+    }
+    fn grow_to(&mut self, device: &wgpu::Device, status: &BezierStatus) -> Result<bool> {
+        self.grow(device, status)
     }
 }
 

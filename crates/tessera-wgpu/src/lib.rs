@@ -36,6 +36,7 @@ pub mod render;
 pub mod scan;
 pub mod shaders;
 pub mod snapshot;
+pub mod stage;
 
 pub use error::{Error, Result};
 pub use output::MeshBuffers;

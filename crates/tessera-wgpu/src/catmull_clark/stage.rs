@@ -60,6 +60,7 @@ use crate::headless::map_read;
 use crate::kernel::{storage, Kernel};
 use crate::output::MeshBuffers;
 use crate::scan::{PrefixSum, ScanKernels};
+use crate::stage::GrowingStage;
 
 /// Binding numbers of the pipeline's own buffers (`shaders/shared/cc_tess.wgsl`).
 mod slot {
@@ -642,18 +643,7 @@ impl CcStage {
     /// Runs to completion on its own submission, growing and rerunning until everything
     /// fits. For loading, tools and tests; a renderer records [`prepare`](Self::prepare).
     pub fn run_blocking(&mut self, device: &wgpu::Device, queue: &wgpu::Queue) -> Result<CcStatus> {
-        for _ in 0..8 {
-            let mut encoder = device.create_command_encoder(&Default::default());
-            self.prepare(device, queue, &mut encoder);
-            queue.submit([encoder.finish()]);
-            let status = self.read_status(device)?;
-            if !self.grow(device, &status)? {
-                return Ok(status);
-            }
-        }
-        Err(Error::Wgpu(
-            "still overflowing after growing 8 times".into(),
-        ))
+        crate::stage::run_blocking(self, device, queue)
     }
 
     /// Copies the output mesh back (files and tests).
@@ -671,6 +661,25 @@ impl CcStage {
         self.buffers
             .output
             .read_mesh(device, queue, status.vertices(), status.indices)
+    }
+}
+
+impl GrowingStage for CcStage {
+    type Status = CcStatus;
+    const MAX_GROWTHS: u32 = 8;
+    fn record(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        encoder: &mut wgpu::CommandEncoder,
+    ) {
+        self.prepare(device, queue, encoder);
+    }
+    fn status(&self, device: &wgpu::Device) -> Result<CcStatus> {
+        self.read_status(device)
+    }
+    fn grow_to(&mut self, device: &wgpu::Device, status: &CcStatus) -> Result<bool> {
+        self.grow(device, status)
     }
 }
 
