@@ -272,3 +272,56 @@ fn polygons_with_points_on_every_side_triangulate_without_slivers() {
     }
     assert!(zips[0] > 0 && zips[1] > 0, "both diagonals tried: {zips:?}");
 }
+
+/// The uniform pipeline of the GPU (its CPU twin, `gpu_uniform`) makes the reference's
+/// uniform mesh: the same vertices (matched by patch and grid point, positions within
+/// 1e-5 of the diagonal), the same triangles in the same order.
+#[test]
+fn gpu_uniform_twin_makes_the_uniform_reference_mesh() {
+    use tessera_core::catmull_clark::gpu_model::CcGpuModel;
+    use tessera_core::catmull_clark::gpu_uniform::{tessellate_uniform_gpu_twin, uniform_patches};
+    let cases = [
+        ("opensubdiv/catmark_cube.obj", 3),
+        ("opensubdiv/catmark_cube.obj", 1),
+        ("opensubdiv/catmark_hole_test1.obj", 4),
+        ("opensubdiv/catmark_edgecorner.obj", 5),
+        ("catmull_clark/spot_control_mesh.obj", 2),
+    ];
+    for (name, n) in cases {
+        let model = cc_model(name);
+        let reference = tessellate_uniform(&model, n).unwrap().mesh;
+        let layout = uniform_patches(&model.mesh);
+        let twin = tessellate_uniform_gpu_twin(&CcGpuModel::new(&model), &layout, n).unwrap();
+        assert_eq!(twin.vertices.len(), reference.vertices.len(), "{name} n={n}");
+        assert_eq!(twin.indices.len(), reference.indices.len(), "{name} n={n}");
+        // A vertex is a grid point of the patch that evaluates it in both.
+        let grid = |v: &tessera_core::gpu_types::OutVertex| {
+            let g = |x: f32| (x as f64 * n as f64).round() as u32;
+            (v.patch, g(v.uv[0]), g(v.uv[1]))
+        };
+        let by_point: std::collections::HashMap<_, _> = reference
+            .vertices
+            .iter()
+            .enumerate()
+            .map(|(id, v)| (grid(v), id as u32))
+            .collect();
+        let tol = 1e-5 * diag(name) as f32;
+        let to_reference: Vec<u32> = twin
+            .vertices
+            .iter()
+            .map(|v| {
+                let id = by_point[&grid(v)];
+                let r = &reference.vertices[id as usize];
+                let d = glam::Vec3::from(v.position).distance(glam::Vec3::from(r.position));
+                assert!(d <= tol, "{name} n={n}: vertex {:?} off by {d}", grid(v));
+                id
+            })
+            .collect();
+        let mut distinct = to_reference.clone();
+        distinct.sort_unstable();
+        distinct.dedup();
+        assert_eq!(distinct.len(), to_reference.len(), "{name} n={n}: one vertex twice");
+        let mapped: Vec<u32> = twin.indices.iter().map(|&i| to_reference[i as usize]).collect();
+        assert_eq!(mapped, reference.indices, "{name} n={n}");
+    }
+}

@@ -358,6 +358,34 @@ pub struct CcPatchTopo {
     pub across: [u32; 4],
 }
 
+/// A surface patch as the uniform Catmull-Clark kernels see it
+/// ([`crate::catmull_clark::gpu_uniform`]): its id, the dense ids of its corners and
+/// edges, and which of them it evaluates.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable, PartialEq, Eq)]
+pub struct CcUniformPatch {
+    pub patch_id: u32,
+    pub corners: [u32; 4],
+    pub edges: [u32; 4],
+    /// Bits `k` (evaluates corner `k`), `4 + k` (evaluates edge `k`'s points) and `8 + k`
+    /// (edge `k` runs from its larger end point).
+    pub flags: u32,
+    pub pad: [u32; 2],
+}
+
+/// Uniform parameters of the uniform Catmull-Clark kernels.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable, PartialEq, Eq)]
+pub struct CcUniformParams {
+    /// `n`: segments per patch side.
+    pub segments: u32,
+    /// Surface patches (holes left out).
+    pub patch_count: u32,
+    /// Distinct patch corners and level-1 edges of the surface patches.
+    pub corner_count: u32,
+    pub edge_count: u32,
+}
+
 /// Uniform parameters of the adaptive Catmull-Clark kernels.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable, PartialEq)]

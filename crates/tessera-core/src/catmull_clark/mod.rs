@@ -5,7 +5,8 @@
 //! the first subdivision step, patches; "Far"); [`refine`] and [`local`] (the
 //! subdivision rules, one-rings), [`bicubic`] and [`patch`] (exact evaluation; "Bfr");
 //! then the tessellators [`adaptive`] and [`uniform`], with [`keys`] (canonical point
-//! keys) and [`triangulate`].
+//! keys) and [`triangulate`]; [`gpu_model`] and [`gpu_uniform`] are the CPU twins of
+//! the GPU kernels' data and of the uniform kernels.
 //!
 //! ```
 //! use tessera_core::catmull_clark::{load_surface, tessellate_adaptive, CcParams};
@@ -23,6 +24,7 @@ pub mod bicubic;
 pub mod bound;
 pub mod control_mesh;
 pub mod gpu_model;
+pub mod gpu_uniform;
 pub mod keys;
 pub mod local;
 pub mod patch;
