@@ -292,7 +292,11 @@ fn gpu_uniform_twin_makes_the_uniform_reference_mesh() {
         let reference = tessellate_uniform(&model, n).unwrap().mesh;
         let layout = uniform_patches(&model.mesh);
         let twin = tessellate_uniform_gpu_twin(&CcGpuModel::new(&model), &layout, n).unwrap();
-        assert_eq!(twin.vertices.len(), reference.vertices.len(), "{name} n={n}");
+        assert_eq!(
+            twin.vertices.len(),
+            reference.vertices.len(),
+            "{name} n={n}"
+        );
         assert_eq!(twin.indices.len(), reference.indices.len(), "{name} n={n}");
         // A vertex is a grid point of the patch that evaluates it in both.
         let grid = |v: &tessera_core::gpu_types::OutVertex| {
@@ -320,8 +324,16 @@ fn gpu_uniform_twin_makes_the_uniform_reference_mesh() {
         let mut distinct = to_reference.clone();
         distinct.sort_unstable();
         distinct.dedup();
-        assert_eq!(distinct.len(), to_reference.len(), "{name} n={n}: one vertex twice");
-        let mapped: Vec<u32> = twin.indices.iter().map(|&i| to_reference[i as usize]).collect();
+        assert_eq!(
+            distinct.len(),
+            to_reference.len(),
+            "{name} n={n}: one vertex twice"
+        );
+        let mapped: Vec<u32> = twin
+            .indices
+            .iter()
+            .map(|&i| to_reference[i as usize])
+            .collect();
         assert_eq!(mapped, reference.indices, "{name} n={n}");
     }
 }

@@ -161,3 +161,25 @@ struct CcTessParams {
     pad1: u32,
     pad2: u32,
 }
+
+// Uniform Catmull-Clark tessellation (`tessera_core::gpu_types::{CcUniformPatch,
+// CcUniformParams}`, flags of `tessera_core::catmull_clark::gpu_uniform`).
+const CC_OWNS_CORNER: u32 = 1u;
+const CC_OWNS_EDGE: u32 = 16u;
+const CC_EDGE_REVERSED: u32 = 256u;
+
+struct CcUniformPatch {
+    patch_id: u32,
+    corners: array<u32, 4>,
+    edges: array<u32, 4>,
+    flags: u32,
+    pad0: u32,
+    pad1: u32,
+}
+
+struct CcUniformParams {
+    segments: u32,
+    patch_count: u32,
+    corner_count: u32,
+    edge_count: u32,
+}

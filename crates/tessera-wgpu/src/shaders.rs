@@ -101,6 +101,18 @@ pub const SOURCES: &[(&str, &str)] = &[
         include_str!("../../../shaders/cc_vertex_eval.wgsl"),
     ),
     (
+        "shared/cc_uniform.wgsl",
+        include_str!("../../../shaders/shared/cc_uniform.wgsl"),
+    ),
+    (
+        "cc_uniform_points.wgsl",
+        include_str!("../../../shaders/cc_uniform_points.wgsl"),
+    ),
+    (
+        "cc_uniform_cells.wgsl",
+        include_str!("../../../shaders/cc_uniform_cells.wgsl"),
+    ),
+    (
         "bezier_edge_decide.wgsl",
         include_str!("../../../shaders/bezier_edge_decide.wgsl"),
     ),

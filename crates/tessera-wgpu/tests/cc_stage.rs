@@ -1,6 +1,7 @@
 //! The adaptive Catmull-Clark stage on the GPU against the CPU reference
 //! (`tessellate_adaptive`): the same triangles (up to vertex numbering), vertices within
-//! 1e-5 of the model size, and the grow-and-retry path from tiny capacities.
+//! 1e-5 of the model size, and the grow-and-retry path from tiny capacities. The uniform
+//! stage against its CPU twin and `tessellate_uniform`.
 
 use glam::DVec3;
 use tessera_core::catmull_clark::{load_surface, tessellate_adaptive, CcParams, SurfaceModel};
@@ -244,4 +245,68 @@ fn moved_control_points_retessellate_in_place() {
     let cpu = tessellate_adaptive(&moved, &params).expect("cpu");
     same_mesh(&mesh, &cpu.mesh, size(&moved)).expect("moved surface");
     gpu.check().expect("no wgpu errors");
+}
+
+#[test]
+fn gpu_uniform_matches_its_twin_and_the_cpu_uniform() {
+    // The uniform stage against its CPU twin (same indices, byte for byte; vertices
+    // within 1e-5 of the model size) and against the reference `tessellate_uniform` (the
+    // same mesh up to numbering); the draw arguments written by the GPU; a changed `n`
+    // reallocates; the comparison catches one cell cut along the other diagonal.
+    use tessera_core::catmull_clark::gpu_model::CcGpuModel;
+    use tessera_core::catmull_clark::gpu_uniform::{tessellate_uniform_gpu_twin, uniform_patches};
+    use tessera_core::catmull_clark::tessellate_uniform;
+    use tessera_core::gpu_types::DrawIndexedIndirectArgs;
+    use tessera_wgpu::catmull_clark::CcUniformStage;
+    let gpu = gpu();
+    for (name, sizes) in [
+        ("opensubdiv/catmark_cube.obj", [3, 1]),
+        ("opensubdiv/catmark_hole_test1.obj", [4, 2]),
+        ("catmull_clark/spot_control_mesh.obj", [2, 5]),
+    ] {
+        let model = model(name);
+        let s = size(&model);
+        let mut stage = CcUniformStage::new(&gpu.device, &model, sizes[0]).expect("stage");
+        for n in sizes {
+            stage
+                .set_segments(&gpu.device, &gpu.queue, n)
+                .expect("segments");
+            let mut encoder = gpu.device.create_command_encoder(&Default::default());
+            stage.prepare(&gpu.device, &gpu.queue, &mut encoder);
+            gpu.queue.submit([encoder.finish()]);
+            let mesh = stage.read_mesh(&gpu.device, &gpu.queue).expect("read");
+            gpu.check().expect("no wgpu errors");
+            let args: DrawIndexedIndirectArgs = bytemuck::pod_read_unaligned(
+                &gpu.read_buffer(&stage.output().indirect, 0, 20)
+                    .expect("draw args"),
+            );
+            assert_eq!(
+                args.index_count as usize,
+                mesh.indices.len(),
+                "{name} n={n}"
+            );
+            assert_eq!(args.instance_count, 1);
+            let layout = uniform_patches(&model.mesh);
+            let twin =
+                tessellate_uniform_gpu_twin(&CcGpuModel::new(&model), &layout, n).expect("twin");
+            assert_eq!(mesh.indices, twin.indices, "{name} n={n}: indices");
+            assert_eq!(mesh.vertices.len(), twin.vertices.len());
+            for (g, c) in mesh.vertices.iter().zip(&twin.vertices) {
+                assert_eq!((g.patch, g.uv), (c.patch, c.uv), "{name} n={n}");
+                let d = glam::Vec3::from(g.position).distance(glam::Vec3::from(c.position));
+                assert!(d as f64 <= 1e-5 * s, "{name} n={n}: off by {d}");
+            }
+            let cpu = tessellate_uniform(&model, n).expect("cpu").mesh;
+            if let Err(e) = same_mesh(&mesh, &cpu, s) {
+                panic!("{name} n={n}: {e}");
+            }
+            let mut flipped = cpu.clone();
+            let [a, b, c, _, d, _] = std::array::from_fn(|k| cpu.indices[k]);
+            flipped.indices[..6].copy_from_slice(&[d, a, b, b, c, d]);
+            assert!(
+                same_mesh(&mesh, &flipped, s).is_err(),
+                "{name} n={n}: the comparison misses a flipped diagonal"
+            );
+        }
+    }
 }

@@ -188,6 +188,31 @@ fn shared_structs_match_their_rust_twins() {
             ("v", offset_of!(CcPoint, v)),
         ],
     );
+    let (uniform, _) = parse("cc_uniform_cells.wgsl");
+    check(
+        &uniform,
+        "CcUniformPatch",
+        size_of::<CcUniformPatch>(),
+        &[
+            ("patch_id", offset_of!(CcUniformPatch, patch_id)),
+            ("corners", offset_of!(CcUniformPatch, corners)),
+            ("edges", offset_of!(CcUniformPatch, edges)),
+            ("flags", offset_of!(CcUniformPatch, flags)),
+            ("pad0", offset_of!(CcUniformPatch, pad)),
+            ("pad1", offset_of!(CcUniformPatch, pad) + 4),
+        ],
+    );
+    check(
+        &uniform,
+        "CcUniformParams",
+        size_of::<CcUniformParams>(),
+        &[
+            ("segments", offset_of!(CcUniformParams, segments)),
+            ("patch_count", offset_of!(CcUniformParams, patch_count)),
+            ("corner_count", offset_of!(CcUniformParams, corner_count)),
+            ("edge_count", offset_of!(CcUniformParams, edge_count)),
+        ],
+    );
     let (hash, _) = parse("cc_hash_number.wgsl");
     check(
         &hash,

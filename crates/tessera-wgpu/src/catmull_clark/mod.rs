@@ -1,5 +1,5 @@
-//! The Catmull-Clark stage on the GPU: [`CcStage`] (the adaptive tessellation, module
-//! `stage`) and its parts: the patches' quadtrees uploaded
+//! The Catmull-Clark stages on the GPU: [`CcStage`] (the adaptive tessellation, module
+//! `stage`), [`CcUniformStage`] (the uniform peer, module `uniform`) and their parts: the patches' quadtrees uploaded
 //! once ([`CcModelBuffers`]), the kernel that evaluates surface points exactly
 //! ([`CcVertexEval`], `shaders/cc_vertex_eval.wgsl`, CPU twin
 //! [`tessera_core::catmull_clark::gpu_model::vertex_eval`]), and the global vertex hash
@@ -20,8 +20,10 @@
 //! ```
 
 mod stage;
+mod uniform;
 
 pub use stage::{CcCapacities, CcKernels, CcStage, CcStatus};
+pub use uniform::{CcUniformKernels, CcUniformStage};
 
 use tessera_core::catmull_clark::gpu_model::CcGpuModel;
 use tessera_core::gpu_types::{CcHashSlot, CcHashStatus};

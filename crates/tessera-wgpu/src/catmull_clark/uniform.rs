@@ -1,0 +1,280 @@
+//! Uniform Catmull-Clark tessellation on the GPU: every surface patch on an `n × n`
+//! grid. Three dispatches, no readback: `cc_uniform_points` (each shared point written
+//! once, by the patch that owns it), `cc_vertex_eval` (exact evaluation, the adaptive
+//! stage's kernel), `cc_uniform_cells` (two triangles per cell and the draw arguments).
+//! The output sizes follow from the topology and `n`, so the buffers are allocated
+//! exactly and never grow. CPU twin: [`tessera_core::catmull_clark::gpu_uniform`].
+//!
+//! ```no_run
+//! # fn demo(device: &wgpu::Device, queue: &wgpu::Queue,
+//! #         model: &tessera_core::catmull_clark::SurfaceModel) -> tessera_wgpu::Result<()> {
+//! use tessera_wgpu::catmull_clark::CcUniformStage;
+//! let stage = CcUniformStage::new(device, model, 8)?;
+//! let mut encoder = device.create_command_encoder(&Default::default());
+//! stage.prepare(device, queue, &mut encoder);
+//! queue.submit([encoder.finish()]);
+//! // Draw `stage.output()` with `draw_indexed_indirect(&stage.output().indirect, 0)`.
+//! # Ok(()) }
+//! ```
+
+use tessera_core::catmull_clark::gpu_model::CcGpuModel;
+use tessera_core::catmull_clark::gpu_uniform::{uniform_patches, UniformLayout};
+use tessera_core::catmull_clark::SurfaceModel;
+use tessera_core::gpu_types::{CcPoint, CcUniformParams, OutVertex};
+use tessera_core::Mesh;
+use wgpu::util::DeviceExt;
+
+use super::{CcModelBuffers, CcVertexEval};
+use crate::error::{Error, Result};
+use crate::kernel::{storage, Kernel};
+use crate::output::MeshBuffers;
+
+/// Binding numbers of the uniform kernels (`shaders/shared/cc_uniform.wgsl`).
+mod slot {
+    pub const PARAMS: u32 = 70;
+    pub const PATCHES: u32 = 71;
+    pub const POINTS: u32 = 72;
+    pub const COUNTS: u32 = 73;
+    pub const VERTICES: u32 = 74;
+    pub const INDICES: u32 = 75;
+    pub const DRAW: u32 = 76;
+}
+
+/// The compiled kernels of [`CcUniformStage`].
+pub struct CcUniformKernels {
+    points: Kernel,
+    eval: CcVertexEval,
+    cells: Kernel,
+}
+
+impl CcUniformKernels {
+    pub fn new(device: &wgpu::Device) -> Self {
+        CcUniformKernels {
+            points: Kernel::new(device, "cc_uniform_points.wgsl", "main"),
+            eval: CcVertexEval::new(device),
+            cells: Kernel::new(device, "cc_uniform_cells.wgsl", "main"),
+        }
+    }
+}
+
+/// The uniform tessellation stage: the model uploaded once, `n` changeable, output
+/// buffers ready to draw after each [`prepare`](Self::prepare).
+pub struct CcUniformStage {
+    kernels: CcUniformKernels,
+    model: CcModelBuffers,
+    layout: UniformLayout,
+    patches: wgpu::Buffer,
+    params: CcUniformParams,
+    params_buffer: wgpu::Buffer,
+    sized: Sized,
+}
+
+/// What depends on `n`: the output and the bind groups over it and the points (which
+/// the bind groups keep alive).
+struct Sized {
+    output: MeshBuffers,
+    binds: [wgpu::BindGroup; 3],
+}
+
+impl CcUniformStage {
+    /// Uploads `model` and sizes the buffers for `segments` per patch side.
+    pub fn new(device: &wgpu::Device, model: &SurfaceModel, segments: u32) -> Result<Self> {
+        let layout = uniform_patches(&model.mesh);
+        let params = layout.params(segments)?;
+        let kernels = CcUniformKernels::new(device);
+        let model_buffers = CcModelBuffers::new(device, &CcGpuModel::new(model));
+        // Never empty: a model of holes only binds one zeroed patch it never reads.
+        let zero = [tessera_core::gpu_types::CcUniformPatch::default()];
+        let patches = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("tessera cc uniform patches"),
+            contents: bytemuck::cast_slice(if layout.patches.is_empty() {
+                &zero
+            } else {
+                &layout.patches
+            }),
+            usage: wgpu::BufferUsages::STORAGE,
+        });
+        let params_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("tessera cc uniform params"),
+            contents: bytemuck::bytes_of(&params),
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+        });
+        let sized = Sized::new(
+            device,
+            &kernels,
+            &model_buffers,
+            &patches,
+            &params_buffer,
+            &params,
+        )?;
+        Ok(CcUniformStage {
+            kernels,
+            model: model_buffers,
+            layout,
+            patches,
+            params,
+            params_buffer,
+            sized,
+        })
+    }
+
+    /// Segments per patch side of the next runs; the output buffers are reallocated
+    /// when the size changes.
+    pub fn set_segments(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        segments: u32,
+    ) -> Result<()> {
+        let params = self.layout.params(segments)?;
+        if params == self.params {
+            return Ok(());
+        }
+        self.sized = Sized::new(
+            device,
+            &self.kernels,
+            &self.model,
+            &self.patches,
+            &self.params_buffer,
+            &params,
+        )?;
+        queue.write_buffer(&self.params_buffer, 0, bytemuck::bytes_of(&params));
+        self.params = params;
+        Ok(())
+    }
+
+    pub fn segments(&self) -> u32 {
+        self.params.segments
+    }
+
+    /// New control-point positions for the same topology, re-uploaded in place.
+    pub fn update_points(&self, queue: &wgpu::Queue, model: &SurfaceModel) -> Result<()> {
+        self.model.update(queue, &CcGpuModel::new(model))
+    }
+
+    /// Vertices and indices every run writes.
+    pub fn vertex_count(&self) -> u32 {
+        self.params.vertex_count()
+    }
+
+    pub fn index_count(&self) -> u32 {
+        self.params.index_count()
+    }
+
+    /// The vertex, index and draw-argument buffers.
+    pub fn output(&self) -> &MeshBuffers {
+        &self.sized.output
+    }
+
+    /// Bytes uploaded: the model's quadtrees and the patches' numbering.
+    pub fn upload_bytes(&self) -> usize {
+        self.model.byte_size() + std::mem::size_of_val(self.layout.patches.as_slice())
+    }
+
+    /// Records the three dispatches into `encoder`. Submits nothing.
+    pub fn prepare(
+        &self,
+        _device: &wgpu::Device,
+        _queue: &wgpu::Queue,
+        encoder: &mut wgpu::CommandEncoder,
+    ) {
+        let p = &self.params;
+        let side = p.segments + 1;
+        let [points, eval, cells] = &self.sized.binds;
+        {
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("tessera cc_uniform_points"),
+                timestamp_writes: None,
+            });
+            // At least one invocation: it writes the vertex count.
+            let items = (p.patch_count * side * side).max(1);
+            self.kernels.points.dispatch(&mut pass, points, items, 64);
+        }
+        self.kernels
+            .eval
+            .record_bound(encoder, eval, self.vertex_count());
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some("tessera cc_uniform_cells"),
+            timestamp_writes: None,
+        });
+        let items = (p.patch_count * p.segments * p.segments).max(1);
+        self.kernels.cells.dispatch(&mut pass, cells, items, 64);
+    }
+
+    /// Copies the output mesh back (files and tests; drawing needs no readback).
+    pub fn read_mesh(&self, device: &wgpu::Device, queue: &wgpu::Queue) -> Result<Mesh> {
+        if self.index_count() == 0 {
+            return Ok(Mesh::default());
+        }
+        self.sized
+            .output
+            .read_mesh(device, queue, self.vertex_count(), self.index_count())
+    }
+}
+
+impl Sized {
+    fn new(
+        device: &wgpu::Device,
+        kernels: &CcUniformKernels,
+        model: &CcModelBuffers,
+        patches: &wgpu::Buffer,
+        params_buffer: &wgpu::Buffer,
+        params: &CcUniformParams,
+    ) -> Result<Self> {
+        let (vertices, indices) = (params.vertex_count(), params.index_count());
+        let limits = device.limits();
+        let limit = limits
+            .max_buffer_size
+            .min(limits.max_storage_buffer_binding_size);
+        for (what, bytes) in [
+            (
+                "vertex",
+                vertices as u64 * std::mem::size_of::<OutVertex>() as u64,
+            ),
+            (
+                "point",
+                vertices as u64 * std::mem::size_of::<CcPoint>() as u64,
+            ),
+            ("index", indices as u64 * 4),
+        ] {
+            if bytes > limit {
+                return Err(Error::OutputTooLarge { what, bytes, limit });
+            }
+        }
+        let points = storage(
+            device,
+            "tessera cc uniform points",
+            vertices.max(1) as u64 * std::mem::size_of::<CcPoint>() as u64,
+        );
+        let counts = storage(device, "tessera cc uniform counts", 4);
+        let output = MeshBuffers::with_capacity(device, vertices, indices);
+        fn entries<'a>(
+            shared: [(u32, &'a wgpu::Buffer); 2],
+            extra: &[(u32, &'a wgpu::Buffer)],
+        ) -> Vec<(u32, &'a wgpu::Buffer)> {
+            shared.iter().chain(extra).copied().collect()
+        }
+        let shared = [(slot::PARAMS, params_buffer), (slot::PATCHES, patches)];
+        let binds = [
+            kernels.points.bind(
+                device,
+                &entries(shared, &[(slot::POINTS, &points), (slot::COUNTS, &counts)]),
+            ),
+            kernels
+                .eval
+                .bind(device, model, &points, &counts, &output.vertices),
+            kernels.cells.bind(
+                device,
+                &entries(
+                    shared,
+                    &[
+                        (slot::VERTICES, &output.vertices),
+                        (slot::INDICES, &output.indices),
+                        (slot::DRAW, &output.indirect),
+                    ],
+                ),
+            ),
+        ];
+        Ok(Sized { output, binds })
+    }
+}

@@ -1,0 +1,39 @@
+// One invocation per grid point of every surface patch ((n + 1)² each): the point
+// `(patch, i/n, j/n)` written where its output vertex goes, by the one patch that owns
+// it, so each vertex is evaluated once (by `cc_vertex_eval` next). Invocation 0 writes
+// the vertex count that kernel reads. Twin: `uniform_point` in
+// `tessera_core::catmull_clark::gpu_uniform`.
+
+#include "shared/cc_uniform.wgsl"
+
+@group(0) @binding(72) var<storage, read_write> uniform_points: array<CcPoint>;
+@group(0) @binding(73) var<storage, read_write> uniform_counts: array<u32>;
+
+// i/n in fixed point (1 = 2^31), rounded down, without 64-bit arithmetic (`grid_param`).
+fn grid_param(i: u32, n: u32) -> u32 {
+    let q = CC_PARAM_ONE / n;
+    let r = CC_PARAM_ONE % n;
+    return i * q + i * r / n;
+}
+
+@compute @workgroup_size(64)
+fn main(@builtin(global_invocation_id) gid: vec3u, @builtin(num_workgroups) groups: vec3u) {
+    let g = uniform_invocation(gid, groups);
+    let n = uniform_params.segments;
+    let side = n + 1u;
+    if g == 0u {
+        let inner = n - 1u;
+        uniform_counts[0] = uniform_params.corner_count + uniform_params.edge_count * inner
+            + uniform_params.patch_count * inner * inner;
+    }
+    if g >= uniform_params.patch_count * side * side {
+        return;
+    }
+    let d = g / (side * side);
+    let i = g % side;
+    let j = g / side % side;
+    let v = grid_vertex(d, i, j);
+    if v.owned && v.index < arrayLength(&uniform_points) {
+        uniform_points[v.index] = CcPoint(uniform_patches[d].patch_id, grid_param(i, n), grid_param(j, n));
+    }
+}
