@@ -13,7 +13,7 @@ use tessera_core::io::export::{write_atomically, MeshFormat};
 use tessera_core::io::load_control_mesh;
 use tessera_core::measure::ErrorStats;
 use tessera_core::Error as CoreError;
-use tessera_wgpu::catmull_clark::CcStage;
+use tessera_wgpu::catmull_clark::{CcStage, CcUniformStage};
 use tessera_wgpu::Error;
 
 use crate::cli::{Backend, Method, TessellateArgs};
@@ -68,12 +68,6 @@ pub fn tessellate(args: TessellateArgs) -> Result<(), Error> {
         .into());
     }
     let on_gpu = args.backend == Some(Backend::Gpu);
-    if on_gpu && method == Method::Uniform {
-        return Err(CoreError::Param(
-            "--method uniform runs on the CPU only; use --backend cpu".into(),
-        )
-        .into());
-    }
     if args.threshold.is_some() || args.target_triangles.is_some() {
         return Err(CoreError::Param(
             "--threshold and --target-triangles are Bézier options; Catmull-Clark meshes take --tolerance or --tolerance-rel".into(),
@@ -120,7 +114,15 @@ pub fn tessellate(args: TessellateArgs) -> Result<(), Error> {
                 Some(l) => 1 << l,
                 None => args.segments.unwrap_or(8),
             };
-            (tessellate_uniform(&model, n)?, None, Some(n))
+            let out = if on_gpu {
+                let mut gpu_timings = GpuTimings::default();
+                let out = run_gpu_uniform(&model, n, &mut gpu_timings)?;
+                timings.gpu = Some(gpu_timings);
+                out
+            } else {
+                tessellate_uniform(&model, n)?
+            };
+            (out, None, Some(n))
         }
         _ => {
             let tolerance = match (args.tolerance, args.tolerance_rel) {
@@ -289,5 +291,27 @@ pub fn run_gpu(
         leaves: status.state.leaves as usize,
         unmet: status.state.unmet as usize,
         max_bound: status.max_bound() as f64,
+    })
+}
+
+/// The uniform stage on the GPU: a first run, the timed run and the readback.
+pub fn run_gpu_uniform(
+    model: &SurfaceModel,
+    segments: u32,
+    timings: &mut GpuTimings,
+) -> Result<CcTessellation, Error> {
+    let gpu = crate::gpu::open(timings)?;
+    let (stage, _) = crate::gpu::run(&gpu, timings, || {
+        CcUniformStage::new(&gpu.device, model, segments)
+    })?;
+    let t = Instant::now();
+    let mesh = stage.read_mesh(&gpu.device, &gpu.queue)?;
+    timings.readback = ms(t);
+    Ok(CcTessellation {
+        evaluations: mesh.vertices.len() as u64,
+        leaves: model.mesh.surface_patches().count() * (segments as usize).pow(2),
+        mesh,
+        unmet: 0,
+        max_bound: 0.0,
     })
 }

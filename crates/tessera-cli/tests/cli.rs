@@ -396,6 +396,33 @@ fn catmull_clark_on_the_gpu_writes_what_the_cpu_writes_and_renders() {
         ));
     }
     assert_eq!(counts[0], counts[1], "gpu and cpu differ");
+    // The uniform peer runs on the GPU too: the same grid, the same measured error.
+    let mut uniform = Vec::new();
+    for backend in ["gpu", "cpu"] {
+        let stats = tmp(&format!("cc_uniform_{backend}.json"));
+        run_ok(
+            tessera()
+                .args(["tessellate"])
+                .arg(asset("opensubdiv/catmark_pyramid.obj"))
+                .args(["--method", "uniform", "--segments", "3", "--measure"])
+                .args(["--backend", backend, "--stats"])
+                .arg(&stats),
+        );
+        let json: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(&stats).unwrap()).unwrap();
+        assert_eq!(json["backend"], backend);
+        assert_eq!(json["triangles"], 16 * 2 * 9);
+        uniform.push(json);
+    }
+    assert_eq!(uniform[0]["vertices"], uniform[1]["vertices"]);
+    let (g, c) = (
+        uniform[0]["max_error"].as_f64().unwrap(),
+        uniform[1]["max_error"].as_f64().unwrap(),
+    );
+    assert!(
+        (g - c).abs() <= 1e-3 * c,
+        "uniform max error gpu {g} cpu {c}"
+    );
     let png = tmp("cc.png");
     run_ok(
         tessera()

@@ -278,3 +278,28 @@ impl Sized {
         Ok(Sized { output, binds })
     }
 }
+
+/// The uniform stage knows its output sizes before it runs, so it never grows; it takes
+/// part in [`run_blocking`](crate::stage::run_blocking) like the adaptive stages.
+impl crate::stage::GrowingStage for CcUniformStage {
+    /// Vertices and indices the run wrote.
+    type Status = (u32, u32);
+    const MAX_GROWTHS: u32 = 1;
+    fn record(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        encoder: &mut wgpu::CommandEncoder,
+    ) {
+        self.prepare(device, queue, encoder);
+    }
+    fn status(&self, device: &wgpu::Device) -> Result<(u32, u32)> {
+        device
+            .poll(wgpu::PollType::wait_indefinitely())
+            .map_err(|e| Error::Readback(e.to_string()))?;
+        Ok((self.vertex_count(), self.index_count()))
+    }
+    fn grow_to(&mut self, _device: &wgpu::Device, _status: &(u32, u32)) -> Result<bool> {
+        Ok(false)
+    }
+}
