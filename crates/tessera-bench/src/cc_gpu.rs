@@ -1,7 +1,8 @@
 //! Catmull-Clark on the GPU: the adaptive stage against the CPU reference (time,
 //! triangles per second), the time to reach a max error of 5e-4 of the diagonal against
-//! uniform tessellation (the CPU's, at the smallest grid that reaches it), and how the
-//! GPU time grows with the output. Writes `OUT/catmull_clark_gpu.{json,md}`.
+//! uniform tessellation (at the smallest grid that reaches it: the CPU's, and the GPU
+//! uniform stage's on the same device), and how the GPU time grows with the output.
+//! Writes `OUT/catmull_clark_gpu.{json,md}`.
 
 use std::path::Path;
 use std::time::Instant;
@@ -15,7 +16,7 @@ use tessera_core::catmull_clark::{
 };
 use tessera_core::io::load_control_mesh;
 use tessera_core::measure::measure_error;
-use tessera_wgpu::catmull_clark::CcStage;
+use tessera_wgpu::catmull_clark::{CcStage, CcUniformStage};
 use tessera_wgpu::headless::Gpu;
 use tessera_wgpu::wgpu;
 
@@ -39,6 +40,9 @@ struct Row {
     uniform_triangles: usize,
     uniform_ms: f64,
     gpu_over_uniform: f64,
+    /// The same uniform grid on the GPU uniform stage (same device as `gpu_ms`).
+    uniform_gpu_ms: f64,
+    gpu_over_uniform_gpu: f64,
     /// Where the GPU time goes (timestamps after each phase, one run), if the adapter
     /// has timestamp queries: (phase, ms).
     phases: Vec<(String, f64)>,
@@ -122,6 +126,25 @@ fn gpu_time(
     (median(times), mesh, phases)
 }
 
+/// Median time of the GPU uniform stage's run to completion at `n` segments (after a
+/// first run), and its triangles.
+fn gpu_uniform_time(gpu: &Gpu, model: &SurfaceModel, n: u32, repeats: usize) -> (f64, usize) {
+    let mut stage = CcUniformStage::new(&gpu.device, model, n).expect("uniform stage");
+    tessera_wgpu::stage::run_blocking(&mut stage, &gpu.device, &gpu.queue).expect("first run");
+    let times = (0..repeats)
+        .map(|_| {
+            let t = Instant::now();
+            let mut encoder = gpu.device.create_command_encoder(&Default::default());
+            stage.prepare(&gpu.device, &gpu.queue, &mut encoder);
+            gpu.queue.submit([encoder.finish()]);
+            gpu.wait().expect("gpu");
+            t.elapsed().as_secs_f64() * 1e3
+        })
+        .collect();
+    gpu.check().expect("no wgpu errors");
+    (median(times), stage.index_count() as usize / 3)
+}
+
 pub fn run(assets: &Path, out_dir: &Path, quick: bool, model_filter: Option<&str>) {
     // Timestamps where the adapter has them, for the phase breakdown.
     let gpu = Gpu::with_optional_features(
@@ -181,6 +204,9 @@ pub fn run(assets: &Path, out_dir: &Path, quick: bool, model_filter: Option<&str
                 }
                 n += 1;
             };
+            let (uniform_gpu_ms, uniform_gpu_triangles) =
+                gpu_uniform_time(&gpu, &model, n, repeats);
+            assert_eq!(uniform_gpu_triangles, uniform_triangles, "GPU uniform grid");
             let tris = mesh.triangle_count();
             let row = Row {
                 model: Path::new(file)
@@ -202,11 +228,13 @@ pub fn run(assets: &Path, out_dir: &Path, quick: bool, model_filter: Option<&str
                 uniform_triangles,
                 uniform_ms,
                 gpu_over_uniform: gpu_ms / uniform_ms,
+                uniform_gpu_ms,
+                gpu_over_uniform_gpu: gpu_ms / uniform_gpu_ms,
                 phases,
             };
             eprintln!(
-                "cc gpu {} {rel:e}: {} tris, gpu {:.1} ms, cpu {:.1} ms, uniform n={} {:.1} ms",
-                row.model, tris, gpu_ms, cpu_ms, n, uniform_ms
+                "cc gpu {} {rel:e}: {} tris, gpu {:.1} ms, cpu {:.1} ms, uniform n={} {:.1} ms (GPU {:.1} ms)",
+                row.model, tris, gpu_ms, cpu_ms, n, uniform_ms, uniform_gpu_ms
             );
             rows.push(row);
         }
@@ -222,11 +250,11 @@ pub fn run(assets: &Path, out_dir: &Path, quick: bool, model_filter: Option<&str
 
 fn table(rows: &[Row]) -> String {
     let mut s = String::from(
-        "| model | device | patches | ε (of diagonal) | triangles | measured max (of diag.) | GPU ms | CPU ms | GPU/CPU | GPU Mtri/s | uniform n (same error) | uniform tris | uniform CPU ms | **GPU/uniform** |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
+        "| model | device | patches | ε (of diagonal) | triangles | measured max (of diag.) | GPU ms | CPU ms | GPU/CPU | GPU Mtri/s | uniform n (same error) | uniform tris | uniform CPU ms | **GPU/uniform** | uniform GPU ms | **GPU/uniform GPU** |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
     );
     for r in rows {
         s += &format!(
-            "| {} | {} | {} | {:.0e} | {} | {:.2e} | {:.1} | {:.1} | {:.2} | {:.3} | {} | {} | {:.1} | **{:.2}** |\n",
+            "| {} | {} | {} | {:.0e} | {} | {:.2e} | {:.1} | {:.1} | {:.2} | {:.3} | {} | {} | {:.1} | **{:.2}** | {:.1} | **{:.2}** |\n",
             r.model,
             r.device,
             r.patches,
@@ -240,7 +268,9 @@ fn table(rows: &[Row]) -> String {
             r.uniform_segments,
             r.uniform_triangles,
             r.uniform_ms,
-            r.gpu_over_uniform
+            r.gpu_over_uniform,
+            r.uniform_gpu_ms,
+            r.gpu_over_uniform_gpu
         );
     }
     if rows.iter().any(|r| !r.phases.is_empty()) {

@@ -108,13 +108,16 @@ pub struct RenderArgs {
     #[arg(long, default_value = "800x600", value_parser = parse_size)]
     pub size: (u32, u32),
     /// Bézier: edge test (map2p, map4p, map8p or flat; default map4p). Catmull-Clark:
-    /// adaptive (the default).
+    /// adaptive (the default) or uniform.
     #[arg(long, value_enum)]
     pub method: Option<Method>,
     /// Bézier: edge-test threshold in model units. Default: 0.002 of the bounding-box
     /// diagonal.
     #[arg(long)]
     pub threshold: Option<f32>,
+    /// Catmull-Clark `--method uniform`: segments per patch side (default 8).
+    #[arg(long)]
+    pub segments: Option<u32>,
     /// Catmull-Clark: largest distance to the limit surface, as a fraction of the
     /// bounding-box diagonal (default 1e-3).
     #[arg(long)]

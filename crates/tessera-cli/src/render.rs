@@ -12,7 +12,7 @@ use tessera_wgpu::{Error, RenderOptions};
 
 use tessera_core::catmull_clark::{CcParams, PatchMesh, SurfaceModel, MAX_DEPTH, TREE_DEPTH};
 use tessera_wgpu::bezier::BezierStage;
-use tessera_wgpu::catmull_clark::CcStage;
+use tessera_wgpu::catmull_clark::{CcStage, CcUniformStage};
 use tessera_wgpu::glam::DVec3;
 use tessera_wgpu::output::MeshBuffers;
 
@@ -23,6 +23,7 @@ use crate::gpu::GpuTimings;
 enum StageOutput {
     Bezier(Box<BezierStage>),
     Cc(Box<CcStage>),
+    CcUniform(Box<CcUniformStage>),
 }
 
 impl StageOutput {
@@ -30,6 +31,7 @@ impl StageOutput {
         match self {
             StageOutput::Bezier(s) => s.output(),
             StageOutput::Cc(s) => s.output(),
+            StageOutput::CcUniform(s) => s.output(),
         }
     }
 }
@@ -42,7 +44,8 @@ pub fn render(args: RenderArgs) -> Result<(), Error> {
         (false, Some(Method::Map2p)) => EdgeTest::Map2p,
         (false, Some(Method::Map8p)) => EdgeTest::Map8p,
         (false, Some(Method::Flat)) => EdgeTest::Flat,
-        (true, None | Some(Method::Adaptive)) => EdgeTest::Map4p,
+        // (Unused for Catmull-Clark meshes.)
+        (true, None | Some(Method::Adaptive | Method::Uniform)) => EdgeTest::Map4p,
         (false, _) => return Err(CoreError::Param(
             "tessera render takes the GPU methods map2p, map4p, map8p or flat for Bézier surfaces"
                 .into(),
@@ -50,7 +53,7 @@ pub fn render(args: RenderArgs) -> Result<(), Error> {
         .into()),
         (true, _) => {
             return Err(CoreError::Param(
-                "tessera render takes --method adaptive for Catmull-Clark meshes".into(),
+                "tessera render takes --method adaptive or uniform for Catmull-Clark meshes".into(),
             )
             .into())
         }
@@ -60,6 +63,18 @@ pub fn render(args: RenderArgs) -> Result<(), Error> {
             "--threshold is a Bézier option; Catmull-Clark meshes take --tolerance-rel".into(),
         )
         .into());
+    }
+    let uniform = cc && args.method == Some(Method::Uniform);
+    if args.segments.is_some() && !uniform {
+        return Err(CoreError::Param(
+            "--segments is for Catmull-Clark meshes with --method uniform".into(),
+        )
+        .into());
+    }
+    if uniform && args.tolerance_rel.is_some() {
+        return Err(
+            CoreError::Param("--method uniform takes --segments, not a tolerance".into()).into(),
+        );
     }
     if !cc && args.tolerance_rel.is_some() {
         return Err(CoreError::Param(
@@ -106,18 +121,22 @@ pub fn render(args: RenderArgs) -> Result<(), Error> {
         };
         params.validate(&model)?;
         let gpu = crate::gpu::open(&mut timings)?;
-        let (stage, status) = crate::gpu::run(&gpu, &mut timings, || {
-            CcStage::new(&gpu.device, &model, &params)
-        })?;
-        let counts = (status.indices / 3, status.vertices());
-        let output = StageOutput::Cc(Box::new(stage));
-        (
-            gpu,
-            output,
-            (lo.as_vec3(), hi.as_vec3()),
-            "adaptive",
-            counts,
-        )
+        let bounds = (lo.as_vec3(), hi.as_vec3());
+        if uniform {
+            let n = args.segments.unwrap_or(8);
+            let (stage, (vertices, indices)) = crate::gpu::run(&gpu, &mut timings, || {
+                CcUniformStage::new(&gpu.device, &model, n)
+            })?;
+            let output = StageOutput::CcUniform(Box::new(stage));
+            (gpu, output, bounds, "uniform", (indices / 3, vertices))
+        } else {
+            let (stage, status) = crate::gpu::run(&gpu, &mut timings, || {
+                CcStage::new(&gpu.device, &model, &params)
+            })?;
+            let counts = (status.indices / 3, status.vertices());
+            let output = StageOutput::Cc(Box::new(stage));
+            (gpu, output, bounds, "adaptive", counts)
+        }
     } else {
         let model = crate::tessellate::load(&args.input)?;
         let prep = PreparedBezier::new(&model);

@@ -433,6 +433,32 @@ fn catmull_clark_on_the_gpu_writes_what_the_cpu_writes_and_renders() {
     );
     let bytes = std::fs::read(&png).unwrap();
     assert_eq!(&bytes[..8], b"\x89PNG\r\n\x1a\n");
+    let png = tmp("cc_uniform.png");
+    run_ok(
+        tessera()
+            .args(["render"])
+            .arg(asset("opensubdiv/catmark_pyramid.obj"))
+            .args([
+                "--size",
+                "64x48",
+                "--method",
+                "uniform",
+                "--segments",
+                "3",
+                "-o",
+            ])
+            .arg(&png),
+    );
+    assert_eq!(&std::fs::read(&png).unwrap()[..8], b"\x89PNG\r\n\x1a\n");
+    let out = tessera()
+        .args(["render"])
+        .arg(asset("opensubdiv/catmark_pyramid.obj"))
+        .args(["--segments", "3", "-o"])
+        .arg(tmp("never.png"))
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("--method uniform"));
     // Options of the other kind of surface are refused.
     let out = tessera()
         .args(["render"])
