@@ -9,6 +9,7 @@ use std::time::Instant;
 
 use serde::Serialize;
 
+use crate::gpu::gpu_median_ms;
 use crate::median;
 use tessera_core::catmull_clark::{
     surface_samples, tessellate_adaptive, tessellate_uniform, CcParams, PatchMesh, SurfaceModel,
@@ -112,18 +113,10 @@ fn gpu_time(
     let mesh = stage
         .read_mesh(&gpu.device, &gpu.queue, &status)
         .expect("mesh");
-    let mut times = Vec::new();
-    for _ in 0..repeats {
-        let t = Instant::now();
-        let mut encoder = gpu.device.create_command_encoder(&Default::default());
-        stage.prepare(&gpu.device, &gpu.queue, &mut encoder);
-        gpu.queue.submit([encoder.finish()]);
-        gpu.wait().expect("gpu");
-        times.push(t.elapsed().as_secs_f64() * 1e3);
-    }
+    let ms = gpu_median_ms(gpu, repeats, |e| stage.prepare(&gpu.device, &gpu.queue, e));
     let phases = gpu_phases(gpu, &stage);
     gpu.check().expect("no wgpu errors");
-    (median(times), mesh, phases)
+    (ms, mesh, phases)
 }
 
 /// Median time of the GPU uniform stage's run to completion at `n` segments (after a
@@ -131,18 +124,9 @@ fn gpu_time(
 fn gpu_uniform_time(gpu: &Gpu, model: &SurfaceModel, n: u32, repeats: usize) -> (f64, usize) {
     let mut stage = CcUniformStage::new(&gpu.device, model, n).expect("uniform stage");
     tessera_wgpu::stage::run_blocking(&mut stage, &gpu.device, &gpu.queue).expect("first run");
-    let times = (0..repeats)
-        .map(|_| {
-            let t = Instant::now();
-            let mut encoder = gpu.device.create_command_encoder(&Default::default());
-            stage.prepare(&gpu.device, &gpu.queue, &mut encoder);
-            gpu.queue.submit([encoder.finish()]);
-            gpu.wait().expect("gpu");
-            t.elapsed().as_secs_f64() * 1e3
-        })
-        .collect();
+    let ms = gpu_median_ms(gpu, repeats, |e| stage.prepare(&gpu.device, &gpu.queue, e));
     gpu.check().expect("no wgpu errors");
-    (median(times), stage.index_count() as usize / 3)
+    (ms, stage.index_count() as usize / 3)
 }
 
 pub fn run(assets: &Path, out_dir: &Path, quick: bool, model_filter: Option<&str>) {

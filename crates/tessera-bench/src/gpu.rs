@@ -116,18 +116,8 @@ pub fn run(assets: &Path, out_dir: &Path, quick: bool) {
             let status = stage
                 .run_blocking(&gpu.device, &gpu.queue)
                 .expect("first run");
-            let gpu_ms = median(
-                (0..repeats)
-                    .map(|_| {
-                        let t = Instant::now();
-                        let mut encoder = gpu.device.create_command_encoder(&Default::default());
-                        stage.prepare(&gpu.device, &gpu.queue, &mut encoder);
-                        gpu.queue.submit([encoder.finish()]);
-                        gpu.wait().expect("gpu");
-                        t.elapsed().as_secs_f64() * 1e3
-                    })
-                    .collect(),
-            );
+            let gpu_ms =
+                gpu_median_ms(&gpu, repeats, |e| stage.prepare(&gpu.device, &gpu.queue, e));
             gpu.check().expect("no wgpu errors");
             // One kernel per submission, for the per-kernel column (not the timed run).
             let kernels_ms = stage
@@ -176,6 +166,27 @@ pub fn run(assets: &Path, out_dir: &Path, quick: bool) {
         rows,
     };
     crate::write_results(out_dir, "bezier_gpu", &report, table(&report));
+}
+
+/// Median over `repeats` runs of what `record` puts into an encoder, submitted and
+/// waited for (ms).
+pub(crate) fn gpu_median_ms(
+    gpu: &Gpu,
+    repeats: usize,
+    mut record: impl FnMut(&mut tessera_wgpu::wgpu::CommandEncoder),
+) -> f64 {
+    median(
+        (0..repeats)
+            .map(|_| {
+                let t = Instant::now();
+                let mut encoder = gpu.device.create_command_encoder(&Default::default());
+                record(&mut encoder);
+                gpu.queue.submit([encoder.finish()]);
+                gpu.wait().expect("gpu");
+                t.elapsed().as_secs_f64() * 1e3
+            })
+            .collect(),
+    )
 }
 
 fn table(r: &GpuReport) -> String {

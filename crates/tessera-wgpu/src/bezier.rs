@@ -49,7 +49,7 @@ use wgpu::util::DeviceExt;
 
 use crate::error::{Error, Result};
 use crate::headless::{map_read, read_buffer};
-use crate::kernel::{storage, Kernel};
+use crate::kernel::{check_size, storage, Kernel};
 use crate::output::MeshBuffers;
 use crate::scan::{PrefixSum, ScanKernels};
 use crate::stage::GrowingStage;
@@ -230,19 +230,6 @@ fn triangle_words(depth: u32) -> (u32, u32) {
     let points = Lattice::points_words(depth) as u32;
     let pole = (3 * ((1u32 << depth) + 1)).div_ceil(32);
     (points, pole)
-}
-
-/// Fails with [`Error::OutputTooLarge`] when a storage buffer of `bytes` would exceed
-/// what `device` can bind.
-fn check_size(device: &wgpu::Device, what: &'static str, bytes: u64) -> Result<()> {
-    let limits = device.limits();
-    let limit = limits
-        .max_buffer_size
-        .min(limits.max_storage_buffer_binding_size);
-    if bytes > limit {
-        return Err(Error::OutputTooLarge { what, bytes, limit });
-    }
-    Ok(())
 }
 
 fn scratch_buffer(
@@ -585,21 +572,12 @@ impl BezierStage {
         };
         let vertices = grow(status.vertices, self.buffers.output.vertex_capacity);
         let indices = grow(status.indices, self.buffers.output.index_capacity);
-        let limits = device.limits();
-        let limit = limits
-            .max_buffer_size
-            .min(limits.max_storage_buffer_binding_size);
-        for (what, bytes) in [
-            (
-                "vertex",
-                vertices as u64 * std::mem::size_of::<OutVertex>() as u64,
-            ),
-            ("index", indices as u64 * 4),
-        ] {
-            if bytes > limit {
-                return Err(Error::OutputTooLarge { what, bytes, limit });
-            }
-        }
+        check_size(
+            device,
+            "vertex",
+            vertices as u64 * std::mem::size_of::<OutVertex>() as u64,
+        )?;
+        check_size(device, "index", indices as u64 * 4)?;
         self.buffers.output = MeshBuffers::with_capacity(device, vertices, indices);
         self.buffers.records = storage(
             device,

@@ -1,6 +1,7 @@
 //! What every compute stage shares: compiling a kernel with the bindings its entry point
 //! uses, binding buffers by number, and dispatching any number of invocations.
 
+use crate::error::{Error, Result};
 use crate::shaders;
 
 /// Largest x dimension dispatched; larger counts spill into y (kernels fold it back).
@@ -84,6 +85,19 @@ impl Kernel {
 pub(crate) fn groups_2d(items: u32, per_group: u32) -> (u32, u32) {
     let g = items.div_ceil(per_group);
     (g.min(MAX_GROUPS_X), g.div_ceil(MAX_GROUPS_X).max(1))
+}
+
+/// Fails with [`Error::OutputTooLarge`] when a storage buffer of `bytes` would exceed
+/// what `device` can create and bind.
+pub(crate) fn check_size(device: &wgpu::Device, what: &'static str, bytes: u64) -> Result<()> {
+    let limits = device.limits();
+    let limit = limits
+        .max_buffer_size
+        .min(limits.max_storage_buffer_binding_size);
+    if bytes > limit {
+        return Err(Error::OutputTooLarge { what, bytes, limit });
+    }
+    Ok(())
 }
 
 /// A storage buffer the kernels write and tests can copy.

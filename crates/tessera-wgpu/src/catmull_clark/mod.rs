@@ -30,7 +30,7 @@ use tessera_core::gpu_types::{CcHashSlot, CcHashStatus};
 use wgpu::util::DeviceExt;
 
 use crate::error::{Error, Result};
-use crate::kernel::{storage, Kernel};
+use crate::kernel::{check_size, storage, Kernel};
 use crate::scan::{PrefixSum, ScanKernels};
 
 /// The flattened quadtrees on the GPU (bindings 20–24 of the Catmull-Clark kernels).
@@ -374,14 +374,7 @@ impl CcVertexHash {
     pub fn grow(&mut self, device: &wgpu::Device) -> Result<()> {
         let capacity = (2 * self.capacity).max((2 * self.item_capacity).next_power_of_two());
         let bytes = capacity as u64 * std::mem::size_of::<CcHashSlot>() as u64;
-        let limit = device.limits().max_storage_buffer_binding_size;
-        if bytes > limit {
-            return Err(Error::OutputTooLarge {
-                what: "vertex hash",
-                bytes,
-                limit,
-            });
-        }
+        check_size(device, "vertex hash", bytes)?;
         self.table = storage(device, "tessera cc hash table", bytes);
         self.capacity = capacity;
         Ok(())

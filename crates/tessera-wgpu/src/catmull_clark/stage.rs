@@ -57,7 +57,7 @@ use wgpu::util::DeviceExt;
 use super::{CcHashBinds, CcHashKernels, CcModelBuffers, CcVertexEval, CcVertexHash};
 use crate::error::{Error, Result};
 use crate::headless::map_read;
-use crate::kernel::{storage, Kernel};
+use crate::kernel::{check_size, storage, Kernel};
 use crate::output::MeshBuffers;
 use crate::scan::{PrefixSum, ScanKernels};
 use crate::stage::GrowingStage;
@@ -724,10 +724,6 @@ impl Buffers {
             hash_slots: caps.hash_slots.max(1).next_power_of_two(),
         };
         let items = 4 * caps.leaves;
-        let limits = device.limits();
-        let limit = limits
-            .max_buffer_size
-            .min(limits.max_storage_buffer_binding_size);
         for (what, bytes) in [
             ("cell list", caps.cells as u64 * 16),
             ("leaf", caps.leaves as u64 * 16),
@@ -740,9 +736,7 @@ impl Buffers {
             ),
             ("vertex hash", caps.hash_slots as u64 * 12),
         ] {
-            if bytes > limit {
-                return Err(Error::OutputTooLarge { what, bytes, limit });
-            }
+            check_size(device, what, bytes)?;
         }
         let params = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("tessera cc params"),

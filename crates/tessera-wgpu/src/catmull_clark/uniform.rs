@@ -26,7 +26,7 @@ use wgpu::util::DeviceExt;
 
 use super::{CcModelBuffers, CcVertexEval};
 use crate::error::{Error, Result};
-use crate::kernel::{storage, Kernel};
+use crate::kernel::{check_size, storage, Kernel};
 use crate::output::MeshBuffers;
 
 /// Binding numbers of the uniform kernels (`shaders/shared/cc_uniform.wgsl`).
@@ -222,10 +222,6 @@ impl Sized {
         params: &CcUniformParams,
     ) -> Result<Self> {
         let (vertices, indices) = (params.vertex_count(), params.index_count());
-        let limits = device.limits();
-        let limit = limits
-            .max_buffer_size
-            .min(limits.max_storage_buffer_binding_size);
         for (what, bytes) in [
             (
                 "vertex",
@@ -237,9 +233,7 @@ impl Sized {
             ),
             ("index", indices as u64 * 4),
         ] {
-            if bytes > limit {
-                return Err(Error::OutputTooLarge { what, bytes, limit });
-            }
+            check_size(device, what, bytes)?;
         }
         let points = storage(
             device,
