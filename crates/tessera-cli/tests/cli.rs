@@ -450,24 +450,22 @@ fn catmull_clark_on_the_gpu_writes_what_the_cpu_writes_and_renders() {
             .arg(&png),
     );
     assert_eq!(&std::fs::read(&png).unwrap()[..8], b"\x89PNG\r\n\x1a\n");
-    let out = tessera()
-        .args(["render"])
-        .arg(asset("opensubdiv/catmark_pyramid.obj"))
-        .args(["--segments", "3", "-o"])
-        .arg(tmp("never.png"))
-        .output()
-        .unwrap();
-    assert!(!out.status.success());
-    assert!(String::from_utf8_lossy(&out.stderr).contains("--method uniform"));
-    // Options of the other kind of surface are refused.
-    let out = tessera()
-        .args(["render"])
-        .arg(asset("opensubdiv/catmark_pyramid.obj"))
-        .args(["--threshold", "0.1", "-o"])
-        .arg(tmp("never.png"))
-        .output()
-        .unwrap();
-    assert!(!out.status.success());
-    assert!(String::from_utf8_lossy(&out.stderr).contains("--tolerance-rel"));
+    // --segments without --method uniform, and options of the other kind of surface,
+    // are refused.
+    for (option, expect) in [
+        (["--segments", "3"], "--method uniform"),
+        (["--threshold", "0.1"], "--tolerance-rel"),
+    ] {
+        let out = tessera()
+            .args(["render"])
+            .arg(asset("opensubdiv/catmark_pyramid.obj"))
+            .args(option)
+            .arg("-o")
+            .arg(tmp("never.png"))
+            .output()
+            .unwrap();
+        assert!(!out.status.success());
+        assert!(String::from_utf8_lossy(&out.stderr).contains(expect));
+    }
     assert!(!tmp("never.png").exists());
 }
