@@ -134,6 +134,23 @@ fn bad_input_names_file_line_and_problem() {
             format!("{SQUARE}f 1 2 3 4\nt hole 1/0/0 3\n"),
             "test.obj:6: hole face 3 out of range",
         ),
+        // Counts whose sum wraps around usize must not pass the length check.
+        (
+            format!("{SQUARE}f 1 2 3 4\nt foo 18446744073709551615/1/0 1\n"),
+            "test.obj:6: tag \"foo\" announces too many values but has 1",
+        ),
+        (
+            format!("{SQUARE}f 1 2 3 4\nt foo 9223372036854775807/9223372036854775807/2 1\n"),
+            "test.obj:6: tag \"foo\" announces",
+        ),
+        (
+            format!("{SQUARE}f 1 2 3 4\nt interpolateboundary 1/0/0 7\n"),
+            "test.obj:6: interpolateboundary 7: expected 0, 1 or 2",
+        ),
+        (
+            "v 0 0 2e18\n".into(),
+            "test.obj:1: coordinate 2e18 is beyond ±1e18",
+        ),
         // Three faces on the edge 1-2.
         (
             format!("{SQUARE}v 0 -1 0\nv 0 0 1\nf 1 2 3\nf 2 1 5\nf 1 2 6\n"),
@@ -154,6 +171,19 @@ fn bad_input_names_file_line_and_problem() {
         assert!(err.contains(expect), "expected {expect:?}, got {err:?}");
         assert_eq!(err.lines().count(), 1, "{err}");
     }
+}
+
+#[test]
+fn non_manifold_edges_are_reported_as_such() {
+    // OpenSubdiv's fan: three sheets on one chain of edges. Its second sheet also runs
+    // the shared edges the same way as the first, which must not mask the real problem.
+    let err = PatchMesh::new(&control_mesh("opensubdiv/catmark_fan.obj"))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("catmark_fan.obj:") && err.contains("non-manifold edge"),
+        "{err}"
+    );
 }
 
 #[test]
@@ -266,7 +296,15 @@ fn gltf_and_glb_triangle_meshes_are_welded_by_position() {
     glb.extend_from_slice(&(bin_padded.len() as u32).to_le_bytes());
     glb.extend_from_slice(b"BIN\0");
     glb.extend_from_slice(&bin_padded);
+    // Also through `load_control_mesh`, which picks the reader by extension (what the
+    // CLI calls), from files on disk.
+    let dir = std::env::temp_dir().join(format!("tessera-gltf-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
     for (name, bytes) in [("cube.gltf", gltf.into_bytes()), ("cube.glb", glb)] {
+        let file = dir.join(name);
+        std::fs::write(&file, &bytes).unwrap();
+        let loaded = tessera_core::io::load_control_mesh(&file).unwrap();
+        assert_eq!(loaded.faces.len(), 12, "{name} from disk");
         let mesh = parse_gltf(Path::new(name), &bytes).unwrap();
         assert_eq!(mesh.positions.len(), 8, "{name}: welded");
         assert_eq!(mesh.faces.len(), 12, "{name}");
@@ -282,6 +320,7 @@ fn gltf_and_glb_triangle_meshes_are_welded_by_position() {
             "{name}: no boundary"
         );
     }
+    let _ = std::fs::remove_dir_all(&dir);
     // Bad glTF: one line naming the file.
     for (bytes, expect) in [
         (&b"{\"asset\":"[..], "not a valid glTF file"),

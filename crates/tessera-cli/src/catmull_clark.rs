@@ -9,7 +9,7 @@ use tessera_core::catmull_clark::{
     surface_samples, tessellate_adaptive, tessellate_uniform, CcParams, CcTessellation, PatchMesh,
     SurfaceModel, MAX_DEPTH, TREE_DEPTH,
 };
-use tessera_core::io::export::{write_atomically, MeshFormat};
+use tessera_core::io::export::MeshFormat;
 use tessera_core::io::load_control_mesh;
 use tessera_core::measure::ErrorStats;
 use tessera_core::Error as CoreError;
@@ -18,7 +18,7 @@ use tessera_wgpu::Error;
 
 use crate::cli::{Backend, Method, TessellateArgs};
 use crate::gpu::GpuTimings;
-use crate::tessellate::{measure_and_write, ms, Timings};
+use crate::tessellate::{finish_outputs, measure_and_write, ms, Timings};
 
 /// Default tolerance as a fraction of the bounding-box diagonal.
 pub const DEFAULT_TOLERANCE_REL: f64 = 1e-3;
@@ -172,7 +172,7 @@ pub fn tessellate(args: TessellateArgs) -> Result<(), Error> {
         .measure_samples
         .unwrap_or(DEFAULT_MEASURE_SAMPLES)
         .max(32);
-    let error = measure_and_write(
+    let (error, staged_mesh) = measure_and_write(
         &out.mesh,
         args.measure,
         || surface_samples(&model, measure_samples),
@@ -207,6 +207,7 @@ pub fn tessellate(args: TessellateArgs) -> Result<(), Error> {
         error,
         measure_samples: args.measure.then_some(measure_samples),
     };
+    finish_outputs(staged_mesh, args.stats.as_deref(), &stats)?;
     let mut line = format!(
         "{}: {} ({}) {} triangles, {} vertices, {} patches ({} irregular), {} evaluations, tessellate {:.2} ms",
         stats.input,
@@ -231,10 +232,6 @@ pub fn tessellate(args: TessellateArgs) -> Result<(), Error> {
             "error vs exact surface: max {:.6} ({:.3e} of diagonal {:.4}), mean {:.6}, p99 {:.6} over {} samples",
             e.max_error, e.max_error_rel, e.bbox_diag, e.mean_error, e.p99_error, e.samples
         );
-    }
-    if let Some(path) = &args.stats {
-        let json = serde_json::to_string_pretty(&stats).expect("stats serialize");
-        write_atomically(path, |w| writeln!(w, "{json}"))?;
     }
     Ok(())
 }

@@ -9,7 +9,7 @@ use tessera_core::bezier::{
     tessellate_adaptive, tessellate_uniform, AdaptiveParams, BezierModel, EdgeTest, PreparedBezier,
     Tessellation,
 };
-use tessera_core::io::export::{write_atomically, write_mesh, MeshFormat};
+use tessera_core::io::export::{commit_all, stage, stage_mesh, MeshFormat, StagedFile};
 use tessera_core::measure::{bezier_surface_samples, measure_error, ErrorStats};
 use tessera_core::Error as CoreError;
 use tessera_wgpu::bezier::BezierStage;
@@ -63,15 +63,16 @@ pub(crate) fn ms(t: Instant) -> f64 {
     t.elapsed().as_secs_f64() * 1e3
 }
 
-/// With `measure`, the error of `mesh` against `samples()`; then `mesh` written to
-/// `output` if given. Both timed into `timings`.
+/// With `measure`, the error of `mesh` against `samples()`; then `mesh` written under a
+/// temporary name beside `output` if given ([`finish_outputs`] puts it in place). Both
+/// timed into `timings`.
 pub(crate) fn measure_and_write(
     mesh: &tessera_core::Mesh,
     measure: bool,
     samples: impl FnOnce() -> Vec<tessera_wgpu::glam::DVec3>,
     output: Option<&Path>,
     timings: &mut Timings,
-) -> Result<Option<ErrorStats>, CoreError> {
+) -> Result<(Option<ErrorStats>, Option<StagedFile>), CoreError> {
     let error = if measure {
         let t = Instant::now();
         let e = measure_error(&samples(), mesh);
@@ -81,11 +82,24 @@ pub(crate) fn measure_and_write(
         None
     };
     let t = Instant::now();
-    if let Some(o) = output {
-        write_mesh(o, mesh)?;
-    }
+    let staged = output.map(|o| stage_mesh(o, mesh)).transpose()?;
     timings.write = ms(t);
-    Ok(error)
+    Ok((error, staged))
+}
+
+/// Writes the stats JSON (if asked), then puts the mesh and the stats in place together:
+/// if either cannot be written, neither is left behind.
+pub(crate) fn finish_outputs(
+    mesh: Option<StagedFile>,
+    stats_path: Option<&Path>,
+    stats: &impl Serialize,
+) -> Result<(), CoreError> {
+    let mut files: Vec<StagedFile> = mesh.into_iter().collect();
+    if let Some(path) = stats_path {
+        let json = serde_json::to_string_pretty(stats).expect("stats serialize");
+        files.push(stage(path, |w| writeln!(w, "{json}"))?);
+    }
+    commit_all(files)
 }
 
 pub fn run(cli: Cli) -> Result<(), Error> {
@@ -285,7 +299,7 @@ fn tessellate(args: TessellateArgs) -> Result<(), Error> {
     };
     timings.gpu = gpu.as_ref().map(|_| gpu_timings);
 
-    let error = measure_and_write(
+    let (error, staged_mesh) = measure_and_write(
         &out.mesh,
         args.measure,
         || bezier_surface_samples(&model, measure_samples),
@@ -321,11 +335,8 @@ fn tessellate(args: TessellateArgs) -> Result<(), Error> {
         error,
         measure_samples: args.measure.then_some(measure_samples),
     };
+    finish_outputs(staged_mesh, args.stats.as_deref(), &stats)?;
     print_summary(&stats);
-    if let Some(path) = &args.stats {
-        let json = serde_json::to_string_pretty(&stats).expect("stats serialize");
-        write_atomically(path, |w| writeln!(w, "{json}"))?;
-    }
     Ok(())
 }
 

@@ -197,6 +197,14 @@ pub fn validate(mesh: &ControlMesh) -> Result<usize> {
                     ),
                 ));
             }
+        }
+    }
+    // Orientation after all uses are counted, so that an edge of three faces is reported
+    // as non-manifold, not as the orientation clash its second use may look like.
+    for (f, face) in mesh.faces.iter().enumerate() {
+        let n = face.len();
+        for k in 0..n {
+            let (a, b) = (face[k], face[(k + 1) % n]);
             if let Some(&g) = directed.get(&(a, b)) {
                 return Err(face_err(
                     f,

@@ -4,7 +4,7 @@
 //! failure never leaves a partial file behind.
 
 use std::io::Write;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use crate::error::{Error, Result};
 use crate::mesh::Mesh;
@@ -36,8 +36,14 @@ impl MeshFormat {
 
 /// Writes `mesh` in the format named by the extension of `path`.
 pub fn write_mesh(path: &Path, mesh: &Mesh) -> Result<()> {
+    stage_mesh(path, mesh)?.commit()
+}
+
+/// Writes `mesh` under a temporary name beside `path`; [`StagedFile::commit`] puts it
+/// in place. Lets a command write several files and keep none if one of them fails.
+pub fn stage_mesh(path: &Path, mesh: &Mesh) -> Result<StagedFile> {
     let format = MeshFormat::from_path(path)?;
-    write_atomically(path, |w| match format {
+    stage(path, |w| match format {
         MeshFormat::Obj => write_obj(w, mesh),
         MeshFormat::Ply => write_ply(w, mesh),
     })
@@ -48,6 +54,60 @@ pub fn write_atomically(
     path: &Path,
     fill: impl FnOnce(&mut dyn Write) -> std::io::Result<()>,
 ) -> Result<()> {
+    stage(path, fill)?.commit()
+}
+
+/// A file written completely under a temporary name, not yet in place. Dropping it
+/// without [`commit`](Self::commit) removes it.
+#[derive(Debug)]
+pub struct StagedFile {
+    tmp: PathBuf,
+    path: PathBuf,
+    committed: bool,
+}
+
+impl StagedFile {
+    /// Renames the file into place.
+    pub fn commit(mut self) -> Result<()> {
+        std::fs::rename(&self.tmp, &self.path).map_err(|source| Error::Io {
+            path: self.path.clone(),
+            source,
+        })?;
+        self.committed = true;
+        Ok(())
+    }
+}
+
+impl Drop for StagedFile {
+    fn drop(&mut self) {
+        if !self.committed {
+            let _ = std::fs::remove_file(&self.tmp);
+        }
+    }
+}
+
+/// Puts every staged file in place, or, if a rename fails, removes the ones already
+/// placed and the rest: a command leaves all its output files or none.
+pub fn commit_all(files: Vec<StagedFile>) -> Result<()> {
+    let mut placed: Vec<PathBuf> = Vec::new();
+    for f in files {
+        let path = f.path.clone();
+        if let Err(e) = f.commit() {
+            for p in &placed {
+                let _ = std::fs::remove_file(p);
+            }
+            return Err(e);
+        }
+        placed.push(path);
+    }
+    Ok(())
+}
+
+/// Writes through `fill` into a temporary file beside `path`.
+pub fn stage(
+    path: &Path,
+    fill: impl FnOnce(&mut dyn Write) -> std::io::Result<()>,
+) -> Result<StagedFile> {
     let io_err = |source| Error::Io {
         path: path.to_path_buf(),
         source,
@@ -55,18 +115,19 @@ pub fn write_atomically(
     let file_name = path
         .file_name()
         .ok_or_else(|| Error::Param(format!("{}: not a file path", path.display())))?;
-    let tmp = path.with_file_name(format!(".{}.tmp", file_name.to_string_lossy()));
-    let result = (|| {
-        let file = std::fs::File::create(&tmp)?;
+    let staged = StagedFile {
+        tmp: path.with_file_name(format!(".{}.tmp", file_name.to_string_lossy())),
+        path: path.to_path_buf(),
+        committed: false,
+    };
+    (|| {
+        let file = std::fs::File::create(&staged.tmp)?;
         let mut w = std::io::BufWriter::new(file);
         fill(&mut w)?;
-        w.into_inner().map_err(|e| e.into_error())?.sync_all()?;
-        std::fs::rename(&tmp, path)
-    })();
-    if result.is_err() {
-        let _ = std::fs::remove_file(&tmp);
-    }
-    result.map_err(io_err)
+        w.into_inner().map_err(|e| e.into_error())?.sync_all()
+    })()
+    .map_err(io_err)?;
+    Ok(staged)
 }
 
 pub fn write_obj(w: &mut dyn Write, mesh: &Mesh) -> std::io::Result<()> {

@@ -76,10 +76,14 @@ pub fn parse_gltf(path: &Path, bytes: &[u8]) -> Result<ControlMesh> {
                 .collect();
             let mut ids = Vec::with_capacity(positions.len());
             for p in &positions {
-                if !p.is_finite() {
+                if !p.is_finite() || p.abs().max_element() > super::MAX_COORDINATE {
                     return Err(Error::input(
                         path,
-                        format!("mesh {}: position {p} is not finite", m.index()),
+                        format!(
+                            "mesh {}: position {p} is not finite or beyond ±{:e}",
+                            m.index(),
+                            super::MAX_COORDINATE
+                        ),
                     ));
                 }
                 let key = [p.x.to_bits(), p.y.to_bits(), p.z.to_bits()];

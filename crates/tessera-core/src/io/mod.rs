@@ -5,13 +5,24 @@ pub mod gltf;
 pub mod obj;
 pub mod teaset;
 
-/// Loads a Catmull-Clark control mesh, choosing the reader by extension (`.obj`;
-/// `.gltf`/`.glb` once supported).
+/// Loads a Catmull-Clark control mesh, choosing the reader by extension: `.gltf` and
+/// `.glb` through [`gltf`], anything else as OBJ.
 pub fn load_control_mesh(
     path: &std::path::Path,
 ) -> crate::Result<crate::catmull_clark::ControlMesh> {
-    obj::load_obj(path)
+    let ext = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase);
+    match ext.as_deref() {
+        Some("gltf" | "glb") => gltf::load_gltf(path),
+        _ => obj::load_obj(path),
+    }
 }
+
+/// Input coordinates beyond this are refused: squared distances of single-precision
+/// points (what the GPU computes) would overflow.
+pub const MAX_COORDINATE: f64 = 1e18;
 
 /// Reads a whole input file; the error names it.
 pub(crate) fn read_file(path: &std::path::Path) -> crate::Result<Vec<u8>> {

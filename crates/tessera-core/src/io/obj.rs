@@ -101,10 +101,14 @@ pub fn parse_obj(path: &Path, bytes: &[u8]) -> Result<ControlMesh> {
                         ))
                     })?;
                 let rest: Vec<&str> = words.collect();
-                if rest.len() < counts[0] + counts[1] + counts[2] {
+                // Checked: counts near usize::MAX must not wrap into a small total.
+                let announced = counts[0]
+                    .checked_add(counts[1])
+                    .and_then(|n| n.checked_add(counts[2]));
+                if announced.is_none_or(|n| rest.len() < n) {
                     return Err(err(format!(
                         "tag {name:?} announces {} values but has {}",
-                        counts[0] + counts[1] + counts[2],
+                        announced.map_or("too many".into(), |n| n.to_string()),
                         rest.len()
                     )));
                 }
@@ -159,7 +163,8 @@ pub fn parse_obj(path: &Path, bytes: &[u8]) -> Result<ControlMesh> {
                     "{}:{line}: interpolateboundary 0 (no boundary interpolation) is not supported; boundaries use the edge-and-corner rule",
                     path.display()
                 )),
-                other => return Err(err(format!("interpolateboundary {other:?}: expected 0, 1 or 2"))),
+                Some(other) => return Err(err(format!("interpolateboundary {other}: expected 0, 1 or 2"))),
+                None => return Err(err("interpolateboundary without a value: expected 0, 1 or 2".into())),
             },
             "hole" => {
                 for &f in &ints {
@@ -193,10 +198,15 @@ pub fn parse_obj(path: &Path, bytes: &[u8]) -> Result<ControlMesh> {
 
 fn parse_finite(w: &str) -> Result<f64, String> {
     let x: f64 = w.parse().map_err(|_| format!("{w:?} is not a number"))?;
-    if x.is_finite() {
-        Ok(x)
-    } else {
+    if !x.is_finite() {
         Err(format!("coordinate {w:?} is not finite"))
+    } else if x.abs() > super::MAX_COORDINATE {
+        Err(format!(
+            "coordinate {w} is beyond ±{:e}, where single-precision distances overflow",
+            super::MAX_COORDINATE
+        ))
+    } else {
+        Ok(x)
     }
 }
 

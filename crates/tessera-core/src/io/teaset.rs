@@ -57,7 +57,8 @@ pub fn parse_teaset(path: &Path, bytes: &[u8]) -> Result<TeasetFile> {
         return Err(Error::parse(path, line, "patch count is 0"));
     }
     // The patch lines, the vertex-count line and at least one vertex line must exist.
-    if patch_count + 2 > lines.len() - 1 {
+    // (saturating: a count near usize::MAX must not wrap around to a small number)
+    if patch_count.saturating_add(2) > lines.len() - 1 {
         return Err(Error::parse(
             path,
             line,
@@ -145,6 +146,17 @@ pub fn parse_teaset(path: &Path, bytes: &[u8]) -> Result<TeasetFile> {
                     format!("coordinate {} is not finite: {field}", n + 1),
                 ));
             }
+            if f64::from(v.abs()) > super::MAX_COORDINATE {
+                return Err(Error::parse(
+                    path,
+                    line,
+                    format!(
+                        "coordinate {} is {field}: beyond ±{:e}, where single-precision distances overflow",
+                        n + 1,
+                        super::MAX_COORDINATE
+                    ),
+                ));
+            }
             xyz[n] = v;
             n += 1;
         }
@@ -181,9 +193,42 @@ pub fn parse_teaset(path: &Path, bytes: &[u8]) -> Result<TeasetFile> {
             }
             p[k] = (i - 1) as u32;
         }
+        check_patch_shape(path, line, &p.map(|i| vertices[i as usize]))?;
         patches.push(p);
     }
     Ok(TeasetFile { vertices, patches })
+}
+
+/// Rejects the patches the tessellators cannot mesh without zero-area triangles: a patch
+/// that is a single point, and one with two adjacent sides collapsed to points (the
+/// corner between them is singular). One collapsed side, or two opposite ones, are fine:
+/// the teapot's lid and bottom have them.
+fn check_patch_shape(path: &Path, line: usize, net: &[Vec3; 16]) -> Result<()> {
+    let same = |ids: [usize; 4]| ids.iter().all(|&i| net[i] == net[ids[0]]);
+    if net.iter().all(|p| *p == net[0]) {
+        return Err(Error::parse(
+            path,
+            line,
+            "all 16 control points are the same point: the patch has no area",
+        ));
+    }
+    // Sides in order around the patch: v = 0, u = 1, v = 1, u = 0.
+    let collapsed = [
+        same([0, 1, 2, 3]),
+        same([3, 7, 11, 15]),
+        same([12, 13, 14, 15]),
+        same([0, 4, 8, 12]),
+    ];
+    for k in 0..4 {
+        if collapsed[k] && collapsed[(k + 1) % 4] {
+            return Err(Error::parse(
+                path,
+                line,
+                "two adjacent sides of the patch collapse to points: the corner between them is singular (unsupported)",
+            ));
+        }
+    }
+    Ok(())
 }
 
 fn parse_count(path: &Path, line: usize, s: &str, what: &str) -> Result<usize> {
@@ -268,6 +313,40 @@ mod tests {
             err(&truncated)
         );
         assert!(err("1\n1,2\n").contains("exceeds"));
+        // A count that would wrap `count + 2` around to a small number.
+        assert!(err(&format!("{}\n1,2\n3\n4\n", u64::MAX)).contains("exceeds"));
+        let huge = one_patch().replacen("3,3,0", "3,2e19,0", 1);
+        assert!(
+            err(&huge).starts_with("t.txt:19: coordinate 2 is 2e19: beyond"),
+            "{}",
+            err(&huge)
+        );
+        let mut point = String::from("1\n");
+        point += &["1"; 16].join(",");
+        point += "\n1\n0.5,0.5,0\n";
+        assert_eq!(
+            err(&point),
+            "t.txt:2: all 16 control points are the same point: the patch has no area"
+        );
+        // Rows v = 0 and column u = 0 both at the origin: two adjacent collapsed sides.
+        let mut corner = String::from("1\n1,1,1,1,1,2,3,4,1,5,6,7,1,8,9,10\n10\n0,0,0\n");
+        for (x, y) in [
+            (1, 1),
+            (2, 1),
+            (3, 1),
+            (1, 2),
+            (2, 2),
+            (3, 2),
+            (1, 3),
+            (2, 3),
+            (3, 3),
+        ] {
+            corner += &format!("{x},{y},0\n");
+        }
+        assert!(err(&corner).contains("two adjacent sides of the patch collapse"));
+        // Two opposite collapsed sides (a spindle) are a valid patch.
+        let spindle = "1\n1,1,1,1,2,3,4,5,6,7,8,9,10,10,10,10\n10\n0,0,0\n1,1,0\n1,2,0\n1,3,0\n1,4,0\n2,1,0\n2,2,0\n2,3,0\n2,4,0\n3,0,0\n";
+        assert!(parse_teaset(Path::new("s"), spindle.as_bytes()).is_ok());
         let binary = parse_teaset(Path::new("b"), &[0xff, 0xfe, 0x00])
             .unwrap_err()
             .to_string();
