@@ -18,7 +18,7 @@ use tessera_wgpu::Error;
 
 use crate::cli::{Backend, Method, TessellateArgs};
 use crate::gpu::GpuTimings;
-use crate::tessellate::{finish_outputs, measure_and_write, ms, Timings};
+use crate::tessellate::{check_measure_args, finish_outputs, measure_and_write, ms, Timings};
 
 /// Default tolerance as a fraction of the bounding-box diagonal.
 pub const DEFAULT_TOLERANCE_REL: f64 = 1e-3;
@@ -103,6 +103,8 @@ pub fn tessellate(args: TessellateArgs) -> Result<(), Error> {
     let model = SurfaceModel::new(PatchMesh::new(&control)?, TREE_DEPTH);
     timings.prepare = ms(t);
     let diag = control.bbox_diag();
+    let measure_samples = args.measure_samples.unwrap_or(DEFAULT_MEASURE_SAMPLES);
+    check_measure_args(&args, measure_samples, model.mesh.surface_patches().count())?;
 
     let t = Instant::now();
     let (out, tolerance, segments) = match method {
@@ -168,10 +170,6 @@ pub fn tessellate(args: TessellateArgs) -> Result<(), Error> {
         warnings.push(w);
     }
 
-    let measure_samples = args
-        .measure_samples
-        .unwrap_or(DEFAULT_MEASURE_SAMPLES)
-        .max(32);
     let (error, staged_mesh) = measure_and_write(
         &out.mesh,
         args.measure,

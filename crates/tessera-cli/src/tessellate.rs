@@ -30,6 +30,9 @@ pub(crate) struct Timings {
     pub measure: f64,
     pub write: f64,
     pub total: f64,
+    /// `--target-triangles`: the search for the threshold or segment count (CPU runs).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub search: Option<f64>,
     /// The GPU backend's stages (`tessellate` above is its timed run).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub gpu: Option<GpuTimings>,
@@ -102,6 +105,33 @@ pub(crate) fn finish_outputs(
     commit_all(files)
 }
 
+/// A warning when a `--target-triangles` search ended outside ±2% of its target.
+fn warn_if_missed(target: usize, mesh: &tessera_core::Mesh, setting: &str, hit: bool) {
+    if !hit {
+        eprintln!(
+            "warning: nothing gives {target} triangles ±2%; closest: {} at {setting}",
+            mesh.triangle_count()
+        );
+    }
+}
+
+/// `--measure-samples` only with `--measure`, and within the measurement's limits.
+pub(crate) fn check_measure_args(
+    args: &TessellateArgs,
+    per_side: usize,
+    patches: usize,
+) -> Result<(), CoreError> {
+    if args.measure_samples.is_some() && !args.measure {
+        return Err(CoreError::Param(
+            "--measure-samples sets the sampling of --measure; add --measure".into(),
+        ));
+    }
+    if args.measure {
+        tessera_core::measure::check_sampling(per_side, patches)?;
+    }
+    Ok(())
+}
+
 pub fn run(cli: Cli) -> Result<(), Error> {
     match cli.command {
         Command::Tessellate(args) => tessellate(args),
@@ -110,13 +140,9 @@ pub fn run(cli: Cli) -> Result<(), Error> {
     }
 }
 
+/// Loads a Newell teaset file (callers send control meshes, by extension, to
+/// `catmull_clark` first).
 pub fn load(input: &Path) -> Result<BezierModel, CoreError> {
-    if is_control_mesh(input) {
-        return Err(CoreError::Input {
-            file: input.to_path_buf(),
-            msg: "Catmull-Clark control meshes are tessellated on the CPU only so far (`tessera tessellate`); render takes a Newell teaset file".into(),
-        });
-    }
     BezierModel::load(input)
 }
 
@@ -174,8 +200,7 @@ fn tessellate(args: TessellateArgs) -> Result<(), Error> {
     let segments = args.segments.unwrap_or(8);
     let measure_samples = args
         .measure_samples
-        .unwrap_or(tessera_core::measure::DEFAULT_SAMPLES_PER_SIDE)
-        .max(32);
+        .unwrap_or(tessera_core::measure::DEFAULT_SAMPLES_PER_SIDE);
     let t_total = Instant::now();
     let mut timings = Timings::default();
     // Reject bad output paths before doing any work.
@@ -197,6 +222,26 @@ fn tessellate(args: TessellateArgs) -> Result<(), Error> {
         }
     };
 
+    // Options that would be silently ignored are refused instead.
+    if test.is_some() && args.segments.is_some() {
+        return Err(CoreError::Param(
+            "--segments is for --method uniform; the adaptive methods take --threshold".into(),
+        )
+        .into());
+    }
+    if test.is_none() && (args.threshold.is_some() || args.max_depth.is_some()) {
+        return Err(CoreError::Param(
+            "--threshold and --max-depth are for the adaptive methods; --method uniform takes --segments".into(),
+        )
+        .into());
+    }
+    if test.is_none() && args.target_triangles.is_some() && args.segments.is_some() {
+        return Err(CoreError::Param(
+            "--target-triangles searches the segment count; drop --segments".into(),
+        )
+        .into());
+    }
+
     let t = Instant::now();
     let model = load(&args.input)?;
     timings.load = ms(t);
@@ -205,6 +250,16 @@ fn tessellate(args: TessellateArgs) -> Result<(), Error> {
     timings.prepare = ms(t);
     let (lo, hi) = model.bounds();
     let diag = (hi - lo).length();
+    check_measure_args(&args, measure_samples, model.patches.len())?;
+    // Parameters are checked before a device is opened.
+    let adaptive = test.map(|test| AdaptiveParams {
+        test,
+        threshold: args.threshold.unwrap_or(DEFAULT_THRESHOLD_REL * diag),
+        max_depth,
+    });
+    if let Some(a) = &adaptive {
+        a.validate()?;
+    }
 
     // The GPU runs the adaptive methods; uniform tessellation is CPU only. Without
     // --backend, the GPU is used when an adapter exists.
@@ -228,20 +283,27 @@ fn tessellate(args: TessellateArgs) -> Result<(), Error> {
     };
     let mut adapter = None;
 
+    // On the CPU a --target-triangles search's last run is the output: its time is
+    // reported as `search`, and `tessellate` is one more run at the found setting.
+    let mut search = false;
     let t = Instant::now();
     let (out, threshold, segments) = match (test, args.target_triangles) {
-        (Some(test), target) if gpu.is_some() => {
+        (Some(_), target) if gpu.is_some() => {
             let gpu = gpu.as_ref().expect("checked");
             adapter = Some(gpu.adapter_name());
-            let mut params = AdaptiveParams {
-                test,
-                threshold: args.threshold.unwrap_or(DEFAULT_THRESHOLD_REL * diag),
-                max_depth,
-            };
-            params.validate()?;
+            let mut params = adaptive.expect("adaptive method");
             if let Some(n) = target {
                 // The search runs the CPU twin, which makes the same mesh as the kernels.
-                params.threshold = threshold_for_triangles(&prep, params, diag, n)?.threshold;
+                let t = Instant::now();
+                let r = threshold_for_triangles(&prep, params, diag, n)?;
+                timings.search = Some(ms(t));
+                warn_if_missed(
+                    n,
+                    &r.tessellation.mesh,
+                    &format!("threshold {}", r.threshold),
+                    r.within_tolerance,
+                );
+                params.threshold = r.threshold;
             }
             let (stage, status) = crate::gpu::run(gpu, &mut gpu_timings, || {
                 BezierStage::new(&gpu.device, &prep, &params)
@@ -256,23 +318,18 @@ fn tessellate(args: TessellateArgs) -> Result<(), Error> {
                 None,
             )
         }
-        (Some(test), target) => {
-            let base = AdaptiveParams {
-                test,
-                threshold: args.threshold.unwrap_or(DEFAULT_THRESHOLD_REL * diag),
-                max_depth,
-            };
-            base.validate()?;
+        (Some(_), target) => {
+            let base = adaptive.expect("adaptive method");
             match target {
                 Some(n) => {
                     let r = threshold_for_triangles(&prep, base, diag, n)?;
-                    if !r.within_tolerance {
-                        eprintln!(
-                            "warning: no threshold gives {n} triangles ±2%; closest: {} at threshold {}",
-                            r.tessellation.mesh.triangle_count(),
-                            r.threshold
-                        );
-                    }
+                    warn_if_missed(
+                        n,
+                        &r.tessellation.mesh,
+                        &format!("threshold {}", r.threshold),
+                        r.within_tolerance,
+                    );
+                    search = true;
                     (r.tessellation, Some(r.threshold), None)
                 }
                 None => (
@@ -284,6 +341,9 @@ fn tessellate(args: TessellateArgs) -> Result<(), Error> {
         }
         (None, Some(n)) => {
             let (segments, t) = segments_for_triangles(&model, &prep, n)?;
+            let hit = t.mesh.triangle_count().abs_diff(n) as f64 <= 0.02 * n as f64;
+            warn_if_missed(n, &t.mesh, &format!("{segments} segments"), hit);
+            search = true;
             (t, None, Some(segments))
         }
         (None, None) => (
@@ -294,6 +354,23 @@ fn tessellate(args: TessellateArgs) -> Result<(), Error> {
     };
     timings.tessellate = if gpu.is_some() {
         gpu_timings.tessellate
+    } else if search {
+        timings.search = Some(ms(t));
+        // The tessellation alone, as the GPU backend reports it: one run at the setting
+        // the search found (the same mesh).
+        let t = Instant::now();
+        let again = match (test, threshold) {
+            (Some(_), Some(th)) => tessellate_adaptive(
+                &prep,
+                &AdaptiveParams {
+                    threshold: th,
+                    ..adaptive.expect("adaptive method")
+                },
+            )?,
+            _ => tessellate_uniform(&model, &prep, segments.expect("uniform"))?,
+        };
+        debug_assert_eq!(again.mesh, out.mesh);
+        ms(t)
     } else {
         ms(t)
     };

@@ -153,6 +153,15 @@ fn bad_input_is_one_line_naming_file_line_and_problem() {
         format!("4000000000\n{good}").as_bytes(),
         ":1: patch count 4000000000 exceeds",
     );
+    // A count whose `+ 2` would wrap around to a small number.
+    expect_failure(
+        format!("{}\n{good}", u64::MAX).as_bytes(),
+        ":1: patch count 18446744073709551615 exceeds",
+    );
+    expect_failure(
+        good.replacen("1.4,0.0,2.4", "1.4,1e38,2.4", 1).as_bytes(),
+        "coordinate 2 is 1e38: beyond",
+    );
     expect_failure(
         good.replacen("1.4,0.0,2.4", "1.4,NaN,2.4", 1).as_bytes(),
         "not finite",
@@ -167,30 +176,148 @@ fn bad_input_is_one_line_naming_file_line_and_problem() {
     );
 }
 
+/// Parameters that cannot work, or would be silently ignored: exit status 1, one line
+/// saying what is wrong, no panic, no output file. The CPU backend, so that the checks
+/// are shown to come before any device is needed.
 #[test]
 fn bad_parameters_fail_cleanly() {
+    let teapot = teapot();
+    let cube = asset("opensubdiv/catmark_cube.obj");
+    let spot = asset("catmull_clark/spot_control_mesh.obj");
+    let cases: &[(&Path, &[&str], &str)] = &[
+        (
+            &teapot,
+            &["--threshold=-1"],
+            "threshold must be a positive number",
+        ),
+        (&teapot, &["--max-depth", "40"], "max depth 40 is beyond"),
+        (
+            &teapot,
+            &["--segments", "5"],
+            "--segments is for --method uniform",
+        ),
+        (
+            &teapot,
+            &["--method", "uniform", "--threshold", "0.1"],
+            "--threshold and --max-depth are for the adaptive methods",
+        ),
+        (
+            &teapot,
+            &["--method", "uniform", "--segments", "5000"],
+            "segments must be in 1..=1024",
+        ),
+        (
+            &teapot,
+            &["--measure", "--measure-samples", "100000000"],
+            "must be in 32..=1024",
+        ),
+        (
+            &teapot,
+            &["--measure", "--measure-samples", "16"],
+            "must be in 32..=1024",
+        ),
+        (&teapot, &["--measure-samples", "40"], "add --measure"),
+        (
+            &cube,
+            &["--tolerance-rel", "1e-300"],
+            "finer than single-precision output can hold",
+        ),
+        (
+            &cube,
+            &["--tolerance-rel", "0"],
+            "tolerance must be a positive number",
+        ),
+        (
+            &spot,
+            &["--method", "uniform", "--segments", "4096"],
+            "more than the 134217728 allowed",
+        ),
+        (
+            &spot,
+            &["--measure", "--measure-samples", "1024"],
+            "more than the 67108864 allowed",
+        ),
+        (Path::new("/nonexistent/teapot"), &[], "/nonexistent/teapot"),
+    ];
+    let out = tmp("bad_param.ply");
+    for (input, args, expect) in cases {
+        let _ = std::fs::remove_file(&out);
+        let r = tessera()
+            .arg("tessellate")
+            .arg(input)
+            .args(*args)
+            .args(["--backend", "cpu", "-o"])
+            .arg(&out)
+            .output()
+            .unwrap();
+        let stderr = String::from_utf8_lossy(&r.stderr);
+        assert_eq!(r.status.code(), Some(1), "{args:?}: {stderr}");
+        assert_eq!(stderr.trim().lines().count(), 1, "{args:?}: {stderr}");
+        assert!(
+            stderr.contains(expect),
+            "{args:?}: expected {expect:?} in {stderr}"
+        );
+        assert!(!stderr.contains("panicked") && !out.exists(), "{args:?}");
+    }
+}
+
+/// The mesh and the stats are written together: a stats file that cannot be written
+/// leaves no mesh either (and no temporary file).
+#[test]
+fn a_failed_stats_write_leaves_no_mesh() {
+    let dir = tmp("stats_fail");
+    std::fs::create_dir_all(&dir).unwrap();
+    let mesh = dir.join("m.obj");
     let r = tessera()
-        .args(["tessellate", teapot().to_str().unwrap(), "--threshold=-1"])
+        .arg("tessellate")
+        .arg(teapot())
+        .args(["--backend", "cpu", "-o"])
+        .arg(&mesh)
+        .arg("--stats")
+        .arg(dir.join("missing/s.json"))
         .output()
         .unwrap();
-    assert!(!r.status.success());
-    assert!(String::from_utf8_lossy(&r.stderr).contains("threshold must be a positive number"));
-    let r = tessera()
-        .args([
-            "tessellate",
-            teapot().to_str().unwrap(),
-            "--max-depth",
-            "40",
-        ])
-        .output()
-        .unwrap();
-    assert!(!r.status.success());
-    let r = tessera()
-        .args(["tessellate", "/nonexistent/teapot"])
-        .output()
-        .unwrap();
-    assert!(!r.status.success());
-    assert!(String::from_utf8_lossy(&r.stderr).contains("/nonexistent/teapot"));
+    assert_eq!(r.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&r.stderr).contains("missing/s.json"));
+    assert_eq!(
+        std::fs::read_dir(&dir).unwrap().count(),
+        0,
+        "left files behind"
+    );
+}
+
+/// `-o OUT.glb` writes binary glTF, which reads back as a triangle control mesh with one
+/// face per output triangle (the glTF reader, through the CLI).
+#[test]
+fn glb_output_reads_back_as_a_control_mesh() {
+    // The cube's limit surface: closed and manifold once the GLB's vertices are welded
+    // (the teapot is not: its lid rests on the body's rim).
+    let (glb, stats) = (tmp("cube.glb"), tmp("glb.json"));
+    run_ok(
+        tessera()
+            .arg("tessellate")
+            .arg(asset("opensubdiv/catmark_cube.obj"))
+            .args(["--backend", "cpu", "--tolerance-rel", "0.01", "-o"])
+            .arg(&glb)
+            .arg("--stats")
+            .arg(&stats),
+    );
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&stats).unwrap()).unwrap();
+    let info = run_ok(tessera().arg("info").arg(&glb));
+    let info = String::from_utf8_lossy(&info.stdout);
+    let faces = format!(
+        "{} faces (sizes 3:{})",
+        json["triangles"], json["triangles"]
+    );
+    assert!(info.contains(&faces), "{info}");
+    // And it tessellates as a Catmull-Clark mesh.
+    run_ok(tessera().arg("tessellate").arg(&glb).args([
+        "--backend",
+        "cpu",
+        "--tolerance-rel",
+        "0.01",
+    ]));
 }
 
 #[test]

@@ -11,6 +11,27 @@ use crate::mesh::Mesh;
 
 /// Default samples per patch side (a 64×64 grid per patch, boundaries included).
 pub const DEFAULT_SAMPLES_PER_SIDE: usize = 64;
+/// The most samples per patch side `--measure-samples` accepts.
+pub const MAX_SAMPLES_PER_SIDE: usize = 1024;
+/// The most samples one measurement takes in all (24 bytes each: 1.5 GiB).
+pub const MAX_SAMPLES: u64 = 1 << 26;
+
+/// Refuses a sampling of `per_side`² points on each of `patches` patches that is
+/// coarser than SPEC §3's 32 per side or larger than the limits above.
+pub fn check_sampling(per_side: usize, patches: usize) -> crate::Result<()> {
+    if !(32..=MAX_SAMPLES_PER_SIDE).contains(&per_side) {
+        return Err(crate::Error::Param(format!(
+            "--measure-samples {per_side}: must be in 32..={MAX_SAMPLES_PER_SIDE}"
+        )));
+    }
+    let total = (per_side as u64).pow(2) * patches as u64;
+    if total > MAX_SAMPLES {
+        return Err(crate::Error::Param(format!(
+            "--measure-samples {per_side}: {per_side}² × {patches} patches = {total} samples, more than the {MAX_SAMPLES} allowed"
+        )));
+    }
+    Ok(())
+}
 
 /// Summary of the distances from the surface samples to the mesh.
 #[derive(Clone, Copy, Debug, Default, Serialize, PartialEq)]

@@ -2,7 +2,23 @@
 
 use glam::Vec3;
 
+use crate::error::{Error, Result};
 use crate::gpu_types::OutVertex;
+
+/// The most triangles a tessellation whose size is known in advance (uniform grids) may
+/// have: 2^27 triangles take 1.5 GiB of indices and about 2.4 GiB of vertices. Larger
+/// requests are refused before anything is allocated.
+pub const MAX_OUTPUT_TRIANGLES: u64 = 1 << 27;
+
+/// Refuses `triangles` above [`MAX_OUTPUT_TRIANGLES`]; `what` says what asked for them.
+pub fn check_output_triangles(triangles: u64, what: &str) -> Result<()> {
+    if triangles > MAX_OUTPUT_TRIANGLES {
+        return Err(Error::Param(format!(
+            "{what} would make {triangles} triangles, more than the {MAX_OUTPUT_TRIANGLES} allowed"
+        )));
+    }
+    Ok(())
+}
 
 /// Indexed triangles; three indices per triangle, counter-clockwise seen from the front.
 #[derive(Clone, Debug, Default, PartialEq)]

@@ -28,6 +28,10 @@ pub fn tessellate_uniform(
     }
     let n = segments;
     let t = &model.topology;
+    crate::mesh::check_output_triangles(
+        2 * u64::from(n).pow(2) * t.patch_corners.len() as u64,
+        &format!("{n} segments per patch side"),
+    )?;
     let corners = t.corner_owner.len() as u32;
     // Curve points: N-1 per curve that is not a single point.
     let mut curve_base = Vec::with_capacity(t.curves.len());

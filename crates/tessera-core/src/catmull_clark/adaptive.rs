@@ -60,6 +60,11 @@ pub fn first_splits() -> impl Iterator<Item = (u32, u32)> {
     squares.chain(rectangles)
 }
 
+/// The finest tolerance accepted, relative to the surface's size: output positions are
+/// single precision (a relative step of 6e-8), and the work grows as 1/ε (the cube at
+/// 1e-5 of its diagonal: 211k triangles, 6 s on one core).
+pub const MIN_TOLERANCE_REL: f64 = 1e-6;
+
 /// Parameters of the adaptive method.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 pub struct CcParams {
@@ -70,10 +75,23 @@ pub struct CcParams {
 }
 
 impl CcParams {
+    /// Checks the tolerance (positive, and at least [`MIN_TOLERANCE_REL`] of the
+    /// bounding-box diagonal of the refined control points) and the depth.
     pub fn validate(&self, model: &SurfaceModel) -> Result<()> {
         if !(self.tolerance.is_finite() && self.tolerance > 0.0) {
             return Err(Error::Param(format!(
                 "tolerance must be a positive number, got {}",
+                self.tolerance
+            )));
+        }
+        let (lo, hi) = model.mesh.points.iter().fold(
+            (glam::DVec3::INFINITY, glam::DVec3::NEG_INFINITY),
+            |(lo, hi), p| (lo.min(*p), hi.max(*p)),
+        );
+        let size = (hi - lo).length();
+        if self.tolerance < MIN_TOLERANCE_REL * size {
+            return Err(Error::Param(format!(
+                "tolerance {:e} is below {MIN_TOLERANCE_REL:e} of the surface's size ({size:e}): finer than single-precision output can hold",
                 self.tolerance
             )));
         }

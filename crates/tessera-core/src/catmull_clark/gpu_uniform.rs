@@ -92,6 +92,10 @@ impl UniformLayout {
                 "segments per patch side must be in 1..={MAX_SEGMENTS}, got {n}"
             )));
         }
+        crate::mesh::check_output_triangles(
+            2 * u64::from(n).pow(2) * self.patches.len() as u64,
+            &format!("{n} segments per patch side"),
+        )?;
         let params = CcUniformParams {
             segments: n,
             patch_count: self.patches.len() as u32,

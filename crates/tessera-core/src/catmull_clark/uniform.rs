@@ -23,6 +23,10 @@ pub fn tessellate_uniform(model: &SurfaceModel, n: u32) -> Result<CcTessellation
         )));
     }
     let mesh = &model.mesh;
+    crate::mesh::check_output_triangles(
+        2 * u64::from(n).pow(2) * mesh.surface_patches().count() as u64,
+        &format!("{n} segments per patch side"),
+    )?;
     let mut keys: HashMap<u64, u32> = HashMap::new();
     let mut out = CcTessellation::default();
     let mut grid = vec![0u32; ((n + 1) * (n + 1)) as usize];

@@ -1,4 +1,5 @@
-//! Mesh writers: OBJ (`v`, `vn`, `vt`, `f`) and ASCII PLY (`x y z nx ny nz u v patch`).
+//! Mesh writers: OBJ (`v`, `vn`, `vt`, `f`), ASCII PLY (`x y z nx ny nz u v patch`) and
+//! binary glTF (`.glb`: `POSITION`, `NORMAL`, `TEXCOORD_0` = patch (u, v), `_PATCH`).
 //!
 //! Files are written to a temporary name beside the target and renamed into place, so a
 //! failure never leaves a partial file behind.
@@ -14,6 +15,7 @@ use crate::mesh::Mesh;
 pub enum MeshFormat {
     Obj,
     Ply,
+    Glb,
 }
 
 impl MeshFormat {
@@ -26,8 +28,9 @@ impl MeshFormat {
         {
             Some("obj") => Ok(MeshFormat::Obj),
             Some("ply") => Ok(MeshFormat::Ply),
+            Some("glb") => Ok(MeshFormat::Glb),
             _ => Err(Error::Param(format!(
-                "{}: unsupported output format (use .obj or .ply)",
+                "{}: unsupported output format (use .obj, .ply or .glb)",
                 path.display()
             ))),
         }
@@ -46,6 +49,7 @@ pub fn stage_mesh(path: &Path, mesh: &Mesh) -> Result<StagedFile> {
     stage(path, |w| match format {
         MeshFormat::Obj => write_obj(w, mesh),
         MeshFormat::Ply => write_ply(w, mesh),
+        MeshFormat::Glb => write_glb(w, mesh),
     })
 }
 
@@ -175,4 +179,184 @@ pub fn write_ply(w: &mut dyn Write, mesh: &Mesh) -> std::io::Result<()> {
         writeln!(w, "3 {a} {b} {c}")?;
     }
     Ok(())
+}
+
+/// glTF accessor component types and buffer-view targets.
+const GL_FLOAT: u32 = 5126;
+const GL_UNSIGNED_INT: u32 = 5125;
+const GL_ARRAY_BUFFER: u32 = 34962;
+const GL_ELEMENT_ARRAY_BUFFER: u32 = 34963;
+/// Patch ids are stored as floats (glTF allows unsigned ints only for indices): exact
+/// below 2^24.
+pub const GLB_MAX_PATCH: u32 = 1 << 24;
+
+/// Binary glTF 2.0: one mesh, one triangle primitive. The vertices are interleaved as
+/// the GPU writes them (36 bytes: position, normal, patch u v, patch id), the patch id
+/// as a float in the application-specific attribute `_PATCH`; indices are `u32`.
+pub fn write_glb(w: &mut dyn Write, mesh: &Mesh) -> std::io::Result<()> {
+    const STRIDE: usize = 36;
+    if let Some(v) = mesh.vertices.iter().find(|v| v.patch >= GLB_MAX_PATCH) {
+        return Err(std::io::Error::other(format!(
+            "patch id {} does not fit the glTF float attribute _PATCH (below 2^24)",
+            v.patch
+        )));
+    }
+    let mut bin = Vec::with_capacity(mesh.vertices.len() * STRIDE + mesh.indices.len() * 4);
+    for v in &mesh.vertices {
+        for x in v.position.iter().chain(&v.normal).chain(&v.uv) {
+            bin.extend_from_slice(&x.to_le_bytes());
+        }
+        bin.extend_from_slice(&(v.patch as f32).to_le_bytes());
+    }
+    let vertex_bytes = bin.len();
+    for i in &mesh.indices {
+        bin.extend_from_slice(&i.to_le_bytes());
+    }
+    let (lo, hi) = mesh.bounds();
+    let n = mesh.vertices.len();
+    let attribute = |offset: usize, kind: &str| {
+        serde_json::json!({"bufferView": 0, "byteOffset": offset, "componentType": GL_FLOAT,
+            "count": n, "type": kind})
+    };
+    let mut position = attribute(0, "VEC3");
+    position["min"] = serde_json::json!(lo.to_array());
+    position["max"] = serde_json::json!(hi.to_array());
+    // glTF forbids empty accessors: an empty mesh is a scene with one empty node.
+    let json = if mesh.indices.is_empty() {
+        serde_json::json!({
+            "asset": {"version": "2.0", "generator": "tessera"},
+            "scene": 0, "scenes": [{"nodes": [0]}], "nodes": [{}],
+        })
+    } else {
+        serde_json::json!({
+            "asset": {"version": "2.0", "generator": "tessera"},
+            "scene": 0, "scenes": [{"nodes": [0]}], "nodes": [{"mesh": 0}],
+            "meshes": [{"primitives": [{
+                "attributes": {"POSITION": 0, "NORMAL": 1, "TEXCOORD_0": 2, "_PATCH": 3},
+                "indices": 4, "mode": 4}]}],
+            "buffers": [{"byteLength": bin.len()}],
+            "bufferViews": [
+                {"buffer": 0, "byteOffset": 0, "byteLength": vertex_bytes,
+                 "byteStride": STRIDE, "target": GL_ARRAY_BUFFER},
+                {"buffer": 0, "byteOffset": vertex_bytes,
+                 "byteLength": bin.len() - vertex_bytes, "target": GL_ELEMENT_ARRAY_BUFFER},
+            ],
+            "accessors": [
+                position,
+                attribute(12, "VEC3"),
+                attribute(24, "VEC2"),
+                attribute(32, "SCALAR"),
+                {"bufferView": 1, "componentType": GL_UNSIGNED_INT,
+                 "count": mesh.indices.len(), "type": "SCALAR"},
+            ],
+        })
+    };
+    let mut json = serde_json::to_vec(&json).map_err(std::io::Error::other)?;
+    // Chunks are 4-byte aligned: JSON padded with spaces, binary with zeros.
+    json.resize(json.len().next_multiple_of(4), b' ');
+    bin.resize(bin.len().next_multiple_of(4), 0);
+    let has_bin = !mesh.indices.is_empty();
+    let total = 12 + 8 + json.len() + if has_bin { 8 + bin.len() } else { 0 };
+    let too_big = || std::io::Error::other("mesh too large for one GLB file (4 GiB)");
+    let u32_len = |n: usize| u32::try_from(n).map_err(|_| too_big());
+    let (total, json_len, bin_len) = (u32_len(total)?, u32_len(json.len())?, u32_len(bin.len())?);
+    w.write_all(b"glTF")?;
+    w.write_all(&2u32.to_le_bytes())?;
+    w.write_all(&total.to_le_bytes())?;
+    w.write_all(&json_len.to_le_bytes())?;
+    w.write_all(b"JSON")?;
+    w.write_all(&json)?;
+    if has_bin {
+        w.write_all(&bin_len.to_le_bytes())?;
+        w.write_all(b"BIN\0")?;
+        w.write_all(&bin)?;
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::gpu_types::OutVertex;
+
+    fn quad() -> Mesh {
+        let v = |x: f32, y: f32, patch| OutVertex {
+            position: [x, y, 0.5],
+            normal: [0.0, 0.0, 1.0],
+            uv: [x, y],
+            patch,
+        };
+        Mesh {
+            vertices: vec![
+                v(0.0, 0.0, 7),
+                v(1.0, 0.0, 7),
+                v(1.0, 1.0, 8),
+                v(0.0, 1.0, 9),
+            ],
+            indices: vec![0, 1, 2, 0, 2, 3],
+        }
+    }
+
+    #[test]
+    fn glb_reads_back_through_the_gltf_crate() {
+        let mesh = quad();
+        let mut bytes = Vec::new();
+        write_glb(&mut bytes, &mesh).unwrap();
+        assert_eq!(bytes.len() % 4, 0);
+        // `from_slice` validates the document (accessor bounds, semantics, views).
+        let gltf = gltf::Gltf::from_slice(&bytes).unwrap();
+        let blob = gltf.blob.clone().unwrap();
+        let prim = gltf.meshes().next().unwrap().primitives().next().unwrap();
+        let reader = prim.reader(|_| Some(&blob[..]));
+        let positions: Vec<[f32; 3]> = reader.read_positions().unwrap().collect();
+        let normals: Vec<[f32; 3]> = reader.read_normals().unwrap().collect();
+        let uvs: Vec<[f32; 2]> = reader.read_tex_coords(0).unwrap().into_f32().collect();
+        let indices: Vec<u32> = reader.read_indices().unwrap().into_u32().collect();
+        assert_eq!(indices, mesh.indices);
+        for (k, v) in mesh.vertices.iter().enumerate() {
+            assert_eq!(
+                (positions[k], normals[k], uvs[k]),
+                (v.position, v.normal, v.uv)
+            );
+        }
+        // `_PATCH`: the float at offset 32 of each 36-byte vertex.
+        let patch = prim
+            .attributes()
+            .find(|(s, _)| *s == gltf::Semantic::Extras("PATCH".into()))
+            .map(|(_, a)| a)
+            .unwrap();
+        assert_eq!((patch.offset(), patch.count()), (32, 4));
+        let ids: Vec<f32> = (0..4)
+            .map(|k| f32::from_le_bytes(blob[k * 36 + 32..k * 36 + 36].try_into().unwrap()))
+            .collect();
+        assert_eq!(ids, [7.0, 7.0, 8.0, 9.0]);
+        // An empty mesh is still a valid file.
+        let mut empty = Vec::new();
+        write_glb(&mut empty, &Mesh::default()).unwrap();
+        assert_eq!(gltf::Gltf::from_slice(&empty).unwrap().meshes().count(), 0);
+    }
+
+    #[test]
+    fn a_failed_write_leaves_nothing() {
+        let dir = std::env::temp_dir().join(format!("tessera-export-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let out = dir.join("m.obj");
+        let staged = stage_mesh(&out, &quad()).unwrap();
+        drop(staged);
+        assert_eq!(
+            std::fs::read_dir(&dir).unwrap().count(),
+            0,
+            "temporary left"
+        );
+        // Two files: the second cannot be written, so neither is placed.
+        let mesh_file = stage_mesh(&out, &quad()).unwrap();
+        assert!(stage(&dir.join("missing/s.json"), |_| Ok(())).is_err());
+        drop(mesh_file);
+        assert!(!out.exists());
+        let a = stage_mesh(&out, &quad()).unwrap();
+        let b = stage(&dir.join("s.json"), |w| writeln!(w, "{{}}")).unwrap();
+        commit_all(vec![a, b]).unwrap();
+        assert!(out.exists() && dir.join("s.json").exists());
+        let _ = std::fs::remove_dir_all(&dir);
+    }
 }

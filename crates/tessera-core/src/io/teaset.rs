@@ -177,6 +177,7 @@ pub fn parse_teaset(path: &Path, bytes: &[u8]) -> Result<TeasetFile> {
         ));
     }
 
+    let tolerance = model_tolerance(path, &vertices, &raw_patches)?;
     let mut patches = Vec::with_capacity(patch_count);
     for (line, idx) in raw_patches {
         let mut p = [0u32; 16];
@@ -193,23 +194,63 @@ pub fn parse_teaset(path: &Path, bytes: &[u8]) -> Result<TeasetFile> {
             }
             p[k] = (i - 1) as u32;
         }
-        check_patch_shape(path, line, &p.map(|i| vertices[i as usize]))?;
+        check_patch_shape(path, line, &p.map(|i| vertices[i as usize]), tolerance)?;
         patches.push(p);
     }
     Ok(TeasetFile { vertices, patches })
 }
 
+/// The distance under which control points count as one (what the model welds by):
+/// 1e-6 of the bounding-box diagonal of the referenced points. A model too small for
+/// single precision to resolve that is refused. Indices must be in range.
+fn model_tolerance(path: &Path, vertices: &[Vec3], patches: &[(usize, [u64; 16])]) -> Result<f64> {
+    let (mut lo, mut hi) = (glam::DVec3::INFINITY, glam::DVec3::NEG_INFINITY);
+    for (_, idx) in patches {
+        for &i in idx {
+            if let Some(v) = vertices.get(i as usize - 1) {
+                lo = lo.min(v.as_dvec3());
+                hi = hi.max(v.as_dvec3());
+            }
+        }
+    }
+    let diag = (hi - lo).length();
+    if !(diag >= MIN_DIAGONAL) {
+        return Err(Error::input(
+            path,
+            format!("the control points span {diag:e} units: below {MIN_DIAGONAL:e}, too small for single precision"),
+        ));
+    }
+    Ok(diag * 1e-6)
+}
+
+/// The smallest model (bounding-box diagonal) accepted: its weld tolerance, 1e-6 of it,
+/// squared, must still be a normal `f32`.
+pub const MIN_DIAGONAL: f64 = 1e-12;
+
 /// Rejects the patches the tessellators cannot mesh without zero-area triangles: a patch
-/// that is a single point, and one with two adjacent sides collapsed to points (the
-/// corner between them is singular). One collapsed side, or two opposite ones, are fine:
-/// the teapot's lid and bottom have them.
-fn check_patch_shape(path: &Path, line: usize, net: &[Vec3; 16]) -> Result<()> {
-    let same = |ids: [usize; 4]| ids.iter().all(|&i| net[i] == net[ids[0]]);
-    if net.iter().all(|p| *p == net[0]) {
+/// whose control points lie on one line (or at one point), and one with two adjacent
+/// sides collapsed to points (the corner between them is singular). One collapsed side,
+/// or two opposite ones, are fine: the teapot's lid and bottom have them.
+fn check_patch_shape(path: &Path, line: usize, net: &[Vec3; 16], tolerance: f64) -> Result<()> {
+    let net = net.map(|p| p.as_dvec3());
+    let near = |a: glam::DVec3, b: glam::DVec3| a.distance(b) <= tolerance;
+    let same = |ids: [usize; 4]| ids.iter().all(|&i| near(net[i], net[ids[0]]));
+    // The farthest point from the first, then every point's distance to that line.
+    let far = net
+        .iter()
+        .copied()
+        .max_by(|a, b| a.distance(net[0]).total_cmp(&b.distance(net[0])))
+        .unwrap_or(net[0]);
+    let axis = (far - net[0]).normalize_or_zero();
+    let off_line = |p: glam::DVec3| {
+        let d = p - net[0];
+        (d - axis * d.dot(axis)).length()
+    };
+    if net.iter().all(|&p| off_line(p) <= tolerance) {
         return Err(Error::parse(
             path,
             line,
-            "all 16 control points are the same point: the patch has no area",
+            "the 16 control points lie on one line: the patch has no area",
         ));
     }
     // Sides in order around the patch: v = 0, u = 1, v = 1, u = 0.
@@ -326,7 +367,14 @@ mod tests {
         point += "\n1\n0.5,0.5,0\n";
         assert_eq!(
             err(&point),
-            "t.txt:2: all 16 control points are the same point: the patch has no area"
+            "t.txt: the control points span 0e0 units: below 1e-12, too small for single precision"
+        );
+        // Control points on a line: every row the same four points.
+        let mut line = String::from("1\n1,2,3,4,1,2,3,4,1,2,3,4,1,2,3,4\n4\n");
+        line += "0,0,0\n1,0,0\n2,0,0\n3,0,0\n";
+        assert_eq!(
+            err(&line),
+            "t.txt:2: the 16 control points lie on one line: the patch has no area"
         );
         // Rows v = 0 and column u = 0 both at the origin: two adjacent collapsed sides.
         let mut corner = String::from("1\n1,1,1,1,1,2,3,4,1,5,6,7,1,8,9,10\n10\n0,0,0\n");
