@@ -148,6 +148,10 @@ fn bad_input_names_file_line_and_problem() {
             "test.obj:6: interpolateboundary 7: expected 0, 1 or 2",
         ),
         (
+            format!("{SQUARE}f 1 2 3 4\nt hole 1/0/0 0\n"),
+            "test.obj: every face is tagged as a hole",
+        ),
+        (
             "v 0 0 2e18\n".into(),
             "test.obj:1: coordinate 2e18 is beyond ±1e18",
         ),

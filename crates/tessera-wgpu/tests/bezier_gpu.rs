@@ -225,16 +225,26 @@ fn tiny_capacities_overflow_cleanly_then_grow_to_the_same_mesh() {
         .read_mesh(&gpu.device, &gpu.queue, &want_status)
         .expect("mesh");
 
+    // The smallest vertex capacity a stage accepts is the coarse vertices (copied in
+    // every run); the refined mesh needs more, so both buffers overflow.
     let mut tiny =
         BezierStage::with_capacity(&gpu.device, &kernels, &prep, &params, 1, 3).expect("stage");
+    assert_eq!(tiny.output().vertex_capacity, l.coarse_vertices);
     let mut encoder = gpu.device.create_command_encoder(&Default::default());
     tiny.prepare(&gpu.device, &gpu.queue, &mut encoder);
     gpu.queue.submit([encoder.finish()]);
     let status = tiny.read_status(&gpu.device).expect("status");
+    assert!(status.vertices > l.coarse_vertices);
     assert_eq!(
-        status.overflow & 2,
-        2,
-        "indices must overflow a 3-index buffer"
+        status.overflow, 3,
+        "vertices and indices must both overflow"
+    );
+    let vertices: Vec<u32> = gpu
+        .read_pod(&tiny.output().vertices, 9 * l.coarse_vertices as usize)
+        .expect("vertices");
+    assert!(
+        vertices.iter().all(|&w| w == 0),
+        "an overflowed run evaluates no vertex"
     );
     assert_eq!(
         status.vertices, want_status.vertices,

@@ -186,6 +186,15 @@ fn tiny_capacities_grow_to_the_same_mesh_and_runs_are_byte_identical() {
         hash_slots: 1,
     };
     let mut stage = CcStage::with_capacity(&gpu.device, &model, &params, tiny).expect("stage");
+    // A sentinel in the output buffers: an overflowing run must leave them as they are
+    // (a write past a capacity, clamped by robust buffer access, would land in them).
+    const SENTINEL: u32 = 0xa5a5_a5a5;
+    let out = stage.output();
+    let words = |b: &wgpu::Buffer| (b.size() / 4) as usize;
+    for b in [&out.vertices, &out.indices] {
+        gpu.queue
+            .write_buffer(b, 0, bytemuck::cast_slice(&vec![SENTINEL; words(b)]));
+    }
     let mut encoder = gpu.device.create_command_encoder(&Default::default());
     stage.prepare(&gpu.device, &gpu.queue, &mut encoder);
     gpu.queue.submit([encoder.finish()]);
@@ -194,6 +203,14 @@ fn tiny_capacities_grow_to_the_same_mesh_and_runs_are_byte_identical() {
         .expect("no wgpu errors after an overflowing run");
     assert!(first.overflowed(), "one-element buffers must overflow");
     assert_eq!(first.indices, 0, "an overflowing run draws nothing");
+    let out = stage.output();
+    for (name, b) in [("vertices", &out.vertices), ("indices", &out.indices)] {
+        let after: Vec<u32> = gpu.read_pod(b, words(b)).expect("read back");
+        assert!(
+            after.iter().all(|&w| w == SENTINEL),
+            "an overflowing run wrote into the {name}"
+        );
+    }
     let status = stage.run_blocking(&gpu.device, &gpu.queue).expect("grows");
     assert!(stage.capacities().leaves >= status.state.leaves);
     let grown = stage

@@ -61,6 +61,12 @@ impl PatchMesh {
     /// Validates `mesh` and makes its first subdivision level.
     pub fn new(mesh: &ControlMesh) -> Result<Self> {
         let unreferenced_vertices = validate(mesh)?;
+        if !mesh.holes.is_empty() && mesh.holes.iter().all(|&h| h) {
+            return Err(Error::input(
+                &mesh.source,
+                "every face is tagged as a hole: there is no surface to tessellate",
+            ));
+        }
         let level1 = refine(&mesh.positions, &mesh.faces, mesh.boundary);
         let mut face_of = Vec::with_capacity(level1.quads.len());
         let mut hole = Vec::with_capacity(level1.quads.len());
