@@ -10,7 +10,7 @@ use tessera_core::catmull_clark::{
 };
 use tessera_core::measure::{closest_point_on_triangle, measure_error};
 use tessera_core::watertight::check_watertight;
-use tessera_tests::{cc_model, control_mesh};
+use tessera_tests::{cc_model, control_mesh, fan};
 
 fn diag(rel: &str) -> f64 {
     control_mesh(rel).bbox_diag()
@@ -40,12 +40,24 @@ fn measured_error_never_exceeds_the_tolerance() {
         "opensubdiv/catmark_pole8.obj",
         "catmull_clark/blub_control_mesh.obj",
     ];
-    for name in meshes {
-        let model = cc_model(name);
-        let samples = surface_samples(&model, 32);
+    let mut models: Vec<(String, SurfaceModel, f64)> = meshes
+        .iter()
+        .map(|name| (name.to_string(), cc_model(name), diag(name)))
+        .collect();
+    // Extraordinary vertices of high valence, interior and on the boundary.
+    for (n, closed) in [(7, true), (12, true), (16, true), (5, false), (16, false)] {
+        let mesh = fan(n, closed);
+        let model = SurfaceModel::new(
+            tessera_core::catmull_clark::PatchMesh::new(&mesh).unwrap(),
+            tessera_core::catmull_clark::TREE_DEPTH,
+        );
+        models.push((format!("fan {n} {closed}"), model, mesh.bbox_diag()));
+    }
+    for (name, model, size) in &models {
+        let samples = surface_samples(model, 32);
         for rel in [1e-2, 3e-3, 1e-3] {
-            let tol = rel * diag(name);
-            let out = adaptive(&model, tol);
+            let tol = rel * size;
+            let out = adaptive(model, tol);
             assert_eq!(out.unmet, 0, "{name} {rel}");
             assert!(out.max_bound <= tol, "{name} {rel}");
             let e = measure_error(&samples, &out.mesh);

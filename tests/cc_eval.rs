@@ -9,7 +9,7 @@ use tessera_core::catmull_clark::bicubic;
 use tessera_core::catmull_clark::patch::{Node, PatchSurface};
 use tessera_core::catmull_clark::refine::{edge_key, refine};
 use tessera_core::catmull_clark::{BoundaryRule, ControlMesh, PatchMesh, SurfaceModel, TREE_DEPTH};
-use tessera_tests::{cc_model, control_mesh};
+use tessera_tests::{cc_model, control_mesh, fan};
 
 fn model_of(mesh: &ControlMesh) -> SurfaceModel {
     SurfaceModel::new(PatchMesh::new(mesh).unwrap(), TREE_DEPTH)
@@ -89,6 +89,13 @@ fn nearest(p: DVec3, set: &[DVec3]) -> f64 {
 #[test]
 fn evaluation_equals_limit_masks_at_every_refined_vertex() {
     // Every vertex of the mesh after 1 + m steps is the point (i, j)/2^m of a patch.
+    let mut meshes: Vec<(String, ControlMesh, usize)> = Vec::new();
+    // Interior valences 3..=16 and boundary valences 2..=17 (every size the issue names).
+    for n in 3..=16 {
+        meshes.push((format!("closed fan of {n}"), fan(n, true), 2));
+        meshes.push((format!("open fan of {n}"), fan(n, false), 2));
+    }
+    meshes.push(("open fan of 1".into(), fan(1, false), 2));
     for (name, rule, m) in [
         ("catmull_clark/spot_control_mesh.obj", None, 1),
         ("catmull_clark/blub_control_mesh.obj", None, 2),
@@ -106,6 +113,9 @@ fn evaluation_equals_limit_masks_at_every_refined_vertex() {
         if let Some(r) = rule {
             mesh.boundary = r;
         }
+        meshes.push((name.to_string(), mesh, m));
+    }
+    for (name, mesh, m) in meshes {
         let model = model_of(&mesh);
         let (mut points, mut faces) = (mesh.positions.clone(), mesh.faces.clone());
         for _ in 0..=m {

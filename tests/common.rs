@@ -65,3 +65,32 @@ pub fn cc_model(rel: &str) -> tessera_core::catmull_clark::SurfaceModel {
         TREE_DEPTH,
     )
 }
+
+/// A fan of `quads` quads around a centre vertex, wavy so that nothing is planar: closed
+/// (`quads` = the valence, an interior vertex) or open (`quads` + 1 = the valence, a
+/// boundary vertex).
+pub fn fan(quads: usize, closed: bool) -> tessera_core::catmull_clark::ControlMesh {
+    let n = quads;
+    let spokes = if closed { n } else { n + 1 };
+    let span = if closed {
+        std::f64::consts::TAU
+    } else {
+        1.5 * std::f64::consts::PI
+    };
+    let step = span / n as f64;
+    let at = |r: f64, a: f64| glam::DVec3::new(r * a.cos(), r * a.sin(), 0.3 * (3.0 * a).cos() * r);
+    let mut positions = vec![glam::DVec3::new(0.0, 0.0, 0.2)];
+    for k in 0..spokes {
+        positions.push(at(1.0, k as f64 * step));
+    }
+    for k in 0..n {
+        positions.push(at(1.5, (k as f64 + 0.5) * step));
+    }
+    let faces = (0..n as u32)
+        .map(|k| {
+            let next = (k + 1) % spokes as u32;
+            vec![0, 1 + k, 1 + spokes as u32 + k, 1 + next]
+        })
+        .collect();
+    tessera_core::catmull_clark::ControlMesh::new(positions, faces)
+}
