@@ -111,6 +111,11 @@ fn gpu_adaptive_matches_the_cpu_reference() {
         ("opensubdiv/catmark_pyramid.obj", 1e-3),
         ("catmull_clark/spot_control_mesh.obj", 3e-3),
         ("opensubdiv/catmark_hole_test1.obj", 2e-3),
+        // Open boundaries: edge-and-corner, edge-only, and extraordinary boundary
+        // vertices (the polygon kernel's boundary walk).
+        ("opensubdiv/catmark_edgecorner.obj", 3e-3),
+        ("opensubdiv/catmark_edgeonly.obj", 3e-3),
+        ("opensubdiv/catmark_xord_boundary.obj", 3e-3),
     ] {
         let model = model(name);
         let s = size(&model);
