@@ -6,17 +6,21 @@ use std::mem::{offset_of, size_of};
 use tessera_core::gpu_types::*;
 use tessera_wgpu::shaders;
 
-fn parse(name: &str) -> (naga::Module, naga::valid::ModuleInfo) {
-    let src = shaders::source(name);
-    let module = naga::front::wgsl::parse_str(&src)
-        .unwrap_or_else(|e| panic!("{name}: {}", e.emit_to_string(&src)));
+/// Parses and validates WGSL as the tests check every kernel; the error text if either
+/// step fails.
+fn check(src: &str) -> Result<(naga::Module, naga::valid::ModuleInfo), String> {
+    let module = naga::front::wgsl::parse_str(src).map_err(|e| e.emit_to_string(src))?;
     let info = naga::valid::Validator::new(
         naga::valid::ValidationFlags::all(),
         naga::valid::Capabilities::default(),
     )
     .validate(&module)
-    .unwrap_or_else(|e| panic!("{name}: {}", e.emit_to_string(&src)));
-    (module, info)
+    .map_err(|e| e.emit_to_string(src))?;
+    Ok((module, info))
+}
+
+fn parse(name: &str) -> (naga::Module, naga::valid::ModuleInfo) {
+    check(&shaders::source(name)).unwrap_or_else(|e| panic!("{name}: {e}"))
 }
 
 #[test]
@@ -32,9 +36,20 @@ fn every_shader_parses_and_validates() {
 
 #[test]
 fn an_invalid_shader_is_rejected() {
-    // The validator is not a formality: a type error must fail.
-    let bad = "@compute @workgroup_size(1) fn main() { let x: u32 = 1.5; }";
-    assert!(naga::front::wgsl::parse_str(bad).is_err());
+    // The check is not a formality: a type error fails the parser, and a module that
+    // parses but breaks a rule only the validator knows (a store through a read-only
+    // storage binding) fails the validation step.
+    let type_error = "@compute @workgroup_size(1) fn main() { let x: u32 = 1.5; }";
+    assert!(naga::front::wgsl::parse_str(type_error).is_err());
+    assert!(check(type_error).is_err());
+    let store_to_read_only = "@group(0) @binding(0) var<storage, read> b: array<u32>;
+        @compute @workgroup_size(1) fn main() { b[0] = 1u; }";
+    assert!(naga::front::wgsl::parse_str(store_to_read_only).is_ok());
+    let err = check(store_to_read_only).expect_err("validation must fail");
+    assert!(
+        err.contains("Entry point main at Compute is invalid"),
+        "{err}"
+    );
 }
 
 /// (name, size, [(member, offset)]) of a struct in a module.
