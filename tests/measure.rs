@@ -110,4 +110,14 @@ fn bvh_agrees_with_brute_force_on_the_teapot() {
         "{e:?} vs {max} {mean}"
     );
     assert!(max > 1e-3, "the check must see real error");
+    // p99: the smallest distance with at least 99% of the samples at or under it.
+    let mut sorted = brute.clone();
+    sorted.sort_by(f64::total_cmp);
+    let p99 = sorted
+        .iter()
+        .copied()
+        .find(|&d| brute.iter().filter(|&&x| x <= d).count() * 100 >= 99 * brute.len())
+        .unwrap();
+    assert!((e.p99_error - p99).abs() < 1e-9, "p99 {} vs {p99}", e.p99_error);
+    assert!(p99 < max, "p99 must differ from the max to test anything");
 }
