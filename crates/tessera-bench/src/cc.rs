@@ -137,7 +137,7 @@ pub fn run(assets: &Path, out_dir: &Path, quick: bool) {
 
 fn table(rows: &[Row]) -> String {
     let mut s = String::from(
-        "| model | patches | ε (of diagonal) | adaptive tris | guaranteed bound | measured max | mean | time ms | uniform n | uniform tris | uniform max | **ratio** | ratio at ε |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
+        "| model | patches | ε (of diagonal) | adaptive tris | guaranteed bound (model units) | measured max (model units) | mean | time ms | uniform n | uniform tris | uniform max | **ratio** | ratio at ε |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
     );
     for r in rows {
         s += &format!(
