@@ -118,6 +118,10 @@ fn bvh_agrees_with_brute_force_on_the_teapot() {
         .copied()
         .find(|&d| brute.iter().filter(|&&x| x <= d).count() * 100 >= 99 * brute.len())
         .unwrap();
-    assert!((e.p99_error - p99).abs() < 1e-9, "p99 {} vs {p99}", e.p99_error);
+    assert!(
+        (e.p99_error - p99).abs() < 1e-9,
+        "p99 {} vs {p99}",
+        e.p99_error
+    );
     assert!(p99 < max, "p99 must differ from the max to test anything");
 }
