@@ -214,7 +214,7 @@ fn model_tolerance(path: &Path, vertices: &[Vec3], patches: &[(usize, [u64; 16])
         }
     }
     let diag = (hi - lo).length();
-    if !(diag >= MIN_DIAGONAL) {
+    if diag.is_nan() || diag < MIN_DIAGONAL {
         return Err(Error::input(
             path,
             format!("the control points span {diag:e} units: below {MIN_DIAGONAL:e}, too small for single precision"),
