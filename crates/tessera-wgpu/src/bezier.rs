@@ -49,7 +49,7 @@ use wgpu::util::DeviceExt;
 
 use crate::error::{Error, Result};
 use crate::headless::{map_read, read_buffer};
-use crate::kernel::{check_size, storage, Kernel};
+use crate::kernel::{check_size, check_upload, storage, Kernel};
 use crate::output::MeshBuffers;
 use crate::scan::{PrefixSum, ScanKernels};
 use crate::stage::GrowingStage;
@@ -322,6 +322,31 @@ impl BezierStage {
             usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
             mapped_at_creation: false,
         });
+        let coarse_records = prepared.coarse_vertex_records();
+        for (what, bytes) in [
+            (
+                "patches",
+                std::mem::size_of_val(prepared.patches.as_slice()),
+            ),
+            (
+                "displacement maps",
+                std::mem::size_of_val(prepared.maps.as_slice()),
+            ),
+            (
+                "patch topology",
+                std::mem::size_of_val(prepared.topo.as_slice()),
+            ),
+            (
+                "boundary curves",
+                std::mem::size_of_val(prepared.curves.as_slice()),
+            ),
+            (
+                "coarse vertices",
+                std::mem::size_of_val(coarse_records.as_slice()),
+            ),
+        ] {
+            check_upload(device, what, bytes as u64)?;
+        }
         let buffers = Buffers {
             uniform,
             patches: upload(
@@ -343,7 +368,7 @@ impl BezierStage {
             coarse_records: upload(
                 device,
                 "tessera coarse vertices",
-                bytemuck::cast_slice(&prepared.coarse_vertex_records()),
+                bytemuck::cast_slice(&coarse_records),
             ),
             edge_bits: storage(
                 device,

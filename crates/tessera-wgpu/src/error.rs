@@ -20,6 +20,13 @@ pub enum Error {
         bytes: u64,
         limit: u64,
     },
+    /// The surface's upload (patch data) needs a buffer larger than the device allows.
+    #[error("the model's {what} need {bytes} bytes on the GPU, over the device's limit of {limit} per buffer; tessellate it with --backend cpu or split the mesh")]
+    ModelTooLarge {
+        what: &'static str,
+        bytes: u64,
+        limit: u64,
+    },
     /// Waiting for the GPU or mapping a buffer failed.
     #[error("GPU readback failed: {0}")]
     Readback(String),

@@ -28,6 +28,22 @@ impl Gpu {
     /// As [`new`](Self::new), with those of the `optional` features that the adapter has
     /// (`Features::empty()` to test what happens without them).
     pub fn with_optional_features(optional: wgpu::Features) -> Result<Gpu> {
+        Self::build(optional, crate::bezier::required_limits)
+    }
+
+    /// As [`new`](Self::new), with the device's limits chosen by `limits` from the
+    /// adapter's (tests use it to play a device smaller than the one at hand).
+    pub fn with_limits(limits: impl FnOnce(&wgpu::Limits) -> wgpu::Limits) -> Result<Gpu> {
+        Self::build(
+            crate::render::MeshRenderer::required_features(wgpu::Features::all()),
+            limits,
+        )
+    }
+
+    fn build(
+        optional: wgpu::Features,
+        limits: impl FnOnce(&wgpu::Limits) -> wgpu::Limits,
+    ) -> Result<Gpu> {
         let mut desc = wgpu::InstanceDescriptor::new_without_display_handle_from_env();
         if std::env::var_os("WGPU_BACKEND").is_none() {
             // Vulkan, Metal, DX12: the GL backend without a display only adds noise
@@ -43,7 +59,7 @@ impl Gpu {
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
             label: Some("tessera"),
             required_features: adapter.features() & optional,
-            required_limits: crate::bezier::required_limits(&adapter.limits()),
+            required_limits: limits(&adapter.limits()),
             ..Default::default()
         }))
         .map_err(|e| Error::RequestDevice(e.to_string()))?;

@@ -90,14 +90,29 @@ pub(crate) fn groups_2d(items: u32, per_group: u32) -> (u32, u32) {
 /// Fails with [`Error::OutputTooLarge`] when a storage buffer of `bytes` would exceed
 /// what `device` can create and bind.
 pub(crate) fn check_size(device: &wgpu::Device, what: &'static str, bytes: u64) -> Result<()> {
-    let limits = device.limits();
-    let limit = limits
-        .max_buffer_size
-        .min(limits.max_storage_buffer_binding_size);
+    let limit = storage_limit(device);
     if bytes > limit {
         return Err(Error::OutputTooLarge { what, bytes, limit });
     }
     Ok(())
+}
+
+/// Fails with [`Error::ModelTooLarge`] when an upload of `bytes` would exceed what
+/// `device` can create and bind.
+pub(crate) fn check_upload(device: &wgpu::Device, what: &'static str, bytes: u64) -> Result<()> {
+    let limit = storage_limit(device);
+    if bytes > limit {
+        return Err(Error::ModelTooLarge { what, bytes, limit });
+    }
+    Ok(())
+}
+
+/// The largest storage buffer `device` can create and bind.
+pub(crate) fn storage_limit(device: &wgpu::Device) -> u64 {
+    let limits = device.limits();
+    limits
+        .max_buffer_size
+        .min(limits.max_storage_buffer_binding_size)
 }
 
 /// A storage buffer the kernels write and tests can copy.

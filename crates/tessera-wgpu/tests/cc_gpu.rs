@@ -41,7 +41,7 @@ fn points(model: &SurfaceModel) -> Vec<CcPoint> {
 
 fn run_gpu(gpu: &Gpu, model: &CcGpuModel, points: &[CcPoint]) -> Vec<OutVertex> {
     let device = &gpu.device;
-    let buffers = CcModelBuffers::new(device, model);
+    let buffers = CcModelBuffers::new(device, model).expect("upload fits");
     let eval = CcVertexEval::new(device);
     let storage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC;
     let point_buf = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
@@ -140,7 +140,7 @@ fn moved_control_points_reupload_in_place_and_a_new_shape_is_refused() {
     let gpu = gpu();
     let mut a = model("opensubdiv/catmark_cube.obj");
     let flat = CcGpuModel::new(&a);
-    let buffers = CcModelBuffers::new(&gpu.device, &flat);
+    let buffers = CcModelBuffers::new(&gpu.device, &flat).expect("upload fits");
     // Scaling the control points moves every piece but keeps the trees' shape.
     for p in &mut a.mesh.points {
         *p *= 2.0;

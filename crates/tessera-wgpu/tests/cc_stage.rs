@@ -332,3 +332,31 @@ fn gpu_uniform_matches_its_twin_and_the_cpu_uniform() {
         }
     }
 }
+
+#[test]
+fn a_model_larger_than_the_device_allows_is_an_error_not_a_wgpu_failure() {
+    // A device whose storage buffers hold 64 KiB: Spot's patch data does not fit, and
+    // the stage says so before creating anything (no wgpu validation error).
+    let gpu = tessera_wgpu::headless::Gpu::with_limits(|adapter| wgpu::Limits {
+        max_storage_buffer_binding_size: 1 << 16,
+        max_buffer_size: 1 << 16,
+        ..tessera_wgpu::bezier::required_limits(adapter)
+    })
+    .expect("device");
+    let model = model("catmull_clark/spot_control_mesh.obj");
+    let params = CcParams {
+        tolerance: 3e-3 * size(&model),
+        max_depth: 5,
+    };
+    for result in [
+        CcStage::new(&gpu.device, &model, &params).map(|_| ()),
+        tessera_wgpu::catmull_clark::CcUniformStage::new(&gpu.device, &model, 2).map(|_| ()),
+    ] {
+        let err = result.expect_err("must not fit");
+        assert!(
+            matches!(err, tessera_wgpu::Error::ModelTooLarge { limit: 65536, .. }),
+            "{err}"
+        );
+    }
+    gpu.check().expect("no wgpu errors");
+}

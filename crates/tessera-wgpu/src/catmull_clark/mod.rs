@@ -8,14 +8,15 @@
 //!
 //! ```no_run
 //! # fn demo(device: &wgpu::Device, queue: &wgpu::Queue, model: &tessera_core::catmull_clark::SurfaceModel,
-//! #         points: &wgpu::Buffer, counts: &wgpu::Buffer, out: &wgpu::Buffer, n: u32) {
+//! #         points: &wgpu::Buffer, counts: &wgpu::Buffer, out: &wgpu::Buffer, n: u32) -> tessera_wgpu::Result<()> {
 //! use tessera_core::catmull_clark::gpu_model::CcGpuModel;
 //! use tessera_wgpu::catmull_clark::{CcModelBuffers, CcVertexEval};
-//! let buffers = CcModelBuffers::new(device, &CcGpuModel::new(model));
+//! let buffers = CcModelBuffers::new(device, &CcGpuModel::new(model))?;
 //! let eval = CcVertexEval::new(device);
 //! let mut encoder = device.create_command_encoder(&Default::default());
 //! eval.record(device, &mut encoder, &buffers, points, counts, out, n);
 //! queue.submit([encoder.finish()]);
+//! # Ok(())
 //! # }
 //! ```
 
@@ -30,7 +31,7 @@ use tessera_core::gpu_types::{CcHashSlot, CcHashStatus};
 use wgpu::util::DeviceExt;
 
 use crate::error::{Error, Result};
-use crate::kernel::{check_size, storage, Kernel};
+use crate::kernel::{check_size, check_upload, storage, Kernel};
 use crate::scan::{PrefixSum, ScanKernels};
 
 /// The flattened quadtrees on the GPU (bindings 20–24 of the Catmull-Clark kernels).
@@ -55,7 +56,19 @@ fn byte_sizes(model: &CcGpuModel) -> [usize; 5] {
 }
 
 impl CcModelBuffers {
-    pub fn new(device: &wgpu::Device, model: &CcGpuModel) -> Self {
+    /// Uploads `model`; [`Error::ModelTooLarge`] if one of its arrays is larger than a
+    /// storage buffer the device can bind (before anything is created).
+    pub fn new(device: &wgpu::Device, model: &CcGpuModel) -> Result<Self> {
+        let names = [
+            "patch roots",
+            "quadtree nodes",
+            "node splits",
+            "Bézier nets",
+            "corner rings",
+        ];
+        for (what, bytes) in names.into_iter().zip(byte_sizes(model)) {
+            check_upload(device, what, bytes as u64)?;
+        }
         let init = |label: &str, bytes: &[u8]| {
             // Bindings are never empty: an empty array (a model without extraordinary
             // vertices has no corners) binds one zeroed element of any of the types.
@@ -66,14 +79,14 @@ impl CcModelBuffers {
                 usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
             })
         };
-        CcModelBuffers {
+        Ok(CcModelBuffers {
             roots: init("tessera cc roots", bytemuck::cast_slice(&model.roots)),
             nodes: init("tessera cc nodes", bytemuck::cast_slice(&model.nodes)),
             splits: init("tessera cc splits", bytemuck::cast_slice(&model.splits)),
             nets: init("tessera cc nets", bytemuck::cast_slice(&model.nets)),
             corners: init("tessera cc corners", bytemuck::cast_slice(&model.corners)),
             sizes: byte_sizes(model),
-        }
+        })
     }
 
     /// Re-uploads a model of the same shape (the control points moved, the topology did

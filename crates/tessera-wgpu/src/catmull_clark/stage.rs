@@ -296,7 +296,7 @@ impl CcStage {
         params.validate(model)?;
         let kernels = CcKernels::new(device);
         let gpu_model = CcGpuModel::new(model);
-        let model_buffers = CcModelBuffers::new(device, &gpu_model);
+        let model_buffers = CcModelBuffers::new(device, &gpu_model)?;
         let patch_count = model.mesh.patch_count() as u32;
         let topo = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("tessera cc topology"),

@@ -82,7 +82,7 @@ impl CcUniformStage {
         let layout = uniform_patches(&model.mesh);
         let params = layout.params(segments)?;
         let kernels = CcUniformKernels::new(device);
-        let model_buffers = CcModelBuffers::new(device, &CcGpuModel::new(model));
+        let model_buffers = CcModelBuffers::new(device, &CcGpuModel::new(model))?;
         // Never empty: a model of holes only binds one zeroed patch it never reads.
         let zero = [tessera_core::gpu_types::CcUniformPatch::default()];
         let patches = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
