@@ -202,7 +202,8 @@ pub fn parse_teaset(path: &Path, bytes: &[u8]) -> Result<TeasetFile> {
 
 /// The distance under which control points count as one (what the model welds by):
 /// 1e-6 of the bounding-box diagonal of the referenced points. A model too small for
-/// single precision to resolve that is refused. Indices must be in range.
+/// single precision to resolve that is refused. Indices out of range are skipped here
+/// (the caller reports them).
 fn model_tolerance(path: &Path, vertices: &[Vec3], patches: &[(usize, [u64; 16])]) -> Result<f64> {
     let (mut lo, mut hi) = (glam::DVec3::INFINITY, glam::DVec3::NEG_INFINITY);
     for (_, idx) in patches {
