@@ -7,7 +7,7 @@ use glam::{DVec3, Vec3};
 use super::patch::BezierPatch;
 use super::topology::PatchTopology;
 use crate::error::Result;
-use crate::io::teaset::{load_teaset, TeasetFile};
+use crate::io::teaset::{load_teaset, TeasetFile, WELD_RELATIVE};
 use crate::weld::weld_points;
 
 /// A set of bicubic Bézier patches ready for tessellation.
@@ -45,7 +45,7 @@ impl BezierModel {
             .map(|(v, _)| *v)
             .collect();
         let diag = bbox_diag(&referenced);
-        let (weld_id, points) = weld_points(&file.vertices, diag * 1e-6);
+        let (weld_id, points) = weld_points(&file.vertices, diag * WELD_RELATIVE as f32);
         let nets: Vec<[u32; 16]> = file
             .patches
             .iter()

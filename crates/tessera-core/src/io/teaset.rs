@@ -221,8 +221,12 @@ fn model_tolerance(path: &Path, vertices: &[Vec3], patches: &[(usize, [u64; 16])
             format!("the control points span {diag:e} units: below {MIN_DIAGONAL:e}, too small for single precision"),
         ));
     }
-    Ok(diag * 1e-6)
+    Ok(diag * WELD_RELATIVE)
 }
+
+/// Control points closer than this fraction of the bounding-box diagonal are one point:
+/// the shape checks here and the model's weld ([`BezierModel::from_teaset`](crate::bezier::BezierModel::from_teaset)) agree.
+pub const WELD_RELATIVE: f64 = 1e-6;
 
 /// The smallest model (bounding-box diagonal) accepted: its weld tolerance, 1e-6 of it,
 /// squared, must still be a normal `f32`.
