@@ -5,6 +5,7 @@
 mod cc;
 mod cc_gpu;
 mod gpu;
+mod probe;
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -116,8 +117,12 @@ fn main() {
         .and_then(|i| args.get(i + 1))
         .cloned();
     std::fs::create_dir_all(&out_dir).expect("create bench output folder");
-    // `--only gpu|cpu|cc|ccgpu`: one part of the bench (cpu is the Bézier CPU table).
+    // `--only gpu|cpu|cc|ccgpu|probe`: one part of the bench (cpu is the Bézier CPU
+    // table; probe is the cost of one map read on the CPU and on the adapter).
     let part = |name: &str| only.as_deref().is_none_or(|o| o == name);
+    if part("probe") {
+        probe::run(&out_dir, &assets, quick);
+    }
     if part("gpu") {
         gpu::run(&assets, &out_dir, quick);
     }
