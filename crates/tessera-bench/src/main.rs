@@ -121,7 +121,7 @@ fn main() {
     // table; probe is the cost of one map read on the CPU and on the adapter).
     let part = |name: &str| only.as_deref().is_none_or(|o| o == name);
     if part("probe") {
-        probe::run(&out_dir, &assets, quick);
+        probe::run(&assets, &out_dir, quick);
     }
     if part("gpu") {
         gpu::run(&assets, &out_dir, quick);

@@ -114,7 +114,7 @@ fn probe_texture(@builtin(global_invocation_id) gid: vec3u) {
 }
 "#;
 
-pub fn run(out_dir: &std::path::Path, assets: &std::path::Path, quick: bool) {
+pub fn run(assets: &std::path::Path, out_dir: &std::path::Path, quick: bool) {
     let teapot = BezierModel::load(&assets.join("teapot")).unwrap_or_else(|e| panic!("{e}"));
     let prep = PreparedBezier::new(&teapot);
     let maps: Vec<_> = (0..MAPS as usize)
