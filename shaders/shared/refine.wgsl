@@ -183,24 +183,54 @@ fn poly_at(k: u32) -> vec2u {
     return unpack_lp(poly[k % poly_len]);
 }
 
+fn poly_push(p: vec2u) {
+    if poly_len < POLY_MAX {
+        poly[poly_len] = pack_lp(p);
+        poly_len += 1u;
+    }
+}
+
+// The points of segment a → b are a + s · unit, 0 <= s <= steps (twin of `side_steps`).
+struct SideSteps {
+    steps: u32,
+    unit: vec2i,
+}
+
+fn side_steps(a: vec2u, b: vec2u) -> SideSteps {
+    let d = vec2i(i32(b.x) - i32(a.x), i32(b.y) - i32(a.y));
+    let steps = gcd(u32(abs(d.x)), u32(abs(d.y)));
+    return SideSteps(steps, d / i32(steps));
+}
+
+fn step_point(a: vec2u, unit: vec2i, s: u32) -> vec2u {
+    return vec2u(vec2i(a) + unit * i32(s));
+}
+
+// The vertices strictly inside side a → b, in order from a: from vertex to vertex,
+// halving the step while the midpoint ahead exists (twin of `side_points`, which says
+// why the points form a dyadic hierarchy).
+fn side_points(c: TriCtx, a: vec2u, b: vec2u) {
+    let st = side_steps(a, b);
+    var s = 0u;
+    while s < st.steps {
+        var h = select(s & (0u - s), st.steps, s == 0u);
+        while h > 1u && exists(c, step_point(a, st.unit, s + h / 2u)) {
+            h /= 2u;
+        }
+        s += h;
+        if s < st.steps {
+            poly_push(step_point(a, st.unit, s));
+        }
+    }
+}
+
 // Corners of leaf t and every existing point on its sides, counter-clockwise.
 fn leaf_polygon(c: TriCtx, t: Tri) {
     poly_len = 0u;
     let corners = array<vec2u, 3>(t.r, t.a, t.b);
     for (var k = 0u; k < 3u; k++) {
-        let a = corners[k];
-        let b = corners[(k + 1u) % 3u];
-        poly[poly_len] = pack_lp(a);
-        poly_len += 1u;
-        let d = vec2i(i32(b.x) - i32(a.x), i32(b.y) - i32(a.y));
-        let steps = i32(gcd(u32(abs(d.x)), u32(abs(d.y))));
-        for (var s = 1; s < steps; s++) {
-            let p = vec2u(u32(i32(a.x) + d.x * s / steps), u32(i32(a.y) + d.y * s / steps));
-            if exists(c, p) && poly_len < POLY_MAX {
-                poly[poly_len] = pack_lp(p);
-                poly_len += 1u;
-            }
-        }
+        poly_push(corners[k]);
+        side_points(c, corners[k], corners[(k + 1u) % 3u]);
     }
 }
 
