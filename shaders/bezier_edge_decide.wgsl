@@ -28,12 +28,14 @@ fn sides_need(sides: EdgeSides, lo: u32, hi: u32) -> bool {
     for (var s = 0u; s < sides.count; s++) {
         let side = sides.s[s];
         let l = lattice_new(side.tri, params.max_depth);
-        let scale = DYADIC_SCALE / l.n;
-        var f0 = lo / scale;
-        var f1 = hi / scale;
+        // Dividing by DYADIC_SCALE / l.n, a power of two: a shift, not an integer
+        // division (a scalar loop over the lanes on a CPU device).
+        let shift = countTrailingZeros(DYADIC_SCALE) - l.depth;
+        var f0 = lo >> shift;
+        var f1 = hi >> shift;
         if !side.forward {
-            f0 = (DYADIC_SCALE - hi) / scale;
-            f1 = (DYADIC_SCALE - lo) / scale;
+            f0 = (DYADIC_SCALE - hi) >> shift;
+            f1 = (DYADIC_SCALE - lo) >> shift;
         }
         if interior_need(l, triangle_on_side(l, side.k, f0, f1)) {
             return true;

@@ -114,9 +114,11 @@ fn from_patch_coords(l: Lattice, c: vec2i) -> vec2u {
     let d = c - g0 * n;
     let e1 = vec2i(l.g1) - g0;
     let e2 = vec2i(l.g2) - g0;
+    // A coarse triangle is half a grid cell: det is ±1, so dividing by it is multiplying
+    // (an integer division is a scalar loop over the lanes on a CPU device).
     let det = e1.x * e2.y - e1.y * e2.x;
-    let i = (d.x * e2.y - d.y * e2.x) / det;
-    let j = (e1.x * d.y - e1.y * d.x) / det;
+    let i = (d.x * e2.y - d.y * e2.x) * det;
+    let j = (e1.x * d.y - e1.y * d.x) * det;
     return vec2u(u32(i), u32(j));
 }
 

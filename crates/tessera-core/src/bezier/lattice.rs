@@ -130,10 +130,12 @@ impl Lattice {
             [g[1][0] - g[0][0], g[1][1] - g[0][1]],
             [g[2][0] - g[0][0], g[2][1] - g[0][1]],
         );
-        // Solve d = i e1 + j e2 (determinant ±1).
+        // Solve d = i e1 + j e2. The determinant is ±1 (half a grid cell): dividing by
+        // it is multiplying, as the shader does.
         let det = e1[0] * e2[1] - e1[1] * e2[0];
-        let i = (d[0] * e2[1] - d[1] * e2[0]) / det;
-        let j = (e1[0] * d[1] - e1[1] * d[0]) / det;
+        debug_assert_eq!(det.abs(), 1);
+        let i = (d[0] * e2[1] - d[1] * e2[0]) * det;
+        let j = (e1[0] * d[1] - e1[1] * d[0]) * det;
         [i as u32, j as u32]
     }
 

@@ -119,11 +119,12 @@ pub fn edge_decide(
     subdivide_segment_with(&owner, uv0, uv1, own_test_levels, |lo, hi| {
         let mut evals = 0;
         for (l, inputs, k, fwd) in &lattices {
-            let scale = DYADIC_SCALE / l.n;
+            // Dividing by DYADIC_SCALE / l.n, a power of two: a shift, as on the GPU.
+            let shift = DYADIC_SCALE.trailing_zeros() - l.depth;
             let (f0, f1) = if *fwd {
-                (lo / scale, hi / scale)
+                (lo >> shift, hi >> shift)
             } else {
-                ((DYADIC_SCALE - hi) / scale, (DYADIC_SCALE - lo) / scale)
+                ((DYADIC_SCALE - hi) >> shift, (DYADIC_SCALE - lo) >> shift)
             };
             let tri = l.triangle_on_side(*k, f0, f1);
             let (yes, ev) = interior_need(inputs, l, tri);
