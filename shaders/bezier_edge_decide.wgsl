@@ -57,7 +57,7 @@ fn main(@builtin(global_invocation_id) gid: vec3u, @builtin(num_workgroups) grou
         let sides = coarse_edge_sides(e);
         // The flat test measures every chord itself; a map test asks the owner's map
         // about the whole coarse edge only (see `edge_decide`).
-        let own_test_levels = select(1u, 0xffffffffu, params.test == TEST_FLAT);
+        let own_test_levels = select(1u, 0xffffffffu, EDGE_TEST == TEST_FLAT);
         var stack: array<Piece, 12>;
         var top = 1u;
         stack[0] = Piece(0u, DYADIC_SCALE, 0u);
@@ -67,7 +67,7 @@ fn main(@builtin(global_invocation_id) gid: vec3u, @builtin(num_workgroups) grou
             let mid = (piece.lo + piece.hi) / 2u;
             var split = false;
             if piece.level < own_test_levels {
-                split = segment_test(params.test, ends.patch_id, params.threshold,
+                split = segment_test(EDGE_TEST, ends.patch_id, params.threshold,
                     lerp_uv(ends.uv0, ends.uv1, piece.lo), lerp_uv(ends.uv0, ends.uv1, piece.hi));
             }
             if !split {

@@ -124,7 +124,8 @@ pub struct DrawIndexedIndirectArgs {
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
 pub struct BezierParams {
-    /// [`EdgeTest`](crate::bezier::EdgeTest) index.
+    /// [`EdgeTest`](crate::bezier::EdgeTest) index. For readers of the buffer: the
+    /// kernels take the test as their pipeline constant `EDGE_TEST` instead.
     pub test: u32,
     pub threshold: f32,
     pub max_depth: u32,

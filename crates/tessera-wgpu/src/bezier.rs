@@ -39,8 +39,10 @@
 //! # Ok(()) }
 //! ```
 
+use std::sync::{Arc, OnceLock};
+
 use tessera_core::bezier::lattice::{inv_lattice, Lattice};
-use tessera_core::bezier::{AdaptiveParams, PreparedBezier};
+use tessera_core::bezier::{AdaptiveParams, EdgeTest, PreparedBezier};
 use tessera_core::gpu_types::{
     BezierParams, BezierStatus, OutVertex, VertexRecord, EDGE_BIT_WORDS,
 };
@@ -85,23 +87,30 @@ mod slot {
 }
 
 /// The compiled Bézier kernels of one device. Compiling them is the slow part of
-/// creating a stage (seconds on a CPU driver), so stages can share one set.
+/// creating a stage (seconds on a CPU driver), so stages can share one set. The kernels
+/// that run the edge test are compiled for one test each (see [`TestKernels`]), the
+/// first time a stage uses that test.
 #[derive(Clone)]
-pub struct BezierKernels(std::sync::Arc<Pipelines>);
+pub struct BezierKernels(Arc<Pipelines>);
 
 impl BezierKernels {
     pub fn new(device: &wgpu::Device) -> Self {
-        BezierKernels(std::sync::Arc::new(Pipelines::new(device)))
+        BezierKernels(Arc::new(Pipelines::new(device)))
+    }
+
+    /// The kernels specialised for `test`, compiled on first use.
+    fn for_test(&self, device: &wgpu::Device, test: EdgeTest) -> Arc<TestKernels> {
+        self.0.by_test[test.index() as usize]
+            .get_or_init(|| Arc::new(TestKernels::new(device, test)))
+            .clone()
     }
 }
 
 struct Pipelines {
-    edge_decide: Kernel,
-    tri_mark: Kernel,
+    by_test: [OnceLock<Arc<TestKernels>>; EdgeTest::ALL.len()],
     scan: ScanKernels,
     finish: Kernel,
     edge_emit: Kernel,
-    tri_emit: Kernel,
     vertex_eval: Kernel,
 }
 
@@ -109,13 +118,34 @@ impl Pipelines {
     fn new(device: &wgpu::Device) -> Self {
         let make = |file: &str| Kernel::new(device, file, "main");
         Pipelines {
-            edge_decide: make("bezier_edge_decide.wgsl"),
-            tri_mark: make("bezier_tri_mark.wgsl"),
+            by_test: Default::default(),
             scan: ScanKernels::new(device),
             finish: make("bezier_finish.wgsl"),
             edge_emit: make("bezier_edge_emit.wgsl"),
-            tri_emit: make("bezier_tri_emit.wgsl"),
             vertex_eval: make("bezier_vertex_eval.wgsl"),
+        }
+    }
+}
+
+/// The kernels that include `shaders/shared/need.wgsl`, with its `EDGE_TEST` constant
+/// fixed. A CPU device runs both sides of every branch, so a test chosen at run time made
+/// each decision pay for all four; fixed, the compiler drops the other three
+/// (`edge_decide` 2.3× faster on lavapipe). `tri_emit` runs no test but includes the
+/// file, so it needs the constant too.
+struct TestKernels {
+    edge_decide: Kernel,
+    tri_mark: Kernel,
+    tri_emit: Kernel,
+}
+
+impl TestKernels {
+    fn new(device: &wgpu::Device, test: EdgeTest) -> Self {
+        let constants = [("EDGE_TEST", test.index() as f64)];
+        let make = |file: &str| Kernel::with_constants(device, file, "main", &constants);
+        TestKernels {
+            edge_decide: make("bezier_edge_decide.wgsl"),
+            tri_mark: make("bezier_tri_mark.wgsl"),
+            tri_emit: make("bezier_tri_emit.wgsl"),
         }
     }
 }
@@ -165,7 +195,7 @@ struct BindGroups {
 impl BindGroups {
     /// Every buffer under its binding number; each kernel takes the ones its entry point
     /// uses (see [`Kernel::bind`]).
-    fn new(device: &wgpu::Device, p: &Pipelines, b: &Buffers) -> Self {
+    fn new(device: &wgpu::Device, p: &Pipelines, t: &TestKernels, b: &Buffers) -> Self {
         use slot::*;
         let all = [
             (PARAMS, &b.uniform),
@@ -184,11 +214,11 @@ impl BindGroups {
             (EVALUATIONS, &b.evaluations),
         ];
         BindGroups {
-            edge_decide: p.edge_decide.bind(device, &all),
-            tri_mark: p.tri_mark.bind(device, &all),
+            edge_decide: t.edge_decide.bind(device, &all),
+            tri_mark: t.tri_mark.bind(device, &all),
             finish: p.finish.bind(device, &all),
             edge_emit: p.edge_emit.bind(device, &all),
-            tri_emit: p.tri_emit.bind(device, &all),
+            tri_emit: t.tri_emit.bind(device, &all),
             vertex_eval: p.vertex_eval.bind(device, &all),
         }
     }
@@ -201,6 +231,8 @@ pub struct BezierStage {
     params: AdaptiveParams,
     buffers: Buffers,
     pipelines: BezierKernels,
+    /// The test-specific kernels of `params.test`.
+    test_kernels: Arc<TestKernels>,
     bind_groups: BindGroups,
 }
 
@@ -292,6 +324,7 @@ impl BezierStage {
         let l = prepared.layout;
         let counts_len = l.coarse_edges + 2 * l.coarse_triangles + 1;
         let pipelines = kernels.clone();
+        let test_kernels = pipelines.for_test(device, params.test);
         check_size(device, "count", 4 * counts_len as u64)?;
         check_size(
             device,
@@ -391,7 +424,8 @@ impl BezierStage {
         Ok(BezierStage {
             prepared_layout: l,
             params: *params,
-            bind_groups: BindGroups::new(device, &pipelines.0, &buffers),
+            bind_groups: BindGroups::new(device, &pipelines.0, &test_kernels, &buffers),
+            test_kernels,
             buffers,
             pipelines,
         })
@@ -403,13 +437,20 @@ impl BezierStage {
     /// [`run_blocking`](Self::run_blocking)) after the change, as after loading.
     pub fn set_params(&mut self, device: &wgpu::Device, params: &AdaptiveParams) -> Result<()> {
         params.validate()?;
+        let mut rebind = false;
         if params.max_depth != self.params.max_depth {
             let l = self.prepared_layout;
             self.buffers.scratch = scratch_buffer(device, params.max_depth, l.coarse_triangles)?;
-            self.params = *params;
-            self.rebind(device);
+            rebind = true;
+        }
+        if params.test != self.params.test {
+            self.test_kernels = self.pipelines.for_test(device, params.test);
+            rebind = true;
         }
         self.params = *params;
+        if rebind {
+            self.rebind(device);
+        }
         Ok(())
     }
 
@@ -427,7 +468,8 @@ impl BezierStage {
     }
 
     fn rebind(&mut self, device: &wgpu::Device) {
-        self.bind_groups = BindGroups::new(device, &self.pipelines.0, &self.buffers);
+        self.bind_groups =
+            BindGroups::new(device, &self.pipelines.0, &self.test_kernels, &self.buffers);
     }
 
     fn gpu_params(&self) -> BezierParams {
@@ -515,6 +557,7 @@ impl BezierStage {
         let b = &self.buffers;
         let bg = &self.bind_groups;
         let p = &*self.pipelines.0;
+        let t = &*self.test_kernels;
         let counts_len = l.coarse_edges + 2 * l.coarse_triangles + 1;
         match step {
             Step::EdgeDecide => {
@@ -538,11 +581,11 @@ impl BezierStage {
             });
             match step {
                 Step::EdgeDecide => {
-                    p.edge_decide
+                    t.edge_decide
                         .dispatch(&mut pass, &bg.edge_decide, l.coarse_edges, WORKGROUP)
                 }
                 Step::TriMark => {
-                    p.tri_mark
+                    t.tri_mark
                         .dispatch(&mut pass, &bg.tri_mark, l.coarse_triangles, WORKGROUP)
                 }
                 Step::ScanFinish => {
@@ -554,7 +597,7 @@ impl BezierStage {
                         .dispatch(&mut pass, &bg.edge_emit, l.coarse_edges, WORKGROUP)
                 }
                 Step::TriEmit => {
-                    p.tri_emit
+                    t.tri_emit
                         .dispatch(&mut pass, &bg.tri_emit, l.coarse_triangles, WORKGROUP)
                 }
                 Step::VertexEval => {

@@ -16,6 +16,16 @@ pub(crate) struct Kernel {
 impl Kernel {
     /// Compiles entry point `entry` of shader file `file` with a derived layout.
     pub fn new(device: &wgpu::Device, file: &str, entry: &str) -> Self {
+        Self::with_constants(device, file, entry, &[])
+    }
+
+    /// As [`Kernel::new`], with values for the shader's `override` constants.
+    pub fn with_constants(
+        device: &wgpu::Device,
+        file: &str,
+        entry: &str,
+        constants: &[(&str, f64)],
+    ) -> Self {
         let module = shaders::module(device, file);
         Kernel {
             pipeline: device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
@@ -23,7 +33,10 @@ impl Kernel {
                 layout: None,
                 module: &module,
                 entry_point: Some(entry),
-                compilation_options: Default::default(),
+                compilation_options: wgpu::PipelineCompilationOptions {
+                    constants,
+                    ..Default::default()
+                },
                 cache: None,
             }),
             bindings: shaders::used_bindings(file, entry),

@@ -35,7 +35,16 @@ impl EdgeTest {
         }
     }
 
-    /// Index used by the shaders' `test` uniform.
+    /// Every test, in [`index`](Self::index) order.
+    pub const ALL: [EdgeTest; 4] = [
+        EdgeTest::Map2p,
+        EdgeTest::Map4p,
+        EdgeTest::Map8p,
+        EdgeTest::Flat,
+    ];
+
+    /// The test's number in the shaders (`TEST_MAP2P` .. `TEST_FLAT`, the value of the
+    /// pipeline constant `EDGE_TEST`).
     pub fn index(self) -> u32 {
         self as u32
     }
