@@ -198,7 +198,8 @@ struct SideSteps {
 
 fn side_steps(a: vec2u, b: vec2u) -> SideSteps {
     let d = vec2i(i32(b.x) - i32(a.x), i32(b.y) - i32(a.y));
-    let steps = gcd(u32(abs(d.x)), u32(abs(d.y)));
+    // At least 1: a degenerate side (a = b) has no inner points.
+    let steps = max(gcd(u32(abs(d.x)), u32(abs(d.y))), 1u);
     return SideSteps(steps, d / i32(steps));
 }
 

@@ -350,7 +350,8 @@ fn leaf_polygon(ctx: &TriContext, scratch: &TriScratch, t: [Lp; 3], out: &mut Ve
 /// diagonals of (u, v) under the lattice's shear) times the gcd.
 fn side_steps(a: Lp, b: Lp) -> (u32, [i64; 2]) {
     let d = [b[0] as i64 - a[0] as i64, b[1] as i64 - a[1] as i64];
-    let steps = gcd(d[0].unsigned_abs(), d[1].unsigned_abs()) as i64;
+    // At least 1, so that a degenerate side (a = b) has no inner points, not a panic.
+    let steps = gcd(d[0].unsigned_abs(), d[1].unsigned_abs()).max(1) as i64;
     (steps as u32, [d[0] / steps, d[1] / steps])
 }
 
