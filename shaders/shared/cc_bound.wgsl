@@ -6,7 +6,7 @@
 #include "shared/cc_patch.wgsl"
 
 const CC_WALK_ONE: u32 = 220200960u; // 105 << 21
-const CC_WALK_STACK: u32 = 16u;
+const CC_WALK_STACK: u32 = 32u;
 const CC_SIDE_BOTTOM: u32 = 1u;
 const CC_SIDE_RIGHT: u32 = 2u;
 const CC_SIDE_TOP: u32 = 4u;
@@ -135,16 +135,20 @@ fn cc_hessian_bound(s: vec3f) -> f32 {
     return 0.5 * (s.x + s.y) + sqrt(0.25 * (s.x - s.y) * (s.x - s.y) + s.z * s.z);
 }
 
-// Point t of side s of bs_net.
-fn cc_side_point(s: u32, t: u32) -> vec3f {
+// The points of side s of bs_net, from its start corner to its end corner.
+fn cc_side_points(s: u32) -> array<vec3f, 4> {
     switch s {
-        case 0u: { return bs_net[t]; }
-        case 1u: { return bs_net[4u * t + 3u]; }
-        case 2u: { return bs_net[12u + t]; }
-        default: { return bs_net[4u * t]; }
+        case 0u: { return array<vec3f, 4>(bs_net[0], bs_net[1], bs_net[2], bs_net[3]); }
+        case 1u: { return array<vec3f, 4>(bs_net[3], bs_net[7], bs_net[11], bs_net[15]); }
+        case 2u: { return array<vec3f, 4>(bs_net[12], bs_net[13], bs_net[14], bs_net[15]); }
+        default: { return array<vec3f, 4>(bs_net[0], bs_net[4], bs_net[8], bs_net[12]); }
     }
 }
 
+// Whether the piece keeps the slab bound's conditions; its heights and side bands
+// summed. No early exit: loops of fixed length without one are unrolled by the
+// compiler, so that every array index is a constant (a lavapipe lane loop otherwise).
+// Where the piece fails, bs_slab turns false for good and the sums are never read.
 fn cc_slab_piece(sides: u32) -> bool {
     for (var k = 0u; k < 16u; k++) {
         let h = dot(bs_normal, bs_net[k] + bs_offset);
@@ -163,43 +167,35 @@ fn cc_slab_piece(sides: u32) -> bool {
     }
     // In linear passes (`bound::orientation_kept`): every a left of dv[0], so turning
     // counter-clockwise orders them; then every b left of the first and the last a.
+    var ok = true;
     var first = du[0];
     var last = du[0];
     let b0 = dv[0];
     for (var k = 0u; k < 12u; k++) {
         let a = du[k];
-        if cc_perp_dot(a, b0) <= 0.0 {
-            return false;
-        }
-        if cc_perp_dot(a, first) > 0.0 {
-            first = a;
-        }
-        if cc_perp_dot(last, a) > 0.0 {
-            last = a;
-        }
+        ok = ok && cc_perp_dot(a, b0) > 0.0;
+        first = select(first, a, cc_perp_dot(a, first) > 0.0);
+        last = select(last, a, cc_perp_dot(last, a) > 0.0);
     }
     for (var k = 0u; k < 12u; k++) {
-        if cc_perp_dot(first, dv[k]) <= 0.0 || cc_perp_dot(last, dv[k]) <= 0.0 {
-            return false;
-        }
+        ok = ok && cc_perp_dot(first, dv[k]) > 0.0 && cc_perp_dot(last, dv[k]) > 0.0;
     }
     for (var s = 0u; s < 4u; s++) {
-        if (sides & (1u << s)) == 0u {
-            continue;
-        }
+        let on = (sides & (1u << s)) != 0u;
         let d = bs_chords[s];
-        for (var t = 0u; t < 3u; t++) {
-            if dot(cc_project(cc_side_point(s, t + 1u) - cc_side_point(s, t)), d) <= 0.0 {
-                return false;
-            }
-        }
+        let pts = cc_side_points(s);
         let start = bs_corners[cc_side_start(s)];
+        var band = bs_band[s];
         for (var t = 0u; t < 4u; t++) {
-            let off = cc_perp_dot(d, cc_project(cc_side_point(s, t) + bs_offset - start));
-            bs_band[s] = vec2f(min(bs_band[s].x, off), max(bs_band[s].y, off));
+            if t < 3u {
+                ok = ok && (!on || dot(cc_project(pts[t + 1u] - pts[t]), d) > 0.0);
+            }
+            let off = cc_perp_dot(d, cc_project(pts[t] + bs_offset - start));
+            band = vec2f(min(band.x, off), max(band.y, off));
         }
+        bs_band[s] = select(bs_band[s], band, on);
     }
-    return true;
+    return ok;
 }
 
 // A Bézier piece (bs_net, relative to the first corner) over `rect` in box coordinates.
@@ -280,6 +276,12 @@ fn bound_finish() -> f32 {
 }
 
 // ---- The walk (`bound::box_bound`).
+//
+// One node per iteration of one loop, whose body holds the piece and vertex code once:
+// on a SIMD device that masks rather than branches (lavapipe), every call site of
+// `bound_piece` costs its full price on every iteration, whatever the node. The path
+// from the root to the node being visited is a stack of split nodes, each with the
+// children still to visit.
 
 struct CcWalkEntry {
     node: u32,
@@ -292,10 +294,19 @@ struct CcWalkEntry {
     sides: u32,
 }
 
+// A split node on the path: itself (placed), whether the box cuts it (its children are
+// then placed by walk coordinates), and its children still to visit (bit c).
+struct CcWalkFrame {
+    entry: CcWalkEntry,
+    cut: bool,
+    children: vec4u,
+    todo: u32,
+}
+
 var<private> walk_box: vec4u;
 var<private> walk_max_ball: f32;
 var<private> walk_origin: vec3f;
-var<private> walk_stack: array<CcWalkEntry, CC_WALK_STACK>;
+var<private> walk_stack: array<CcWalkFrame, CC_WALK_STACK>;
 var<private> walk_len: u32;
 var<private> walk_overflow: bool;
 // Set by walk_place: whether the node is cut, and the part inside in node coordinates.
@@ -314,6 +325,12 @@ fn cc_quadrant_sides(c: u32) -> u32 {
         case 2u: { return CC_SIDE_RIGHT | CC_SIDE_TOP; }
         default: { return CC_SIDE_TOP | CC_SIDE_LEFT; }
     }
+}
+
+// Whether the square (x, y, size) in walk units overlaps the box.
+fn walk_overlaps(x: u32, y: u32, size: u32) -> bool {
+    let bx = walk_box;
+    return max(bx.x, x) < min(bx.y, x + size) && max(bx.z, y) < min(bx.w, y + size);
 }
 
 // `Walk::place`: false if the node does not overlap the box.
@@ -396,80 +413,56 @@ fn cc_load_net(k: u32) {
     }
 }
 
-// `Walk::enter`.
-fn walk_enter(entry: CcWalkEntry) {
-    var e = entry;
-    let nd = cc_nodes[e.node];
-    let kind = nd.kind & CC_NODE_KIND_MASK;
-    if kind == CC_NODE_SPLIT {
-        if walk_len < CC_WALK_STACK {
-            walk_stack[walk_len] = e;
-            walk_len += 1u;
-        } else {
-            walk_overflow = true;
-        }
-        return;
-    }
-    if !walk_place(&e) {
-        return;
-    }
-    if kind == CC_NODE_BEZIER {
-        cc_load_net(nd.index);
-        if walk_cut {
-            cc_clip_net();
-        }
-        bound_piece(e.rect, e.sides);
-    } else {
-        let c = cc_corners[nd.index];
-        bound_vertex(vec3f(c.limit[0], c.limit[1], c.limit[2]) - walk_origin, c.hull_radius, e.rect, e.sides);
-    }
-}
-
 // `Walk::small`: a node of `level` is at most 1/64 of the box's shorter side.
 fn walk_small(level: u32) -> bool {
     let bmin = min(walk_box.y - walk_box.x, walk_box.w - walk_box.z);
     return level >= 27u || (bmin >> (27u - level)) >= 105u;
 }
 
-// `Walk::split`.
-fn walk_split(entry: CcWalkEntry) {
-    var e = entry;
-    let nd = cc_nodes[e.node];
-    let children = cc_splits[nd.index];
-    if !walk_place(&e) {
-        return;
-    }
-    let ball = nd.kind >> CC_NODE_BALL_SHIFT;
-    if !walk_cut && ball != 0u {
-        let c = cc_corners[ball - 1u];
-        if c.hull_radius <= walk_max_ball && walk_small(entry.level) {
-            bound_vertex(vec3f(c.limit[0], c.limit[1], c.limit[2]) - walk_origin, c.hull_radius, e.rect, e.sides);
-            return;
-        }
-    }
+// `Walk::push`: a split node (placed) onto the path, with the children to visit: those
+// the box overlaps while the node is cut, all four once it is inside.
+fn walk_push(e: CcWalkEntry, children: vec4u) {
+    var todo = 15u;
     if walk_cut {
-        if (entry.size & 1u) != 0u {
+        // Below level 21 nodes are never cut by a box of the grid.
+        if (e.size & 1u) != 0u {
             walk_overflow = true;
             return;
         }
-        let h = entry.size / 2u;
+        let h = e.size / 2u;
+        todo = 0u;
         for (var c = 0u; c < 4u; c++) {
             let q = cc_quadrant_offset(c);
-            walk_enter(CcWalkEntry(children[c], entry.level + 1u, entry.x + q.x * h, entry.y + q.y * h, h,
-                false, vec4f(0.0), 0u));
+            if walk_overlaps(e.x + q.x * h, e.y + q.y * h, h) {
+                todo |= 1u << c;
+            }
         }
-        return;
+    }
+    if walk_len < CC_WALK_STACK {
+        walk_stack[walk_len] = CcWalkFrame(e, walk_cut, children, todo);
+        walk_len += 1u;
+    } else {
+        walk_overflow = true;
+    }
+}
+
+// `Walk::child`: child c of the frame on top of the path.
+fn walk_child(c: u32) -> CcWalkEntry {
+    let f = walk_stack[walk_len - 1u];
+    let e = f.entry;
+    let q = cc_quadrant_offset(c);
+    if f.cut {
+        let h = e.size / 2u;
+        return CcWalkEntry(f.children[c], e.level + 1u, e.x + q.x * h, e.y + q.y * h, h, false,
+            vec4f(0.0), 0u);
     }
     let r = e.rect;
     let hu = 0.5 * (r.y - r.x);
     let hv = 0.5 * (r.w - r.z);
-    for (var c = 0u; c < 4u; c++) {
-        let q = cc_quadrant_offset(c);
-        let u0 = r.x + f32(q.x) * hu;
-        let v0 = r.z + f32(q.y) * hv;
-        walk_enter(CcWalkEntry(children[c], entry.level + 1u, e.x, e.y, e.size, true,
-            vec4f(u0, u0 + hu, v0, v0 + hv), e.sides & cc_quadrant_sides(c)));
-    }
+    let u0 = r.x + f32(q.x) * hu;
+    let v0 = r.z + f32(q.y) * hv;
+    return CcWalkEntry(f.children[c], e.level + 1u, e.x, e.y, e.size, true,
+        vec4f(u0, u0 + hu, v0, v0 + hv), e.sides & cc_quadrant_sides(c));
 }
 
 // `bound::box_bound`: the bound of box `bx` (walk units: u0, u1, v0, v1) of patch p with
@@ -483,12 +476,54 @@ fn cc_box_bound(p: u32, bx: vec4u, c: array<vec3f, 4>) -> f32 {
     bound_start(c);
     // A patch without a vertex is one Bézier piece.
     bs_track_dev = (cc_nodes[cc_roots[p]].kind & CC_NODE_KIND_MASK) != CC_NODE_BEZIER;
-    walk_enter(CcWalkEntry(cc_roots[p], 0u, 0u, 0u, CC_WALK_ONE, false, vec4f(0.0), 0u));
-    // Bounded: every split node is pushed once, and trees are finite; the cap guards a
+    var e = CcWalkEntry(cc_roots[p], 0u, 0u, 0u, CC_WALK_ONE, false, vec4f(0.0), 0u);
+    // Bounded: every node is visited once, and trees are finite; the cap guards a
     // corrupt upload.
-    for (var guard = 0u; guard < 4096u && walk_len > 0u; guard++) {
-        walk_len -= 1u;
-        walk_split(walk_stack[walk_len]);
+    for (var guard = 0u; guard < 65536u; guard++) {
+        let nd = cc_nodes[e.node];
+        let kind = nd.kind & CC_NODE_KIND_MASK;
+        var piece = false;
+        var vertex = false;
+        var corner = nd.index;
+        if walk_place(&e) {
+            if kind == CC_NODE_SPLIT {
+                // A node whose ball is small enough enters as its vertex.
+                let ball = nd.kind >> CC_NODE_BALL_SHIFT;
+                if !walk_cut && ball != 0u && walk_small(e.level) {
+                    corner = ball - 1u;
+                    vertex = cc_corners[corner].hull_radius <= walk_max_ball;
+                }
+                if !vertex {
+                    walk_push(e, cc_splits[nd.index]);
+                }
+            } else {
+                piece = kind == CC_NODE_BEZIER;
+                vertex = !piece;
+            }
+        }
+        if piece {
+            cc_load_net(nd.index);
+            if walk_cut {
+                cc_clip_net();
+            }
+            bound_piece(e.rect, e.sides);
+        }
+        if vertex {
+            let cv = cc_corners[corner];
+            bound_vertex(vec3f(cv.limit[0], cv.limit[1], cv.limit[2]) - walk_origin, cv.hull_radius, e.rect,
+                e.sides);
+        }
+        // The next node: the next child of the innermost split node with one left.
+        while walk_len > 0u && walk_stack[walk_len - 1u].todo == 0u {
+            walk_len -= 1u;
+        }
+        if walk_len == 0u || walk_overflow {
+            break;
+        }
+        let todo = walk_stack[walk_len - 1u].todo;
+        let c = firstTrailingBit(todo);
+        walk_stack[walk_len - 1u].todo = todo & (todo - 1u);
+        e = walk_child(c);
     }
     if walk_overflow || walk_len > 0u {
         return CC_INFINITY;

@@ -76,47 +76,49 @@ fn cc_net_point(k: u32, u: f32, v: f32) -> CcSample {
 }
 
 fn cc_eval(point: CcPoint) -> CcSample {
-    var node = cc_roots[point.patch_id];
+    var nd = cc_nodes[cc_roots[point.patch_id]];
     var x = point.u;
     var y = point.v;
     var size = CC_PARAM_ONE;
-    // The stored depth bounds the walk; the cap only guards against a corrupt upload.
-    for (var level = 0u; level < 64u; level++) {
-        let nd = cc_nodes[node];
-        let kind = nd.kind & CC_NODE_KIND_MASK;
-        if kind == CC_NODE_SPLIT {
-            // Past 2^-31 (the chains at extraordinary vertices) the point is a corner of
-            // the node and stays that corner of the child.
-            let half = size >> 1u;
-            let right = select(x >= half, x >= 1u, size == 1u);
-            let top = select(y >= half, y >= 1u, size == 1u);
-            var c = 0u;
-            if right && !top {
-                c = 1u;
-            } else if right && top {
-                c = 2u;
-            } else if top {
-                c = 3u;
-            }
-            if size > 1u {
-                if right {
-                    x -= half;
-                }
-                if top {
-                    y -= half;
-                }
-                size = half;
-            }
-            node = cc_splits[nd.index][c];
-        } else if kind == CC_NODE_BEZIER {
-            return cc_net_point(nd.index, f32(x) / f32(size), f32(y) / f32(size));
-        } else {
-            let c = cc_corners[nd.index];
-            return CcSample(
-                vec3f(c.limit[0], c.limit[1], c.limit[2]),
-                vec3f(c.normal[0], c.normal[1], c.normal[2]),
-            );
+    // Down to the node holding the point, then one evaluation after the loop: on a
+    // SIMD device that masks rather than branches, an evaluation inside the loop would
+    // run on every level. The stored depth bounds the walk; the cap only guards against
+    // a corrupt upload.
+    for (var level = 0u; level < 64u && (nd.kind & CC_NODE_KIND_MASK) == CC_NODE_SPLIT; level++) {
+        // Past 2^-31 (the chains at extraordinary vertices) the point is a corner of
+        // the node and stays that corner of the child.
+        let half = size >> 1u;
+        let right = select(x >= half, x >= 1u, size == 1u);
+        let top = select(y >= half, y >= 1u, size == 1u);
+        var c = 0u;
+        if right && !top {
+            c = 1u;
+        } else if right && top {
+            c = 2u;
+        } else if top {
+            c = 3u;
         }
+        if size > 1u {
+            if right {
+                x -= half;
+            }
+            if top {
+                y -= half;
+            }
+            size = half;
+        }
+        nd = cc_nodes[cc_splits[nd.index][c]];
+    }
+    let kind = nd.kind & CC_NODE_KIND_MASK;
+    if kind == CC_NODE_BEZIER {
+        return cc_net_point(nd.index, f32(x) / f32(size), f32(y) / f32(size));
+    }
+    if kind == CC_NODE_CORNER {
+        let c = cc_corners[nd.index];
+        return CcSample(
+            vec3f(c.limit[0], c.limit[1], c.limit[2]),
+            vec3f(c.normal[0], c.normal[1], c.normal[2]),
+        );
     }
     return CcSample(vec3f(0.0), vec3f(0.0));
 }

@@ -71,10 +71,11 @@ use super::patch::{Node, PatchSurface};
 
 /// The walk's unit: `WALK_ONE` units span the patch side.
 pub const WALK_ONE: u32 = 105 << 21;
-/// The walk's stack. The stored trees split only along chains toward extraordinary
-/// vertices (at most two per patch), so a few entries suffice; running out makes the
-/// bound infinite (sound: the cell is split).
-pub const WALK_STACK: usize = 16;
+/// The walk's stack: the split nodes on the path from the root to the node visited.
+/// Stored trees split to level 30 at most (the chains at extraordinary vertices), so
+/// the path holds at most 31; running out makes the bound infinite (sound: the cell is
+/// split).
+pub const WALK_STACK: usize = 32;
 
 /// Side bits of a piece: on the box's bottom (`v = v0`), right, top and left side.
 pub const SIDE_BOTTOM: u32 = 1;
@@ -220,7 +221,9 @@ impl BoundSum {
         }
     }
 
-    /// The slab part of a piece; false where its conditions fail.
+    /// The slab part of a piece; false where its conditions fail. (The kernel runs every
+    /// pass to the end instead of returning early: a failing piece turns the slab bound
+    /// off for good, so the sums it still adds are never read.)
     fn slab_piece(&mut self, shape: &Net, net: &Net, sides: u32) -> bool {
         for p in net {
             let h = self.normal.dot(*p);
@@ -353,8 +356,8 @@ fn project(plane: (DVec3, DVec3), p: DVec3) -> DVec2 {
     DVec2::new(p.dot(plane.0), p.dot(plane.1))
 }
 
-/// A node on the walk's stack: either at integer walk coordinates `(x, y, size)` and not
-/// yet known to be inside the box, or inside it with its box rectangle and sides.
+/// A node to visit: either at integer walk coordinates `(x, y, size)` and not yet known
+/// to be inside the box, or inside it with its box rectangle and sides.
 #[derive(Clone, Copy)]
 struct WalkEntry {
     node: u32,
@@ -367,8 +370,21 @@ struct WalkEntry {
     sides: u32,
 }
 
+/// A split node on the path: itself (placed), whether the box cuts it (its children are
+/// then placed by walk coordinates), and its children still to visit (bit `c`).
+struct WalkFrame {
+    entry: WalkEntry,
+    cut: bool,
+    children: [u32; 4],
+    todo: u32,
+}
+
 /// The flatness bound of the box `bx = [u0, u1, v0, v1]` (walk units) of a patch whose
 /// corner positions are `corners`.
+///
+/// The walk visits one node per step of one loop, and the kernel reads the same: on a
+/// SIMD device that masks rather than branches, each place the loop body sums a piece
+/// costs a piece on every step, whatever the node.
 pub fn box_bound(surface: &PatchSurface, bx: [u32; 4], corners: [DVec3; 4]) -> f64 {
     // The ball at a vertex enters the bound as is: stop at a node 64 times smaller than
     // the box whose ball is below 1e-4 of the cell.
@@ -388,7 +404,7 @@ pub fn box_bound(surface: &PatchSurface, bx: [u32; 4], corners: [DVec3; 4]) -> f
         stack: Vec::with_capacity(WALK_STACK),
         overflow: false,
     };
-    walk.enter(WalkEntry {
+    let mut e = WalkEntry {
         node: 0,
         level: 0,
         x: 0,
@@ -397,13 +413,22 @@ pub fn box_bound(surface: &PatchSurface, bx: [u32; 4], corners: [DVec3; 4]) -> f
         inside: false,
         rect: [0.0; 4],
         sides: 0,
-    });
-    // Split nodes wait on the stack; pieces are summed as soon as they are reached.
-    while let Some(e) = walk.stack.pop() {
-        walk.split(e);
-    }
-    if walk.overflow {
-        return f64::INFINITY;
+    };
+    loop {
+        walk.visit(e);
+        // The next node: the next child of the innermost split node with one left.
+        while walk.stack.last().is_some_and(|f| f.todo == 0) {
+            walk.stack.pop();
+        }
+        if walk.overflow {
+            return f64::INFINITY;
+        }
+        let Some(top) = walk.stack.last_mut() else {
+            break;
+        };
+        let c = top.todo.trailing_zeros() as usize;
+        top.todo &= top.todo - 1;
+        e = walk.child(c);
     }
     walk.sum.finish()
 }
@@ -414,25 +439,30 @@ struct Walk<'a> {
     max_ball: f64,
     origin: DVec3,
     sum: BoundSum,
-    stack: Vec<WalkEntry>,
+    stack: Vec<WalkFrame>,
     overflow: bool,
 }
 
 impl Walk<'_> {
-    /// Reaches a node: a split node is pushed, a piece summed.
-    fn enter(&mut self, e: WalkEntry) {
-        if let Node::Split(_) = self.surface.nodes[e.node as usize] {
-            if self.stack.len() < WALK_STACK {
-                self.stack.push(e);
-            } else {
-                self.overflow = true;
-            }
-            return;
-        }
+    /// Visits a node: a piece is summed, a split node whose ball is small enough enters
+    /// as its vertex, any other split node goes on the path.
+    fn visit(&mut self, e: WalkEntry) {
         let Some((e, clip)) = self.place(e) else {
             return;
         };
         match &self.surface.nodes[e.node as usize] {
+            Node::Split(children) => {
+                if clip.is_none() && self.small(e.level) {
+                    if let Some(ball) = self.surface.balls[e.node as usize] {
+                        if ball.radius <= self.max_ball {
+                            self.sum
+                                .vertex(ball.limit - self.origin, ball.radius, e.rect, e.sides);
+                            return;
+                        }
+                    }
+                }
+                self.push(e, clip.is_some(), *children);
+            }
             Node::Bezier(net) => {
                 // As the GPU stores it: the first point, and the others relative to it.
                 let mut shape = net.map(|p| p - net[0]);
@@ -446,7 +476,6 @@ impl Walk<'_> {
                 self.sum
                     .vertex(c.limit - self.origin, c.hull_radius, e.rect, e.sides)
             }
-            Node::Split(_) => unreachable!("split nodes are pushed"),
         }
     }
 
@@ -458,6 +487,9 @@ impl Walk<'_> {
         if e.inside {
             return Some((e, None));
         }
+        if !self.overlaps(e.x, e.y, e.size) {
+            return None;
+        }
         let bx = self.bx;
         let ov = [
             bx[0].max(e.x),
@@ -465,9 +497,6 @@ impl Walk<'_> {
             bx[2].max(e.y),
             bx[3].min(e.y + e.size),
         ];
-        if ov[0] >= ov[1] || ov[2] >= ov[3] {
-            return None;
-        }
         let whole = ov == [e.x, e.x + e.size, e.y, e.y + e.size];
         let local = |a: u32, o: u32| (a - o) as f64 / e.size as f64;
         let clip = (!whole).then(|| {
@@ -492,6 +521,12 @@ impl Walk<'_> {
         Some((e, clip))
     }
 
+    /// Whether the square `(x, y, size)` in walk units overlaps the box.
+    fn overlaps(&self, x: u32, y: u32, size: u32) -> bool {
+        let bx = self.bx;
+        bx[0].max(x) < bx[1].min(x + size) && bx[2].max(y) < bx[3].min(y + size)
+    }
+
     /// Whether a node of `level` is at most 1/64 of the box's shorter side: its side is
     /// `105 · 2^(21 - level)` walk units.
     fn small(&self, level: u32) -> bool {
@@ -499,61 +534,63 @@ impl Walk<'_> {
         level >= 27 || (bmin >> (27 - level)) >= 105
     }
 
-    /// A split node: its children entered, in walk coordinates while the box cuts the
-    /// node, by rectangle and inherited sides once it is wholly inside.
-    fn split(&mut self, e: WalkEntry) {
-        let Node::Split(children) = self.surface.nodes[e.node as usize] else {
-            unreachable!("only split nodes are pushed");
-        };
-        let Some((placed, clip)) = self.place(e) else {
-            return;
-        };
-        if clip.is_none() {
-            if let Some(ball) = self.surface.balls[e.node as usize] {
-                if ball.radius <= self.max_ball && self.small(e.level) {
-                    self.sum.vertex(
-                        ball.limit - self.origin,
-                        ball.radius,
-                        placed.rect,
-                        placed.sides,
-                    );
-                    return;
-                }
-            }
-        }
-        if clip.is_some() {
+    /// A split node (placed) onto the path, with the children to visit: those the box
+    /// overlaps while it cuts the node, all four once the node is inside.
+    fn push(&mut self, e: WalkEntry, cut: bool, children: [u32; 4]) {
+        let mut todo = 15;
+        if cut {
             // Below level 21 nodes are never cut by a box of the grid.
             if !e.size.is_multiple_of(2) {
                 self.overflow = true;
                 return;
             }
             let h = e.size / 2;
-            for (c, &child) in children.iter().enumerate() {
-                let (qx, qy) = quadrant_offset(c);
-                self.enter(WalkEntry {
-                    node: child,
-                    level: e.level + 1,
-                    x: e.x + qx * h,
-                    y: e.y + qy * h,
-                    size: h,
-                    ..e
-                });
-            }
-            return;
+            todo = (0..4)
+                .filter(|&c| {
+                    let (qx, qy) = quadrant_offset(c);
+                    self.overlaps(e.x + qx * h, e.y + qy * h, h)
+                })
+                .fold(0, |m, c| m | 1 << c);
         }
-        let r = placed.rect;
-        let (hu, hv) = (0.5 * (r[1] - r[0]), 0.5 * (r[3] - r[2]));
-        for (c, &child) in children.iter().enumerate() {
-            let (qx, qy) = quadrant_offset(c);
-            let u0 = r[0] + qx as f64 * hu;
-            let v0 = r[2] + qy as f64 * hv;
-            self.enter(WalkEntry {
-                node: child,
-                level: e.level + 1,
-                rect: [u0, u0 + hu, v0, v0 + hv],
-                sides: placed.sides & QUADRANT_SIDES[c],
-                ..placed
+        if self.stack.len() < WALK_STACK {
+            self.stack.push(WalkFrame {
+                entry: e,
+                cut,
+                children,
+                todo,
             });
+        } else {
+            self.overflow = true;
+        }
+    }
+
+    /// Child `c` of the split node on top of the path.
+    fn child(&self, c: usize) -> WalkEntry {
+        let f = self.stack.last().expect("a split node on the path");
+        let e = f.entry;
+        let (qx, qy) = quadrant_offset(c);
+        if f.cut {
+            let h = e.size / 2;
+            return WalkEntry {
+                node: f.children[c],
+                level: e.level + 1,
+                x: e.x + qx * h,
+                y: e.y + qy * h,
+                size: h,
+                inside: false,
+                ..e
+            };
+        }
+        let r = e.rect;
+        let (hu, hv) = (0.5 * (r[1] - r[0]), 0.5 * (r[3] - r[2]));
+        let u0 = r[0] + qx as f64 * hu;
+        let v0 = r[2] + qy as f64 * hv;
+        WalkEntry {
+            node: f.children[c],
+            level: e.level + 1,
+            rect: [u0, u0 + hu, v0, v0 + hv],
+            sides: e.sides & QUADRANT_SIDES[c],
+            ..e
         }
     }
 }
