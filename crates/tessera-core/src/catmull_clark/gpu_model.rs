@@ -162,44 +162,42 @@ fn net_point(net: &GpuPatch, u: f32, v: f32) -> (Vec3, Vec3) {
 /// square at an extraordinary vertex gets the vertex (the stored depth puts every point
 /// of the tessellators' grids outside it; see [`super::TREE_DEPTH`]).
 pub fn cc_eval(model: &CcGpuModel, point: CcPoint) -> (Vec3, Vec3) {
-    let mut node = model.roots[point.patch_id as usize];
+    let mut nd = model.nodes[model.roots[point.patch_id as usize] as usize];
     let (mut x, mut y, mut size) = (point.u, point.v, CC_PARAM_ONE);
-    loop {
-        let nd = model.nodes[node as usize];
-        let kind = nd.kind & CC_NODE_KIND_MASK;
-        if kind == CC_NODE_SPLIT {
-            // Past 2^-31 (the chains at extraordinary vertices) the point is a corner of
-            // the node and stays that corner of the child.
-            let half = size >> 1;
-            let (right, top) = if size == 1 {
-                (x >= 1, y >= 1)
-            } else {
-                (x >= half, y >= half)
-            };
-            let c = match (right, top) {
-                (false, false) => 0,
-                (true, false) => 1,
-                (true, true) => 2,
-                (false, true) => 3,
-            };
-            if size > 1 {
-                if right {
-                    x -= half;
-                }
-                if top {
-                    y -= half;
-                }
-                size = half;
-            }
-            node = model.splits[nd.index as usize][c];
-        } else if kind == CC_NODE_BEZIER {
-            let (u, v) = (x as f32 / size as f32, y as f32 / size as f32);
-            return net_point(&model.nets[nd.index as usize], u, v);
+    // Down to the node holding the point, then one evaluation (as the kernel: there an
+    // evaluation inside the loop would run on every level).
+    while nd.kind & CC_NODE_KIND_MASK == CC_NODE_SPLIT {
+        // Past 2^-31 (the chains at extraordinary vertices) the point is a corner of
+        // the node and stays that corner of the child.
+        let half = size >> 1;
+        let (right, top) = if size == 1 {
+            (x >= 1, y >= 1)
         } else {
-            let c = model.corners[nd.index as usize];
-            return (Vec3::from(c.limit), Vec3::from(c.normal));
+            (x >= half, y >= half)
+        };
+        let c = match (right, top) {
+            (false, false) => 0,
+            (true, false) => 1,
+            (true, true) => 2,
+            (false, true) => 3,
+        };
+        if size > 1 {
+            if right {
+                x -= half;
+            }
+            if top {
+                y -= half;
+            }
+            size = half;
         }
+        nd = model.nodes[model.splits[nd.index as usize][c] as usize];
     }
+    if nd.kind & CC_NODE_KIND_MASK == CC_NODE_BEZIER {
+        let (u, v) = (x as f32 / size as f32, y as f32 / size as f32);
+        return net_point(&model.nets[nd.index as usize], u, v);
+    }
+    let c = model.corners[nd.index as usize];
+    (Vec3::from(c.limit), Vec3::from(c.normal))
 }
 
 /// Twin of the kernel `cc_vertex_eval`: one output vertex per point.
