@@ -24,13 +24,14 @@
 var<private> next_index: u32;
 var<private> inner_base: u32;
 
+// Inner points before each word of the triangle's bit set (twin of `word_prefix`):
+// one lookup per rank instead of a loop over the words before it.
+const MAX_POINTS_WORDS: u32 = ((DYADIC_SCALE + 1u) * (DYADIC_SCALE + 2u) / 2u + 31u) / 32u;
+var<private> word_below: array<u32, MAX_POINTS_WORDS>;
+
 fn inner_rank(c: TriCtx, i: u32) -> u32 {
-    var below = 0u;
-    for (var w = 0u; w < i / 32u; w++) {
-        below += countOneBits(scratch[c.points_base + w]);
-    }
     let mask = (1u << (i % 32u)) - 1u;
-    return below + countOneBits(scratch[c.points_base + i / 32u] & mask);
+    return word_below[i / 32u] + countOneBits(scratch[c.points_base + i / 32u] & mask);
 }
 
 fn global_index(v: VRef) -> u32 {
@@ -65,6 +66,7 @@ fn main(@builtin(global_invocation_id) gid: vec3u, @builtin(num_workgroups) grou
     inner_base = params.coarse_vertices + counts[e + t];
     var next = inner_base;
     for (var w = 0u; w < params.points_words; w++) {
+        word_below[w] = next - inner_base;
         var bits = scratch[c.points_base + w];
         while bits != 0u {
             let i = 32u * w + firstTrailingBit(bits);

@@ -1,7 +1,7 @@
 // Stages 3a and 3b, one invocation per coarse triangle: mark the bisection tree as the
 // lattice points it makes, then count the inner vertices and the triangles the replay
-// makes. Twin of `tri_mark`, `TriScratch::inner_count` and `tri_count` in
-// `tessera_core::bezier`.
+// will make (by Euler's formula, without the replay). Twin of `tri_mark`,
+// `TriScratch::inner_count` and `tri_count` in `tessera_core::bezier`.
 
 #include "shared/types.wgsl"
 #include "shared/patch.wgsl"
@@ -70,8 +70,13 @@ fn main(@builtin(global_invocation_id) gid: vec3u, @builtin(num_workgroups) grou
     if flat_evaluations > 0u {
         atomicAdd(&evaluations, flat_evaluations);
     }
-    triangles = 0u;
-    tri_triangles(c);
+    var made = euler_count(c);
+    if made == NO_COUNT {
+        // A patch degenerate enough that the formula does not hold: replay.
+        triangles = 0u;
+        tri_triangles(c);
+        made = triangles;
+    }
     counts[params.coarse_edges + t] = inner_count(c);
-    counts[params.coarse_edges + params.coarse_triangles + t] = triangles;
+    counts[params.coarse_edges + params.coarse_triangles + t] = made;
 }

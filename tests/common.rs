@@ -52,6 +52,17 @@ pub fn parabolic_cylinder() -> BezierModel {
     })
 }
 
+/// A degenerate patch, bent in both directions, whose bottom row and right column are
+/// one control point: two sides collapsed to one point, meeting at a corner.
+pub fn two_collapsed_sides() -> BezierModel {
+    let curved = single_patch(|x, y| [x, y, 0.5 * (x - 0.5) * (y - 0.3)]);
+    let mut net: [u32; 16] = std::array::from_fn(|i| i as u32);
+    for k in [0, 1, 2, 7, 11, 15] {
+        net[k] = 3;
+    }
+    BezierModel::from_nets(curved.points.clone(), vec![net])
+}
+
 /// A shipped Catmull-Clark control mesh.
 pub fn control_mesh(rel: &str) -> tessera_core::catmull_clark::ControlMesh {
     tessera_core::io::load_control_mesh(&asset(rel)).expect("shipped mesh loads")

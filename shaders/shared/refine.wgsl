@@ -145,6 +145,40 @@ fn inner_count(c: TriCtx) -> u32 {
     return n;
 }
 
+// Inserted points of edge e.
+fn edge_point_count(e: u32) -> u32 {
+    var n = 0u;
+    for (var w = 0u; w < EDGE_BIT_WORDS; w++) {
+        n += countOneBits(edge_bits[e * EDGE_BIT_WORDS + w]);
+    }
+    return n;
+}
+
+const NO_COUNT: u32 = 0xffffffffu;
+
+// The triangle count from the vertex counts alone, NO_COUNT where the formula does not
+// apply (twin of `euler_count`, which proves it): 2·I + 1 + the points of the open
+// sides − the collapsed sides, while the only shared vertex is one collapsed side's.
+fn euler_count(c: TriCtx) -> u32 {
+    var count = 2u * inner_count(c) + 1u;
+    var collapsed = 0u;
+    var applies = true;
+    for (var k = 0u; k < 3u; k++) {
+        let a = c.corner_ids[k];
+        let b = c.corner_ids[(k + 1u) % 3u];
+        let other = c.corner_ids[(k + 2u) % 3u];
+        if c.side_collapsed[k] {
+            collapsed += 1u;
+            count -= 1u;
+            applies = applies && a == b && other != a;
+        } else {
+            count += edge_point_count(c.side_edge[k]);
+            applies = applies && a != b;
+        }
+    }
+    return select(NO_COUNT, count, applies && collapsed <= 1u);
+}
+
 // A leaf polygon: lattice points packed as i | j << 16. At most the corners plus every
 // lattice point on the sides of the coarse triangle.
 const POLY_MAX: u32 = 3u * (1u << MAX_DEPTH_LIMIT) + 3u;
@@ -301,23 +335,35 @@ fn clip_ears(c: TriCtx) {
 }
 
 // Stage "count" / "emit": the triangles of every leaf in depth-first order (twin of
-// `tri_triangles`), handed to the kernel's `sink_triangle`.
+// `tri_triangles`), handed to the kernel's `sink_triangle`. The descent to the next leaf
+// is a loop of its own, so that the leaf's polygon and ear clipping are paid once per
+// leaf: a SIMD device runs every statement of a loop body on every step, masked.
 fn tri_triangles(c: TriCtx) {
     let max_level = 2u * c.l.depth;
     var stack: array<TriLevel, STACK_MAX>;
     var top = 1u;
     stack[0] = TriLevel(lattice_root(c.l), 0u);
-    while top > 0u {
-        top -= 1u;
-        let item = stack[top];
-        if item.level < max_level && exists(c, lattice_mid(item.t.a, item.t.b)) {
-            // Reversed push: the first child is visited first.
-            stack[top] = TriLevel(bisect_second(item.t), item.level + 1u);
-            stack[top + 1u] = TriLevel(bisect_first(item.t), item.level + 1u);
-            top += 2u;
-        } else {
-            leaf_polygon(c, item.t);
-            clip_ears(c);
+    loop {
+        var leaf = false;
+        var t: Tri;
+        while top > 0u {
+            top -= 1u;
+            let item = stack[top];
+            if item.level < max_level && exists(c, lattice_mid(item.t.a, item.t.b)) {
+                // Reversed push: the first child is visited first.
+                stack[top] = TriLevel(bisect_second(item.t), item.level + 1u);
+                stack[top + 1u] = TriLevel(bisect_first(item.t), item.level + 1u);
+                top += 2u;
+            } else {
+                t = item.t;
+                leaf = true;
+                break;
+            }
         }
+        if !leaf {
+            break;
+        }
+        leaf_polygon(c, t);
+        clip_ears(c);
     }
 }

@@ -338,3 +338,28 @@ fn growing_past_the_device_limits_is_an_error_not_a_wgpu_failure() {
     assert_eq!(status.overflow, 0);
     gpu.check().expect("no wgpu validation errors");
 }
+
+/// A patch with two collapsed sides meeting at a corner: the mark kernel's triangle
+/// count falls back to the replay there (Euler's formula does not apply), and the mesh
+/// still equals the CPU twin's, index for index.
+#[test]
+fn two_collapsed_sides_count_by_replay_and_match_the_cpu() {
+    let gpu = gpu();
+    let prep = PreparedBezier::new(&tessera_tests::two_collapsed_sides());
+    for test in [EdgeTest::Map4p, EdgeTest::Flat] {
+        let params = AdaptiveParams {
+            test,
+            threshold: 0.01,
+            max_depth: AdaptiveParams::DEFAULT_MAX_DEPTH,
+        };
+        let mut stage = BezierStage::new(&gpu.device, &prep, &params).expect("stage");
+        let status = stage.run_blocking(&gpu.device, &gpu.queue).expect("run");
+        let mesh = stage
+            .read_mesh(&gpu.device, &gpu.queue, &status)
+            .expect("mesh");
+        let cpu = tessellate_adaptive(&prep, &params).expect("cpu").mesh;
+        assert!(cpu.triangle_count() > 0);
+        assert_eq!(mesh.indices, cpu.indices, "{test:?}: topology");
+    }
+    gpu.check().expect("no wgpu validation errors");
+}

@@ -157,8 +157,49 @@ impl TriangleSink for CountSink {
     }
 }
 
-/// Stage 3b, one work item per coarse triangle: how many triangles it makes.
+/// Stage 3b, one work item per coarse triangle: how many triangles it makes, by
+/// Euler's formula where it applies ([`euler_count`]), else by replaying the
+/// bisection.
 pub fn tri_count(ctx: &TriContext, scratch: &TriScratch) -> u32 {
+    euler_count(ctx, scratch).unwrap_or_else(|| replay_count(ctx, scratch))
+}
+
+/// The triangle count of a coarse triangle from its vertex counts alone.
+///
+/// The leaves' triangulation covers the coarse triangle's lattice triangle with
+/// triangles of non-zero area whose corners are exactly the existing points, so it is a
+/// triangulated disk: `T = 2·I + B − 2` for `I` inner and `B` boundary points (Euler,
+/// with each inner edge in two triangles and each boundary edge in one). The boundary
+/// holds the 3 corners, the points of each side's coarse edge, and the pole points `P`
+/// of a side collapsed to a point. The triangles on a collapsed side, one per boundary
+/// segment (`P + 1`), have two corners on its one vertex and are dropped. So
+/// `T = 2·I + 1 + Σ (edge points of the open sides) − (collapsed sides)`.
+///
+/// That holds while the only shared vertex is one collapsed side's (the corners'
+/// ids otherwise distinct): a patch degenerate enough to break it returns `None`.
+pub fn euler_count(ctx: &TriContext, scratch: &TriScratch) -> Option<u32> {
+    let mut count = 2 * scratch.inner_count() + 1;
+    let mut collapsed = 0;
+    for (k, &(e, _, is_collapsed)) in ctx.sides.iter().enumerate() {
+        let [a, b, c] = [k, (k + 1) % 3, (k + 2) % 3].map(|i| ctx.corner_ids[i]);
+        if is_collapsed {
+            collapsed += 1;
+            count -= 1;
+            if a != b || c == a {
+                return None;
+            }
+        } else {
+            count += bit_count(&ctx.edge_bits[e as usize]);
+            if a == b {
+                return None;
+            }
+        }
+    }
+    (collapsed <= 1).then_some(count)
+}
+
+/// The triangle count by replaying the bisection and triangulating every leaf.
+pub fn replay_count(ctx: &TriContext, scratch: &TriScratch) -> u32 {
     let mut sink = CountSink(0);
     // Any injective numbering of inner points will do for counting.
     tri_triangles(ctx, scratch, &|i| i as u32, &mut sink);
