@@ -288,50 +288,62 @@ fn emit_leaf_triangle(c: TriCtx, p0: vec2u, p1: vec2u, p2: vec2u) {
     }
 }
 
-// Ear clipping without new vertices (twin of `clip_ears`).
+// Ear clipping without new vertices (twin of `clip_ears`). One triangle per step, the
+// last one (k = 1 of a triangle) included, so that emitting is written once: a SIMD
+// device pays for every call site on every step.
 fn clip_ears(c: TriCtx) {
-    while poly_len > 3u {
+    while poly_len >= 3u {
         let n = poly_len;
-        var corners = 0u;
-        for (var k = 0u; k < n; k++) {
-            corners += u32(is_corner(k));
+        var k = 1u;
+        if n > 3u {
+            k = best_ear(c);
         }
-        var best_d2 = 0xffffffffu;
-        var best_k = 0u;
-        var found = false;
-        for (var k = 0u; k < n; k++) {
-            if !is_corner(k) {
-                continue;
-            }
-            let u = k + n - 1u;
-            let w = k + 1u;
-            let u_after = !collinear(poly_at(u + n - 1u), poly_at(u), poly_at(w));
-            let w_after = !collinear(poly_at(u), poly_at(w), poly_at(w + 1u));
-            let after = corners - 1u - u32(is_corner(u)) - u32(is_corner(w)) + u32(u_after) + u32(w_after);
-            if after < 3u {
-                continue;
-            }
-            let pu = patch_coords(c.l, poly_at(u));
-            let pw = patch_coords(c.l, poly_at(w));
-            let dx = pu.x - pw.x;
-            let dy = pu.y - pw.y;
-            let d2 = u32(dx * dx + dy * dy);
-            if !found || d2 < best_d2 {
-                best_d2 = d2;
-                best_k = k;
-                found = true;
-            }
-        }
-        let k = best_k;
         emit_leaf_triangle(c, poly_at(k + n - 1u), poly_at(k), poly_at(k + 1u));
+        if n == 3u {
+            break;
+        }
         for (var i = k; i + 1u < n; i++) {
             poly[i] = poly[i + 1u];
         }
         poly_len = n - 1u;
     }
-    if poly_len == 3u {
-        emit_leaf_triangle(c, unpack_lp(poly[0]), unpack_lp(poly[1]), unpack_lp(poly[2]));
+}
+
+// The ear to clip: a true corner whose removal leaves at least three, with the
+// shortest new diagonal (the first on ties).
+fn best_ear(c: TriCtx) -> u32 {
+    let n = poly_len;
+    var corners = 0u;
+    for (var k = 0u; k < n; k++) {
+        corners += u32(is_corner(k));
     }
+    var best_d2 = 0xffffffffu;
+    var best_k = 0u;
+    var found = false;
+    for (var k = 0u; k < n; k++) {
+        if !is_corner(k) {
+            continue;
+        }
+        let u = k + n - 1u;
+        let w = k + 1u;
+        let u_after = !collinear(poly_at(u + n - 1u), poly_at(u), poly_at(w));
+        let w_after = !collinear(poly_at(u), poly_at(w), poly_at(w + 1u));
+        let after = corners - 1u - u32(is_corner(u)) - u32(is_corner(w)) + u32(u_after) + u32(w_after);
+        if after < 3u {
+            continue;
+        }
+        let pu = patch_coords(c.l, poly_at(u));
+        let pw = patch_coords(c.l, poly_at(w));
+        let dx = pu.x - pw.x;
+        let dy = pu.y - pw.y;
+        let d2 = u32(dx * dx + dy * dy);
+        if !found || d2 < best_d2 {
+            best_d2 = d2;
+            best_k = k;
+            found = true;
+        }
+    }
+    return best_k;
 }
 
 // Stage "count" / "emit": the triangles of every leaf in depth-first order (twin of

@@ -405,45 +405,52 @@ fn collinear(a: Lp, b: Lp, c: Lp) -> bool {
 }
 
 /// Cuts a convex polygon whose sides may carry extra collinear points into triangles
-/// without new vertices and without zero-area triangles: repeatedly clip the ear at a
-/// true corner whose removal leaves a polygon with at least three true corners,
-/// choosing the shortest new diagonal (first in polygon order on ties).
+/// without new vertices and without zero-area triangles, one triangle per step: the
+/// [`best_ear`] while more than three vertices are left, then the last three.
 fn clip_ears(l: &Lattice, poly: &mut Vec<Lp>, mut tri: impl FnMut(Lp, Lp, Lp)) {
-    while poly.len() > 3 {
+    while poly.len() >= 3 {
         let n = poly.len();
-        let at = |k: usize| poly[k % n];
-        let corner = |k: usize| !collinear(at(k + n - 1), at(k), at(k + 1));
-        let corners = (0..n).filter(|&k| corner(k)).count();
-        let mut best: Option<(u64, usize)> = None;
-        for k in 0..n {
-            if !corner(k) {
-                continue;
-            }
-            let (u, w) = (k + n - 1, k + 1);
-            let u_after = !collinear(at(u + n - 1), at(u), at(w));
-            let w_after = !collinear(at(u), at(w), at(w + 1));
-            let after = corners - 1 - corner(u) as usize - corner(w) as usize
-                + u_after as usize
-                + w_after as usize;
-            if after < 3 {
-                continue;
-            }
-            let (pu, pw) = (l.patch_coords(at(u)), l.patch_coords(at(w)));
-            let dx = pu[0] as i64 - pw[0] as i64;
-            let dy = pu[1] as i64 - pw[1] as i64;
-            let d2 = (dx * dx + dy * dy) as u64;
-            if best.is_none_or(|(b, _)| d2 < b) {
-                best = Some((d2, k));
-            }
+        // k = 1 of a triangle is the triangle itself, in order.
+        let k = if n > 3 { best_ear(l, poly) } else { 1 };
+        tri(poly[(k + n - 1) % n], poly[k], poly[(k + 1) % n]);
+        if n == 3 {
+            break;
         }
-        // A convex polygon with three true corners always has such an ear.
-        let k = best.map_or(0, |(_, k)| k);
-        tri(at(k + n - 1), at(k), at(k + 1));
         poly.remove(k);
     }
-    if poly.len() == 3 {
-        tri(poly[0], poly[1], poly[2]);
+}
+
+/// The ear to clip: a true corner whose removal leaves a polygon with at least three
+/// true corners, with the shortest new diagonal (first in polygon order on ties).
+fn best_ear(l: &Lattice, poly: &[Lp]) -> usize {
+    let n = poly.len();
+    let at = |k: usize| poly[k % n];
+    let corner = |k: usize| !collinear(at(k + n - 1), at(k), at(k + 1));
+    let corners = (0..n).filter(|&k| corner(k)).count();
+    let mut best: Option<(u64, usize)> = None;
+    for k in 0..n {
+        if !corner(k) {
+            continue;
+        }
+        let (u, w) = (k + n - 1, k + 1);
+        let u_after = !collinear(at(u + n - 1), at(u), at(w));
+        let w_after = !collinear(at(u), at(w), at(w + 1));
+        let after = corners - 1 - corner(u) as usize - corner(w) as usize
+            + u_after as usize
+            + w_after as usize;
+        if after < 3 {
+            continue;
+        }
+        let (pu, pw) = (l.patch_coords(at(u)), l.patch_coords(at(w)));
+        let dx = pu[0] as i64 - pw[0] as i64;
+        let dy = pu[1] as i64 - pw[1] as i64;
+        let d2 = (dx * dx + dy * dy) as u64;
+        if best.is_none_or(|(b, _)| d2 < b) {
+            best = Some((d2, k));
+        }
     }
+    // A convex polygon with three true corners always has such an ear.
+    best.map_or(0, |(_, k)| k)
 }
 
 /// Stage "count" / "emit", one work item per coarse triangle: the triangles of every
