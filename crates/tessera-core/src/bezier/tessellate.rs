@@ -183,11 +183,13 @@ pub fn euler_count(ctx: &TriContext, scratch: &TriScratch) -> Option<u32> {
     for (k, &(e, _, is_collapsed)) in ctx.sides.iter().enumerate() {
         let [a, b, c] = [k, (k + 1) % 3, (k + 2) % 3].map(|i| ctx.corner_ids[i]);
         if is_collapsed {
-            collapsed += 1;
-            count -= 1;
+            // Checked first: a second collapsed side always fails it (all three corners
+            // are then one vertex), so `count` (at least 1) is lowered at most once.
             if a != b || c == a {
                 return None;
             }
+            collapsed += 1;
+            count -= 1;
         } else {
             count += bit_count(&ctx.edge_bits[e as usize]);
             if a == b {
