@@ -161,14 +161,14 @@ const NO_COUNT: u32 = 0xffffffffu;
 // sides − the collapsed sides, while the only shared vertex is one collapsed side's.
 fn euler_count(c: TriCtx) -> u32 {
     var count = 2u * inner_count(c) + 1u;
-    var collapsed = 0u;
+    // A second collapsed side shares a corner with the first: all three corners are then
+    // one vertex, and `applies` turns false.
     var applies = true;
     for (var k = 0u; k < 3u; k++) {
         let a = c.corner_ids[k];
         let b = c.corner_ids[(k + 1u) % 3u];
         let other = c.corner_ids[(k + 2u) % 3u];
         if c.side_collapsed[k] {
-            collapsed += 1u;
             count -= 1u;
             applies = applies && a == b && other != a;
         } else {
@@ -176,7 +176,7 @@ fn euler_count(c: TriCtx) -> u32 {
             applies = applies && a != b;
         }
     }
-    return select(NO_COUNT, count, applies && collapsed <= 1u);
+    return select(NO_COUNT, count, applies);
 }
 
 // A leaf polygon: lattice points packed as i | j << 16. At most the corners plus every

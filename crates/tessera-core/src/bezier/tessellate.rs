@@ -179,7 +179,6 @@ pub fn tri_count(ctx: &TriContext, scratch: &TriScratch) -> u32 {
 /// ids otherwise distinct): a patch degenerate enough to break it returns `None`.
 pub fn euler_count(ctx: &TriContext, scratch: &TriScratch) -> Option<u32> {
     let mut count = 2 * scratch.inner_count() + 1;
-    let mut collapsed = 0;
     for (k, &(e, _, is_collapsed)) in ctx.sides.iter().enumerate() {
         let [a, b, c] = [k, (k + 1) % 3, (k + 2) % 3].map(|i| ctx.corner_ids[i]);
         if is_collapsed {
@@ -188,7 +187,6 @@ pub fn euler_count(ctx: &TriContext, scratch: &TriScratch) -> Option<u32> {
             if a != b || c == a {
                 return None;
             }
-            collapsed += 1;
             count -= 1;
         } else {
             count += bit_count(&ctx.edge_bits[e as usize]);
@@ -197,7 +195,7 @@ pub fn euler_count(ctx: &TriContext, scratch: &TriScratch) -> Option<u32> {
             }
         }
     }
-    (collapsed <= 1).then_some(count)
+    Some(count)
 }
 
 /// The triangle count by replaying the bisection and triangulating every leaf.
