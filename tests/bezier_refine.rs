@@ -1,5 +1,9 @@
 //! The refinement inside coarse triangles: what it guarantees about the mesh it makes.
 
+use tessera_core::bezier::refine::{tri_mark, TriContext, TriScratch};
+use tessera_core::bezier::tessellate::{
+    edge_decide, euler_count, replay_count, tri_context, tri_count,
+};
 use tessera_core::bezier::{tessellate_adaptive, AdaptiveParams, EdgeTest, PreparedBezier};
 use tessera_core::measure::{bezier_surface_samples, measure_error};
 use tessera_tests::teaset;
@@ -58,6 +62,26 @@ fn refinement_is_monotone_in_the_threshold() {
     }
 }
 
+/// The CPU twins' first stages on every coarse triangle: the coarse edges' decisions,
+/// then each triangle's marks, handed to `visit` with the triangle's context.
+fn for_each_marked_triangle(
+    prep: &PreparedBezier,
+    p: &AdaptiveParams,
+    mut visit: impl FnMut(u32, &TriContext, &TriScratch),
+) {
+    let l = prep.layout;
+    let cps: Vec<_> = (0..l.patches).map(|k| prep.control_points(k)).collect();
+    let bits: Vec<_> = (0..l.coarse_edges)
+        .map(|e| edge_decide(prep, &cps, p, e).0)
+        .collect();
+    for t in 0..l.coarse_triangles {
+        let ctx = tri_context(prep, &cps, &bits, p, t);
+        let mut scratch = TriScratch::new(p.max_depth);
+        tri_mark(&ctx, &mut scratch);
+        visit(t, &ctx, &scratch);
+    }
+}
+
 /// The triangle count the mark stage reports without replaying the bisection (Euler's
 /// formula, `euler_count`) equals the count of the replay that emits the triangles, on
 /// every coarse triangle of the teaset, for every test and several thresholds; and the
@@ -65,37 +89,19 @@ fn refinement_is_monotone_in_the_threshold() {
 /// shift every later triangle's indices.
 #[test]
 fn triangle_count_by_euler_formula_equals_the_replay() {
-    use tessera_core::bezier::refine::{tri_mark, TriScratch};
-    use tessera_core::bezier::tessellate::{edge_decide, euler_count, replay_count, tri_context};
     let mut at_poles = 0;
     for (name, model) in teaset() {
         let prep = PreparedBezier::new(&model);
-        let l = prep.layout;
-        let cps: Vec<_> = (0..l.patches).map(|p| prep.control_points(p)).collect();
-        for test in [
-            EdgeTest::Map2p,
-            EdgeTest::Map4p,
-            EdgeTest::Map8p,
-            EdgeTest::Flat,
-        ] {
+        for test in EdgeTest::ALL {
             for th in [0.05f32, 0.01, 0.002] {
-                let p = params(test, th);
-                let bits: Vec<_> = (0..l.coarse_edges)
-                    .map(|e| edge_decide(&prep, &cps, &p, e).0)
-                    .collect();
-                for t in 0..l.coarse_triangles {
-                    let ctx = tri_context(&prep, &cps, &bits, &p, t);
-                    let mut scratch = TriScratch::new(p.max_depth);
-                    tri_mark(&ctx, &mut scratch);
-                    let replay = replay_count(&ctx, &scratch);
-                    let euler = euler_count(&ctx, &scratch);
+                for_each_marked_triangle(&prep, &params(test, th), |t, ctx, scratch| {
                     assert_eq!(
-                        euler,
-                        Some(replay),
+                        euler_count(ctx, scratch),
+                        Some(replay_count(ctx, scratch)),
                         "{name} {test:?} th={th} coarse triangle {t}"
                     );
                     at_poles += ctx.sides.iter().any(|s| s.2) as usize;
-                }
+                });
             }
         }
     }
@@ -105,30 +111,23 @@ fn triangle_count_by_euler_formula_equals_the_replay() {
     );
 }
 
-/// A patch whose bottom row and right column both collapse to one point: the coarse
-/// triangle in that corner has two collapsed sides, where Euler's formula does not
-/// apply; the count falls back to the replay and still equals it.
+/// A patch whose bottom row and right column both collapse to one point (the teaset
+/// loader refuses it; `BezierModel::from_nets` does not check): the coarse triangle in
+/// that corner has two collapsed sides, where Euler's formula does not apply; the count
+/// falls back to the replay and still equals it.
 #[test]
 fn a_patch_with_two_collapsed_sides_falls_back_to_the_replay_count() {
-    use tessera_core::bezier::refine::{tri_mark, TriScratch};
-    use tessera_core::bezier::tessellate::{edge_decide, euler_count, tri_context, tri_count};
     let prep = PreparedBezier::new(&tessera_tests::two_collapsed_sides());
-    let l = prep.layout;
-    let cps: Vec<_> = (0..l.patches).map(|p| prep.control_points(p)).collect();
     let p = params(EdgeTest::Map4p, 0.01);
-    let bits: Vec<_> = (0..l.coarse_edges)
-        .map(|e| edge_decide(&prep, &cps, &p, e).0)
-        .collect();
     let mut fallbacks = 0;
-    for t in 0..l.coarse_triangles {
-        let ctx = tri_context(&prep, &cps, &bits, &p, t);
-        let mut scratch = TriScratch::new(p.max_depth);
-        tri_mark(&ctx, &mut scratch);
-        let euler = euler_count(&ctx, &scratch);
-        fallbacks += euler.is_none() as usize;
-        let replay = tessera_core::bezier::tessellate::replay_count(&ctx, &scratch);
-        assert_eq!(tri_count(&ctx, &scratch), replay, "coarse triangle {t}");
-    }
+    for_each_marked_triangle(&prep, &p, |t, ctx, scratch| {
+        fallbacks += euler_count(ctx, scratch).is_none() as usize;
+        assert_eq!(
+            tri_count(ctx, scratch),
+            replay_count(ctx, scratch),
+            "coarse triangle {t}"
+        );
+    });
     assert!(fallbacks > 0, "no coarse triangle needed the replay");
     let mesh = tessellate_adaptive(&prep, &p).unwrap().mesh;
     assert!(mesh.triangle_count() > 0);
