@@ -8,8 +8,9 @@
 // halves, else there is none. On the patch boundary the points come from the patch
 // across the edge, whose own first split may differ: its root cells divide the edge in
 // steps of grid / k, and inside each step the same dyadic search applies.
-// The CPU reference builds the same polygons from sorted lines of marked points instead
-// (`Lines::between` in `tessera_core::catmull_clark::adaptive`, step 2).
+// Twin: `tessera_core::catmull_clark::polygon`. The CPU reference builds the same
+// polygons from sorted lines of marked points instead (`Lines::between` in
+// `tessera_core::catmull_clark::adaptive`, step 2); tests compare all three.
 
 #include "shared/cc_tess.wgsl"
 #include "shared/cc_poly.wgsl"

@@ -1,9 +1,16 @@
 //! The adaptive Catmull-Clark stage on the GPU against the CPU reference
 //! (`tessellate_adaptive`): the same triangles (up to vertex numbering), vertices within
-//! 1e-5 of the model size, and the grow-and-retry path from tiny capacities. The uniform
+//! 1e-5 of the model size, and the grow-and-retry path from tiny capacities; the polygon
+//! kernel against its CPU twin, polygon for polygon. The uniform
 //! stage against its CPU twin and `tessellate_uniform`.
 
+use std::collections::HashMap;
+
 use glam::DVec3;
+use tessera_core::catmull_clark::gpu_model::patch_topology;
+use tessera_core::catmull_clark::keys::point_key;
+use tessera_core::catmull_clark::polygon::PolygonKernel;
+use tessera_core::catmull_clark::vertex_hash::split_key;
 use tessera_core::catmull_clark::{load_surface, tessellate_adaptive, CcParams, SurfaceModel};
 use tessera_core::Mesh;
 use tessera_wgpu::catmull_clark::{CcCapacities, CcStage};
@@ -169,6 +176,87 @@ fn gpu_adaptive_matches_the_cpu_reference() {
     assert_eq!(status.state.unmet as usize, cpu.unmet, "unmet");
     assert!((status.max_bound() as f64 - cpu.max_bound).abs() <= 1e-5 * cpu.max_bound);
     same_mesh(&mesh, &cpu.mesh, size(&model)).expect("depth-limited mesh");
+}
+
+#[test]
+fn the_polygon_kernel_matches_its_twin() {
+    // `cc_polygon` leaf for leaf against its CPU twin, on the GPU's own leaves, first
+    // splits and vertex ids: the side counts, and every polygon vertex (id and grid point).
+    let gpu = gpu();
+    let mut side_points = 0;
+    for (name, rel) in [
+        ("opensubdiv/catmark_xord_boundary.obj", 3e-3),
+        ("opensubdiv/catmark_xord_interior.obj", 3e-4),
+    ] {
+        let model = model(name);
+        let params = CcParams {
+            tolerance: rel * size(&model),
+            max_depth: 6,
+        };
+        let mut stage = CcStage::new(&gpu.device, &model, &params).expect("stage");
+        let status = stage.run_blocking(&gpu.device, &gpu.queue).expect("run");
+        gpu.check().expect("no wgpu errors");
+        let gpu_polys = stage
+            .read_polygons(&gpu.device, &gpu.queue, &status)
+            .expect("read");
+        let n = 840 << params.max_depth;
+        let key =
+            |p: u32, v: &[u32; 4]| split_key(point_key(&model.mesh, p as usize, v[1], v[2], n));
+        // The hash holds the leaves' corners: their ids are in the polygons' corners.
+        let mut id_of = HashMap::new();
+        for (l, leaf) in gpu_polys.leaves.iter().enumerate() {
+            let mut at = gpu_polys.offsets[l] as usize;
+            for s in 0..4 {
+                let v = &gpu_polys.verts[at];
+                let before = id_of.insert(key(leaf.patch_id, v), v[0]);
+                assert!(
+                    before.is_none_or(|id| id == v[0]),
+                    "{name}: two ids for one point"
+                );
+                at += 1 + gpu_polys.side_counts[l][s] as usize;
+            }
+        }
+        let topo = patch_topology(&model.mesh);
+        let vertex_of = |k: [u32; 2]| id_of.get(&k).copied();
+        let kernel = PolygonKernel {
+            grid: n,
+            topo: &topo,
+            first_trial: &gpu_polys.first_trial,
+            vertex_of: &vertex_of,
+        };
+        let mut twin = Vec::new();
+        for (l, leaf) in gpu_polys.leaves.iter().enumerate() {
+            assert_eq!(
+                twin.len(),
+                gpu_polys.offsets[l] as usize,
+                "{name}: leaf {l}"
+            );
+            assert_eq!(
+                kernel.count(leaf),
+                gpu_polys.side_counts[l],
+                "{name}: leaf {l}"
+            );
+            let start = twin.len();
+            let mut at = start;
+            let corner_ids = std::array::from_fn(|s| {
+                let id = gpu_polys.verts[at][0];
+                at += 1 + gpu_polys.side_counts[l][s] as usize;
+                id
+            });
+            kernel.emit(leaf, corner_ids, &mut twin);
+            assert_eq!(
+                twin[start..],
+                gpu_polys.verts[start..twin.len()],
+                "{name}: leaf {l} {leaf:?}"
+            );
+            side_points += twin.len() - start - 4;
+        }
+        assert_eq!(twin.len(), gpu_polys.verts.len(), "{name}");
+    }
+    assert!(
+        side_points > 1000,
+        "only {side_points} side points to compare"
+    );
 }
 
 #[test]

@@ -224,82 +224,13 @@ fn tessellate_with_splits(
     };
     let mesh = &model.mesh;
     let mut out = CcTessellation::default();
-    let mut leaves: Vec<(usize, Cell)> = Vec::new();
-
-    // 1. Adaptive marking. The first split ku×kv is the one with the fewest leaves.
-    for p in mesh.surface_patches() {
-        let base_cells = |(ku, kv): (u32, u32)| {
-            let (w, h) = (n / ku, n / kv);
-            (0..ku * kv).map(move |c| Cell {
-                i: (c % ku) * w,
-                j: (c / ku) * h,
-                w,
-                h,
-            })
-        };
-        // Square splits first, then near-square rectangles, each only if it could still
-        // beat the best so far (a split into ku·kv cells has at least that many leaves).
-        // The leaves of the best so far are kept, so it is not marked a second time.
-        let mut best = usize::MAX;
-        let mut best_leaves: Vec<(Cell, f64)> = Vec::new();
-        let mut trial_leaves: Vec<(Cell, f64)> = Vec::new();
-        for &split in splits {
-            if (split.0 * split.1) as usize >= best {
-                continue;
-            }
-            trial_leaves.clear();
-            for cell in base_cells(split) {
-                mark(
-                    &mut eval,
-                    p,
-                    cell,
-                    params.max_depth,
-                    params.tolerance,
-                    &mut |c, bound| trial_leaves.push((c, bound)),
-                );
-                if trial_leaves.len() >= best {
-                    break;
-                }
-            }
-            if trial_leaves.len() < best {
-                best = trial_leaves.len();
-                std::mem::swap(&mut best_leaves, &mut trial_leaves);
-            }
-        }
-        for (c, bound) in best_leaves {
-            if bound > params.tolerance {
-                out.unmet += 1;
-            }
-            out.max_bound = out.max_bound.max(bound);
-            leaves.push((p, c));
-        }
-    }
+    // 1. Adaptive marking. 2. Base-quadrilateral replacement.
+    let marking = mark_patches(&mut eval, params, splits);
+    out.unmet = marking.unmet;
+    out.max_bound = marking.max_bound;
+    let leaves = marking.leaves;
     out.leaves = leaves.len();
-
-    // 2. Base-quadrilateral replacement: the marked points on every line, in order.
-    let mut lines = Lines::default();
-    for &(p, cell) in &leaves {
-        for (a, b) in cell.corners() {
-            lines.add(point_key(mesh, p, a, b, n));
-        }
-    }
-    lines.sort();
-    // Each leaf's polygon, with the positions of its four corners in it.
-    type Polygon = (Vec<(u32, u32)>, [usize; 4]);
-    let polygons: Vec<Polygon> = leaves
-        .iter()
-        .map(|&(p, cell)| {
-            let c = cell.corners();
-            let mut poly = Vec::with_capacity(4);
-            let mut at = [0; 4];
-            for k in 0..4 {
-                at[k] = poly.len();
-                poly.push(c[k]);
-                lines.between(mesh, p, c[k], c[(k + 1) % 4], n, &mut poly);
-            }
-            (poly, at)
-        })
-        .collect();
+    let polygons = leaf_polygons(mesh, &leaves, n);
 
     // Every polygon vertex evaluated once; ids in the order of the canonical keys, so
     // the numbering does not depend on the order of work.
@@ -343,6 +274,106 @@ fn tessellate_with_splits(
     }
     out.mesh.indices = indices;
     Ok(out)
+}
+
+/// What step 1 found: every leaf, and the first split each patch chose.
+struct Marking {
+    leaves: Vec<(usize, Cell)>,
+    /// Per patch, the index in the splits tried of its first split (`u32::MAX` for a
+    /// hole): with [`first_splits`] in order, the GPU's trial number.
+    first_split: Vec<u32>,
+    unmet: usize,
+    max_bound: f64,
+}
+
+/// Step 1, adaptive marking: the first split ku×kv of each patch is the one with the
+/// fewest leaves.
+fn mark_patches(eval: &mut Evaluator, params: &CcParams, splits: &[(u32, u32)]) -> Marking {
+    let (n, model) = (eval.n, eval.model);
+    let mesh = &model.mesh;
+    let mut out = Marking {
+        leaves: Vec::new(),
+        first_split: vec![u32::MAX; mesh.patch_count()],
+        unmet: 0,
+        max_bound: 0.0,
+    };
+    for p in mesh.surface_patches() {
+        let base_cells = |(ku, kv): (u32, u32)| {
+            let (w, h) = (n / ku, n / kv);
+            (0..ku * kv).map(move |c| Cell {
+                i: (c % ku) * w,
+                j: (c / ku) * h,
+                w,
+                h,
+            })
+        };
+        // Square splits first, then near-square rectangles, each only if it could still
+        // beat the best so far (a split into ku·kv cells has at least that many leaves).
+        // The leaves of the best so far are kept, so it is not marked a second time.
+        let mut best = usize::MAX;
+        let mut best_leaves: Vec<(Cell, f64)> = Vec::new();
+        let mut trial_leaves: Vec<(Cell, f64)> = Vec::new();
+        for (t, &split) in splits.iter().enumerate() {
+            if (split.0 * split.1) as usize >= best {
+                continue;
+            }
+            trial_leaves.clear();
+            for cell in base_cells(split) {
+                mark(
+                    eval,
+                    p,
+                    cell,
+                    params.max_depth,
+                    params.tolerance,
+                    &mut |c, bound| trial_leaves.push((c, bound)),
+                );
+                if trial_leaves.len() >= best {
+                    break;
+                }
+            }
+            if trial_leaves.len() < best {
+                best = trial_leaves.len();
+                out.first_split[p] = t as u32;
+                std::mem::swap(&mut best_leaves, &mut trial_leaves);
+            }
+        }
+        for (c, bound) in best_leaves {
+            if bound > params.tolerance {
+                out.unmet += 1;
+            }
+            out.max_bound = out.max_bound.max(bound);
+            out.leaves.push((p, c));
+        }
+    }
+    out
+}
+
+/// A leaf's polygon, with the positions of its four corners in it.
+type Polygon = (Vec<(u32, u32)>, [usize; 4]);
+
+/// Step 2, base-quadrilateral replacement: the marked points on every line, in order.
+fn leaf_polygons(mesh: &PatchMesh, leaves: &[(usize, Cell)], n: u32) -> Vec<Polygon> {
+    let mut lines = Lines::default();
+    for &(p, cell) in leaves {
+        for (a, b) in cell.corners() {
+            lines.add(point_key(mesh, p, a, b, n));
+        }
+    }
+    lines.sort();
+    leaves
+        .iter()
+        .map(|&(p, cell)| {
+            let c = cell.corners();
+            let mut poly = Vec::with_capacity(4);
+            let mut at = [0; 4];
+            for k in 0..4 {
+                at[k] = poly.len();
+                poly.push(c[k]);
+                lines.between(mesh, p, c[k], c[(k + 1) % 4], n, &mut poly);
+            }
+            (poly, at)
+        })
+        .collect()
 }
 
 /// Which line a side runs along: a level-1 edge, or a grid line inside a patch.
@@ -520,5 +551,100 @@ mod tests {
             "the test must split patches finely ({most} leaves per patch)"
         );
         assert!(searched, "the first split must matter somewhere");
+    }
+
+    #[test]
+    fn the_polygon_kernel_twin_builds_the_reference_polygons() {
+        // The GPU's walk (dyadic halving, the patch across's first split on boundaries)
+        // against the reference's sorted lines, leaf for leaf, on the same leaves.
+        use crate::catmull_clark::gpu_model::patch_topology;
+        use crate::catmull_clark::polygon::PolygonKernel;
+        use crate::catmull_clark::vertex_hash::split_key;
+        use crate::gpu_types::CcCell;
+        let assets = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets");
+        let splits: Vec<(u32, u32)> = first_splits().collect();
+        // Side points found inside a patch and on a patch's edge.
+        let mut found = [0; 2];
+        for (name, rel) in [
+            ("opensubdiv/catmark_xord_boundary.obj", 3e-3),
+            ("opensubdiv/catmark_edgecorner.obj", 1e-3),
+            ("opensubdiv/catmark_hole_test1.obj", 2e-3),
+            ("catmull_clark/spot_control_mesh.obj", 3e-3),
+            ("opensubdiv/catmark_xord_interior.obj", 3e-4),
+        ] {
+            let model = crate::catmull_clark::load_surface(&assets.join(name)).expect(name);
+            let mesh = &model.mesh;
+            let size = {
+                let (lo, hi) = mesh
+                    .points
+                    .iter()
+                    .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), p| {
+                        (lo.min(*p), hi.max(*p))
+                    });
+                (hi - lo).length()
+            };
+            let params = CcParams {
+                tolerance: rel * size,
+                max_depth: 6,
+            };
+            let n = BASE_GRID << params.max_depth;
+            let mut eval = Evaluator {
+                model: &model,
+                n,
+                points: HashMap::new(),
+            };
+            let marking = mark_patches(&mut eval, &params, &splits);
+            let polygons = leaf_polygons(mesh, &marking.leaves, n);
+            // The hash holds the leaves' corners; any numbering will do.
+            let key = |p: usize, (a, b): (u32, u32)| split_key(point_key(mesh, p, a, b, n));
+            let mut marked: Vec<[u32; 2]> = marking
+                .leaves
+                .iter()
+                .flat_map(|&(p, cell)| cell.corners().map(|c| key(p, c)))
+                .collect();
+            marked.sort_unstable();
+            marked.dedup();
+            let id_of: HashMap<[u32; 2], u32> = marked
+                .iter()
+                .enumerate()
+                .map(|(k, &m)| (m, k as u32))
+                .collect();
+            let vertex_of = |k: [u32; 2]| id_of.get(&k).copied();
+            let topo = patch_topology(mesh);
+            let kernel = PolygonKernel {
+                grid: n,
+                topo: &topo,
+                first_trial: &marking.first_split,
+                vertex_of: &vertex_of,
+            };
+            for (&(p, cell), (poly, _)) in marking.leaves.iter().zip(&polygons) {
+                let trial = marking.first_split[p];
+                let (ku, _) = splits[trial as usize];
+                let depth = (n / ku / cell.w).trailing_zeros();
+                let leaf = CcCell {
+                    patch_id: p as u32,
+                    trial_depth: trial | depth << 8,
+                    i: cell.i,
+                    j: cell.j,
+                };
+                let counts = kernel.count(&leaf);
+                let mut twin = Vec::new();
+                kernel.emit(&leaf, cell.corners().map(|c| id_of[&key(p, c)]), &mut twin);
+                let reference: Vec<[u32; 4]> = poly
+                    .iter()
+                    .map(|&(a, b)| [id_of[&key(p, (a, b))], a, b, 0])
+                    .collect();
+                assert_eq!(twin, reference, "{name}: leaf {cell:?} of patch {p}");
+                assert_eq!(twin.len() as u32, 4 + counts.iter().sum::<u32>());
+                // The points found on the sides (the corners are given).
+                let corners = cell.corners();
+                for v in twin.iter().filter(|v| !corners.contains(&(v[1], v[2]))) {
+                    let on_patch_edge = v[1] == 0 || v[2] == 0 || v[1] == n || v[2] == n;
+                    found[usize::from(on_patch_edge)] += 1;
+                }
+            }
+        }
+        // Both walks must have had points to find: inside patches and across their edges.
+        assert!(found[0] > 0 && found[1] > 0, "points found: {found:?}");
     }
 }

@@ -18,8 +18,13 @@ const INTERIOR: u64 = 2 << 62;
 
 /// The key of point `(i, j)/n` of patch `p`.
 pub fn point_key(mesh: &PatchMesh, p: usize, i: u32, j: u32, n: u32) -> u64 {
+    quad_point_key(mesh.quads[p], mesh.quad_edges[p], p, i, j, n)
+}
+
+/// [`point_key`] from the patch's level-1 points and edge ids alone (as the GPU's
+/// [`CcPatchTopo`](crate::gpu_types::CcPatchTopo) holds them).
+pub fn quad_point_key(quad: [u32; 4], edges: [u32; 4], p: usize, i: u32, j: u32, n: u32) -> u64 {
     debug_assert!(i <= n && j <= n && n < 1 << 20 && p < 1 << 22);
-    let quad = mesh.quads[p];
     let corner = match (i, j) {
         (0, 0) => Some(0),
         (i, 0) if i == n => Some(1),
@@ -46,7 +51,7 @@ pub fn point_key(mesh: &PatchMesh, p: usize, i: u32, j: u32, n: u32) -> u64 {
         Some((k, t)) => {
             let (a, b) = (quad[k], quad[(k + 1) % 4]);
             let t = if a < b { t } else { n - t };
-            EDGE | (mesh.quad_edges[p][k] as u64) << 32 | t as u64
+            EDGE | (edges[k] as u64) << 32 | t as u64
         }
         None => INTERIOR | (p as u64) << 40 | (i as u64) << 20 | j as u64,
     }

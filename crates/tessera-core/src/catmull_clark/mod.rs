@@ -5,8 +5,8 @@
 //! the first subdivision step, patches; "Far"); [`refine`] and [`local`] (the
 //! subdivision rules, one-rings), [`bicubic`] and [`patch`] (exact evaluation; "Bfr");
 //! then the tessellators [`adaptive`] and [`uniform`], with [`keys`] (canonical point
-//! keys) and [`triangulate`]; [`gpu_model`] and [`gpu_uniform`] are the CPU twins of
-//! the GPU kernels' data and of the uniform kernels.
+//! keys) and [`triangulate`]; [`gpu_model`], [`gpu_uniform`], [`polygon`] and
+//! [`vertex_hash`] are the CPU twins of the GPU kernels' data and of kernels.
 //!
 //! ```
 //! use tessera_core::catmull_clark::{load_surface, tessellate_adaptive, CcParams};
@@ -28,6 +28,7 @@ pub mod gpu_uniform;
 pub mod keys;
 pub mod local;
 pub mod patch;
+pub mod polygon;
 pub mod refine;
 pub mod topology;
 pub mod triangulate;

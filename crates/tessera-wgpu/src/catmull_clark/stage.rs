@@ -664,6 +664,59 @@ impl CcStage {
     }
 }
 
+/// The leaves and polygons of a run as the kernels left them, for the tests that compare
+/// `cc_polygon` with its CPU twin ([`tessera_core::catmull_clark::polygon`]).
+#[doc(hidden)]
+#[derive(Clone, Debug, Default)]
+pub struct CcPolygons {
+    pub leaves: Vec<CcCell>,
+    /// Per patch: the trial of its first split (`best[p].y`).
+    pub first_trial: Vec<u32>,
+    /// Per leaf: where its polygon starts in `verts`; one more entry for the end.
+    pub offsets: Vec<u32>,
+    /// Per leaf: the points found on each side.
+    pub side_counts: Vec<[u32; 4]>,
+    /// `[vertex id, i, j, 0]` per polygon vertex.
+    pub verts: Vec<[u32; 4]>,
+}
+
+impl CcStage {
+    /// Copies the leaves and polygons of the last run back (tests only).
+    #[doc(hidden)]
+    pub fn read_polygons(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        status: &CcStatus,
+    ) -> Result<CcPolygons> {
+        if status.overflowed() {
+            return Err(Error::Wgpu(
+                "the last run overflowed its buffers; grow and rerun".into(),
+            ));
+        }
+        let b = &self.buffers;
+        let read = |buffer: &wgpu::Buffer, offset: u64, size: u64| {
+            crate::headless::read_buffer(device, queue, buffer, offset, size)
+        };
+        let leaves = status.state.leaves as u64;
+        let best: Vec<[u32; 2]> =
+            bytemuck::pod_collect_to_vec(&read(&self.best, 0, 8 * self.patch_count as u64)?);
+        let offsets: Vec<u32> =
+            bytemuck::pod_collect_to_vec(&read(&b.poly_offsets, 0, 4 * (leaves + 1))?);
+        let side_base = 4 * (b.caps.leaves as u64 + 1);
+        let side_counts =
+            bytemuck::pod_collect_to_vec(&read(&b.poly_offsets, side_base, 16 * leaves)?);
+        let total = offsets.last().copied().unwrap_or(0) as u64;
+        Ok(CcPolygons {
+            leaves: bytemuck::pod_collect_to_vec(&read(&b.leaves, 0, 16 * leaves)?),
+            first_trial: best.iter().map(|b| b[1]).collect(),
+            offsets,
+            side_counts,
+            verts: bytemuck::pod_collect_to_vec(&read(&b.poly_verts, 0, 16 * total)?),
+        })
+    }
+}
+
 impl GrowingStage for CcStage {
     type Status = CcStatus;
     const MAX_GROWTHS: u32 = 8;
