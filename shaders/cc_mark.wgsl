@@ -26,6 +26,7 @@ fn main(@builtin(global_invocation_id) gid: vec3u, @builtin(num_workgroups) grou
         flags[c] = 0u;
         return;
     }
+    atomicAdd(&cc_state.bounds, 1u);
     let size = cc_cell_size(cell);
     let i1 = cell.i + size.x;
     let j1 = cell.j + size.y;

@@ -21,7 +21,7 @@ struct CcCounters {
     max_bound_bits: atomic<u32>,
     vertices: u32,
     search_leaves: u32,
-    pad: u32,
+    bounds: atomic<u32>,
     trials: array<atomic<u32>>,
 }
 

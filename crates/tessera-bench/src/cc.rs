@@ -25,6 +25,8 @@ struct Row {
     max_error: f64,
     mean_error: f64,
     time_ms: f64,
+    /// Flatness bounds computed per leaf, the first-split search's trials included.
+    bounds_per_leaf: f64,
     /// Fewest triangles of a uniform grid (n × n per patch, any n) whose measured max
     /// error is at or under this row's.
     uniform_segments: u32,
@@ -112,6 +114,7 @@ pub fn run(assets: &Path, out_dir: &Path, quick: bool) {
                 max_error: e.max_error,
                 mean_error: e.mean_error,
                 time_ms: ms,
+                bounds_per_leaf: out.bounds as f64 / out.leaves.max(1) as f64,
                 uniform_segments: n,
                 uniform_triangles: ut,
                 uniform_max_error: ue.max_error,
@@ -137,11 +140,11 @@ pub fn run(assets: &Path, out_dir: &Path, quick: bool) {
 
 fn table(rows: &[Row]) -> String {
     let mut s = String::from(
-        "| model | patches | ε (of diagonal) | adaptive tris | guaranteed bound (model units) | measured max (model units) | mean | time ms | uniform n | uniform tris | uniform max | **ratio** | ratio at ε |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
+        "| model | patches | ε (of diagonal) | adaptive tris | guaranteed bound (model units) | measured max (model units) | mean | time ms | bounds per leaf | uniform n | uniform tris | uniform max | **ratio** | ratio at ε |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
     );
     for r in rows {
         s += &format!(
-            "| {}{} | {} | {:.0e} | {} | {:.2e} | {:.2e} | {:.2e} | {:.1} | {} | {} | {:.2e} | **{:.2}** | {:.2} |\n",
+            "| {}{} | {} | {:.0e} | {} | {:.2e} | {:.2e} | {:.2e} | {:.1} | {:.2} | {} | {} | {:.2e} | **{:.2}** | {:.2} |\n",
             r.model,
             if r.detailed { "" } else { " (simple)" },
             r.patches,
@@ -151,6 +154,7 @@ fn table(rows: &[Row]) -> String {
             r.max_error,
             r.mean_error,
             r.time_ms,
+            r.bounds_per_leaf,
             r.uniform_segments,
             r.uniform_triangles,
             r.uniform_max_error,

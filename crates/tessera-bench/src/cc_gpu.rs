@@ -47,6 +47,11 @@ struct Row {
     /// Where the GPU time goes (timestamps after each phase, one run), if the adapter
     /// has timestamp queries: (phase, ms).
     phases: Vec<(String, f64)>,
+    /// Flatness bounds computed per output leaf, the search's trials included: the GPU
+    /// drops a losing trial only against the best of earlier rounds, the CPU as soon as
+    /// it reaches the best so far.
+    gpu_bounds_per_leaf: f64,
+    cpu_bounds_per_leaf: f64,
 }
 
 /// One run with a timestamp after each phase of the stage script: (phase, ms), the
@@ -101,13 +106,13 @@ fn gpu_phases(gpu: &Gpu, stage: &CcStage) -> Vec<(String, f64)> {
 }
 
 /// Median time of the recorded stage run to completion (after a first run that grew the
-/// buffers), and the mesh.
+/// buffers), the mesh, the phases and the bounds per leaf.
 fn gpu_time(
     gpu: &Gpu,
     model: &SurfaceModel,
     params: &CcParams,
     repeats: usize,
-) -> (f64, tessera_core::Mesh, Vec<(String, f64)>) {
+) -> (f64, tessera_core::Mesh, Vec<(String, f64)>, f64) {
     let mut stage = CcStage::new(&gpu.device, model, params).expect("stage");
     let status = stage.run_blocking(&gpu.device, &gpu.queue).expect("run");
     let mesh = stage
@@ -116,7 +121,8 @@ fn gpu_time(
     let ms = gpu_median_ms(gpu, repeats, |e| stage.prepare(&gpu.device, &gpu.queue, e));
     let phases = gpu_phases(gpu, &stage);
     gpu.check().expect("no wgpu errors");
-    (ms, mesh, phases)
+    let bounds_per_leaf = status.state.bounds as f64 / status.state.leaves.max(1) as f64;
+    (ms, mesh, phases, bounds_per_leaf)
 }
 
 /// Median time of the GPU uniform stage's run to completion at `n` segments (after a
@@ -161,14 +167,18 @@ pub fn run(assets: &Path, out_dir: &Path, quick: bool, model_filter: Option<&str
                 tolerance: rel * diag,
                 max_depth: MAX_DEPTH,
             };
-            let (gpu_ms, mesh, phases) = gpu_time(&gpu, &model, &params, repeats);
+            let (gpu_ms, mesh, phases, gpu_bounds_per_leaf) =
+                gpu_time(&gpu, &model, &params, repeats);
             let e = measure_error(&samples, &mesh);
+            let mut cpu_bounds_per_leaf = 0.0;
             let cpu_ms = median(
                 (0..repeats)
                     .map(|_| {
                         let t = Instant::now();
-                        tessellate_adaptive(&model, &params).expect("cpu");
-                        t.elapsed().as_secs_f64() * 1e3
+                        let out = tessellate_adaptive(&model, &params).expect("cpu");
+                        let ms = t.elapsed().as_secs_f64() * 1e3;
+                        cpu_bounds_per_leaf = out.bounds as f64 / out.leaves.max(1) as f64;
+                        ms
                     })
                     .collect(),
             );
@@ -215,6 +225,8 @@ pub fn run(assets: &Path, out_dir: &Path, quick: bool, model_filter: Option<&str
                 uniform_gpu_ms,
                 gpu_over_uniform_gpu: gpu_ms / uniform_gpu_ms,
                 phases,
+                gpu_bounds_per_leaf,
+                cpu_bounds_per_leaf,
             };
             eprintln!(
                 "cc gpu {} {rel:e}: {} tris, gpu {:.1} ms, cpu {:.1} ms, uniform n={} {:.1} ms (GPU {:.1} ms)",
@@ -267,15 +279,18 @@ fn table(rows: &[Row]) -> String {
         for n in &names {
             s += &format!(" {n} |");
         }
-        s += "\n|---|---|";
-        s += &"---|".repeat(names.len());
+        s += " bounds per leaf (GPU / CPU) |\n|---|---|";
+        s += &"---|".repeat(names.len() + 1);
         s += "\n";
         for r in rows.iter().filter(|r| !r.phases.is_empty()) {
             s += &format!("| {} | {:.0e} |", r.model, r.tolerance_rel);
             for (_, ms) in &r.phases {
                 s += &format!(" {ms:.1} |");
             }
-            s += "\n";
+            s += &format!(
+                " {:.2} / {:.2} |\n",
+                r.gpu_bounds_per_leaf, r.cpu_bounds_per_leaf
+            );
         }
     }
     s

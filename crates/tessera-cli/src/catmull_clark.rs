@@ -47,6 +47,8 @@ struct Stats {
     guaranteed_error: Option<f64>,
     /// Adaptive: leaves stopped by --max-depth above the tolerance.
     unmet: Option<usize>,
+    /// Adaptive: flatness bounds computed, the first-split search's trials included.
+    flatness_bounds: Option<u64>,
     warnings: Vec<String>,
     timings_ms: Timings,
     #[serde(flatten)]
@@ -200,6 +202,7 @@ pub fn tessellate(args: TessellateArgs) -> Result<(), Error> {
         leaves: out.leaves,
         guaranteed_error: tolerance.map(|_| out.max_bound),
         unmet: tolerance.map(|_| out.unmet),
+        flatness_bounds: tolerance.map(|_| out.bounds),
         warnings,
         timings_ms: timings,
         error,
@@ -286,6 +289,7 @@ pub fn run_gpu(
         leaves: status.state.leaves as usize,
         unmet: status.state.unmet as usize,
         max_bound: status.max_bound() as f64,
+        bounds: status.state.bounds as u64,
     })
 }
 
@@ -308,5 +312,6 @@ pub fn run_gpu_uniform(
         mesh,
         unmet: 0,
         max_bound: 0.0,
+        bounds: 0,
     })
 }

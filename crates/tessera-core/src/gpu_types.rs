@@ -434,5 +434,6 @@ pub struct CcState {
     pub vertices: u32,
     /// Leaves of every trial of the search so far (also beyond capacity).
     pub search_leaves: u32,
-    pub pad: u32,
+    /// Flatness bounds computed (cells tested, every trial of the search included).
+    pub bounds: u32,
 }

@@ -142,6 +142,9 @@ fn gpu_adaptive_matches_the_cpu_reference() {
             cpu.max_bound
         );
         assert_eq!(status.state.leaves as usize, cpu.leaves, "{name}: leaves");
+        // Each leaf had its bound computed, and so did its ancestors.
+        assert!(status.state.bounds >= status.state.leaves, "{name}: bounds");
+        assert!(cpu.bounds >= cpu.leaves as u64, "{name}: bounds");
         assert_eq!(status.state.unmet as usize, cpu.unmet, "{name}: unmet");
         assert!(status.max_bound() as f64 <= params.tolerance * (1.0 + 1e-6) || cpu.unmet > 0);
         assert!((status.max_bound() as f64 - cpu.max_bound).abs() <= 1e-5 * cpu.max_bound);

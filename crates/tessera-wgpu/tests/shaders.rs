@@ -316,7 +316,7 @@ fn catmull_clark_parameters_and_counters_match_their_rust_twins() {
         ("max_bound_bits", offset_of!(CcState, max_bound_bits)),
         ("vertices", offset_of!(CcState, vertices)),
         ("search_leaves", offset_of!(CcState, search_leaves)),
-        ("pad", offset_of!(CcState, pad)),
+        ("bounds", offset_of!(CcState, bounds)),
         ("trials", size_of::<CcState>()),
     ];
     let members: Vec<(&str, usize)> = members

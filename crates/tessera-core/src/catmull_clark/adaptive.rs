@@ -120,6 +120,9 @@ pub struct CcTessellation {
     pub unmet: usize,
     /// The largest flatness bound of any leaf: the guaranteed error of the output.
     pub max_bound: f64,
+    /// Flatness bounds computed, every trial of the first-split search included: the
+    /// method's cost, most of its time.
+    pub bounds: u64,
 }
 
 /// A cell of a patch: `[i, i + w] × [j, j + h]` in grid units.
@@ -142,6 +145,8 @@ impl Cell {
 struct Evaluator<'a> {
     model: &'a SurfaceModel,
     n: u32,
+    /// Flatness bounds computed so far.
+    bounds: u64,
     points: HashMap<u64, (SurfacePoint, usize, u32, u32)>,
 }
 
@@ -186,6 +191,7 @@ fn mark(
     let bx = [cell.i, cell.i + cell.w, cell.j, cell.j + cell.h].map(|t| t * scale);
     let corners = cell.corners().map(|(a, c)| eval.get(p, a, c).position);
     let bound = box_bound(&eval.model.patches[p], bx, corners);
+    eval.bounds += 1;
     if bound <= tolerance || splits_left == 0 {
         leaf(cell, bound);
         return;
@@ -220,6 +226,7 @@ fn tessellate_with_splits(
     let mut eval = Evaluator {
         model,
         n,
+        bounds: 0,
         points: HashMap::new(),
     };
     let mesh = &model.mesh;
@@ -227,6 +234,7 @@ fn tessellate_with_splits(
     // 1. Adaptive marking. 2. Base-quadrilateral replacement.
     let marking = mark_patches(&mut eval, params, splits);
     out.unmet = marking.unmet;
+    out.bounds = eval.bounds;
     out.max_bound = marking.max_bound;
     let leaves = marking.leaves;
     out.leaves = leaves.len();
@@ -554,6 +562,39 @@ mod tests {
     }
 
     #[test]
+    fn the_bound_count_is_one_per_patch_when_every_root_passes() {
+        let cube = concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../../assets/opensubdiv/catmark_cube.obj"
+        );
+        let model = crate::catmull_clark::load_surface(Path::new(cube)).expect("cube");
+        let patches = model.mesh.patch_count() as u64;
+        let coarse = CcParams {
+            tolerance: 10.0,
+            max_depth: 4,
+        };
+        let out = tessellate_adaptive(&model, &coarse).expect("coarse");
+        // The 1×1 root passes, and no other split can have fewer than one leaf.
+        assert_eq!((out.bounds, out.leaves as u64), (patches, patches));
+        let fine = tessellate_adaptive(
+            &model,
+            &CcParams {
+                tolerance: 1e-3,
+                ..coarse
+            },
+        )
+        .expect("fine");
+        // Per patch, the 1×1 split is always tried in full: a tree of L1 ≥ L leaves and
+        // (L1 - 1) / 3 inner cells (L the leaves kept, whichever split won).
+        let (bounds, leaves) = (fine.bounds, fine.leaves as u64);
+        assert!(leaves > patches, "the fine run must split");
+        assert!(
+            bounds >= leaves + (leaves - patches) / 3,
+            "{bounds} bounds, {leaves} leaves"
+        );
+    }
+
+    #[test]
     fn the_polygon_kernel_twin_builds_the_reference_polygons() {
         // The GPU's walk (dyadic halving, the patch across's first split on boundaries)
         // against the reference's sorted lines, leaf for leaf, on the same leaves.
@@ -591,6 +632,7 @@ mod tests {
             let mut eval = Evaluator {
                 model: &model,
                 n,
+                bounds: 0,
                 points: HashMap::new(),
             };
             let marking = mark_patches(&mut eval, &params, &splits);
