@@ -10,9 +10,8 @@ use glam::Vec3;
 use serde::Serialize;
 
 use crate::median;
-use tessera_core::bezier::{
-    tessellate_adaptive, AdaptiveParams, BezierModel, EdgeTest, PreparedBezier,
-};
+use tessera_core::bezier::tessellate::{tessellate_adaptive_timed, StageTimes};
+use tessera_core::bezier::{AdaptiveParams, BezierModel, EdgeTest, PreparedBezier};
 use tessera_wgpu::bezier::{BezierKernels, BezierStage};
 use tessera_wgpu::headless::Gpu;
 
@@ -31,6 +30,8 @@ pub struct GpuRow {
     cpu_triangles_per_s: f64,
     /// Each kernel on its own submission (ms): where the GPU time goes.
     kernels_ms: Vec<(String, f64)>,
+    /// The CPU reference's stages (ms, medians), to set beside the kernels.
+    cpu_stages_ms: Vec<(String, f64)>,
 }
 
 #[derive(Serialize)]
@@ -124,16 +125,25 @@ pub fn run(assets: &Path, out_dir: &Path, quick: bool) {
                 .profile_kernels(&gpu.device, &gpu.queue)
                 .expect("profile");
             let mut cpu_triangles = 0;
+            let mut stages = Vec::new();
             let cpu_ms = median(
                 (0..repeats)
                     .map(|_| {
                         let t = Instant::now();
-                        let out = tessellate_adaptive(&prep, &params).expect("cpu");
+                        let (out, s) = tessellate_adaptive_timed(&prep, &params).expect("cpu");
                         cpu_triangles = out.mesh.triangle_count();
+                        stages.push(s);
                         t.elapsed().as_secs_f64() * 1e3
                     })
                     .collect(),
             );
+            let stage_median = |f: fn(&StageTimes) -> f64| median(stages.iter().map(f).collect());
+            let cpu_stages_ms = vec![
+                ("edge_decide".to_string(), stage_median(|s| s.edge_decide)),
+                ("tri_mark".to_string(), stage_median(|s| s.tri_mark)),
+                ("emit".to_string(), stage_median(|s| s.emit)),
+                ("vertex_eval".to_string(), stage_median(|s| s.vertex_eval)),
+            ];
             let triangles = status.indices / 3;
             assert_eq!(
                 cpu_triangles, triangles as usize,
@@ -157,6 +167,7 @@ pub fn run(assets: &Path, out_dir: &Path, quick: bool) {
                     .into_iter()
                     .map(|(k, t)| (k.to_string(), t))
                     .collect(),
+                cpu_stages_ms,
             });
         }
     }
@@ -194,15 +205,14 @@ fn table(r: &GpuReport) -> String {
         "Measured by `cargo xtask bench` on {} (map4p, max depth 6; medians of {} runs; GPU time = record + submit + wait, after a first run that sizes the buffers; CPU = the reference twins, one thread).\n\n",
         r.adapter, r.repeats
     );
-    s += "| patches | threshold | triangles | CPU (ms) | GPU (ms) | GPU speed-up | GPU triangles/s | GPU kernels alone (ms) |\n|---:|---:|---:|---:|---:|---:|---:|---|\n";
+    s += "| patches | threshold | triangles | CPU (ms) | GPU (ms) | GPU speed-up | GPU triangles/s | GPU kernels alone (ms) | CPU stages (ms) |\n|---:|---:|---:|---:|---:|---:|---:|---|---|\n";
+    let list = |times: &[(String, f64)]| {
+        let parts: Vec<String> = times.iter().map(|(k, t)| format!("{k} {t:.1}")).collect();
+        parts.join(", ")
+    };
     for row in &r.rows {
-        let kernels: Vec<String> = row
-            .kernels_ms
-            .iter()
-            .map(|(k, t)| format!("{k} {t:.1}"))
-            .collect();
         s += &format!(
-            "| {} | {:.4} | {} | {:.2} | {:.2} | {:.2}× | {:.3e} | {} |\n",
+            "| {} | {:.4} | {} | {:.2} | {:.2} | {:.2}× | {:.3e} | {} | {} |\n",
             row.patches,
             row.threshold,
             row.triangles,
@@ -210,7 +220,8 @@ fn table(r: &GpuReport) -> String {
             row.gpu_ms,
             row.speedup,
             row.gpu_triangles_per_s,
-            kernels.join(", ")
+            list(&row.kernels_ms),
+            list(&row.cpu_stages_ms)
         );
     }
     // Scaling with output: the largest against the smallest output per model size.

@@ -303,7 +303,31 @@ pub fn vertex_eval(prep: &PreparedBezier, cps: &[[Vec3; 16]], r: &VertexRecord) 
 
 /// Runs the whole pipeline on the CPU.
 pub fn tessellate_adaptive(prep: &PreparedBezier, params: &AdaptiveParams) -> Result<Tessellation> {
+    tessellate_adaptive_timed(prep, params).map(|(t, _)| t)
+}
+
+/// Wall time of each stage of a CPU run (ms), to set beside the kernels' own times.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct StageTimes {
+    /// Stages 1 and 2: the coarse edges' decisions and their offsets.
+    pub edge_decide: f64,
+    /// Stages 3 and 4: marking and counting per coarse triangle, and the offsets.
+    pub tri_mark: f64,
+    /// Stage 5: vertex records of the edges and the triangles' records and indices.
+    pub emit: f64,
+    /// Stage 6: one evaluation per vertex.
+    pub vertex_eval: f64,
+}
+
+/// [`tessellate_adaptive`], timing each stage.
+pub fn tessellate_adaptive_timed(
+    prep: &PreparedBezier,
+    params: &AdaptiveParams,
+) -> Result<(Tessellation, StageTimes)> {
     params.validate()?;
+    let mut times = StageTimes::default();
+    let ms = |t: std::time::Instant| t.elapsed().as_secs_f64() * 1e3;
+    let start = std::time::Instant::now();
     let l = prep.layout;
     let cps: Vec<[Vec3; 16]> = (0..l.patches).map(|p| prep.control_points(p)).collect();
     let mut evaluations = 0u64;
@@ -318,6 +342,8 @@ pub fn tessellate_adaptive(prep: &PreparedBezier, params: &AdaptiveParams) -> Re
     // 2. Edge vertex offsets.
     let mut edge_offsets: Vec<u32> = bits.iter().map(bit_count).collect();
     let edge_vertices = exclusive_scan(&mut edge_offsets);
+    times.edge_decide = ms(start);
+    let start = std::time::Instant::now();
     // 3. Per-triangle split trees and counts, 4. their offsets.
     let mut scratch = Vec::with_capacity(l.coarse_triangles as usize);
     let mut inner_offsets = Vec::with_capacity(l.coarse_triangles as usize);
@@ -335,6 +361,8 @@ pub fn tessellate_adaptive(prep: &PreparedBezier, params: &AdaptiveParams) -> Re
     let edge_vertex_base = l.coarse_vertices;
     let inner_vertex_base = edge_vertex_base + edge_vertices;
     let vertex_count = inner_vertex_base + inner_vertices;
+    times.tri_mark = ms(start);
+    let start = std::time::Instant::now();
 
     // 5. Emit vertex records and indices.
     let mut records = prep.coarse_vertex_records();
@@ -362,11 +390,15 @@ pub fn tessellate_adaptive(prep: &PreparedBezier, params: &AdaptiveParams) -> Re
             &mut indices,
         );
     }
+    times.emit = ms(start);
+    let start = std::time::Instant::now();
     // 6. Evaluate each vertex once.
     let vertices: Vec<OutVertex> = records.iter().map(|r| vertex_eval(prep, &cps, r)).collect();
     evaluations += vertices.len() as u64;
-    Ok(Tessellation {
+    times.vertex_eval = ms(start);
+    let out = Tessellation {
         mesh: Mesh { vertices, indices },
         evaluations,
-    })
+    };
+    Ok((out, times))
 }
