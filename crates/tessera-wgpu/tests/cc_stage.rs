@@ -6,7 +6,6 @@
 
 use std::collections::HashMap;
 
-use glam::DVec3;
 use tessera_core::catmull_clark::gpu_model::patch_topology;
 use tessera_core::catmull_clark::keys::point_key;
 use tessera_core::catmull_clark::polygon::PolygonKernel;
@@ -26,11 +25,7 @@ fn model(name: &str) -> SurfaceModel {
 }
 
 fn size(model: &SurfaceModel) -> f64 {
-    let (lo, hi) = model.mesh.points.iter().fold(
-        (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
-        |(lo, hi), p| (lo.min(*p), hi.max(*p)),
-    );
-    (hi - lo).length()
+    model.mesh.bbox_diag()
 }
 
 /// Whether two meshes are the same up to vertex numbering: equal counts, every vertex

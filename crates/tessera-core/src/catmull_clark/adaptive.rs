@@ -84,11 +84,7 @@ impl CcParams {
                 self.tolerance
             )));
         }
-        let (lo, hi) = model.mesh.points.iter().fold(
-            (glam::DVec3::INFINITY, glam::DVec3::NEG_INFINITY),
-            |(lo, hi), p| (lo.min(*p), hi.max(*p)),
-        );
-        let size = (hi - lo).length();
+        let size = model.mesh.bbox_diag();
         if self.tolerance < MIN_TOLERANCE_REL * size {
             return Err(Error::Param(format!(
                 "tolerance {:e} is below {MIN_TOLERANCE_REL:e} of the surface's size ({size:e}): finer than single-precision output can hold",
@@ -615,15 +611,7 @@ mod tests {
         ] {
             let model = crate::catmull_clark::load_surface(&assets.join(name)).expect(name);
             let mesh = &model.mesh;
-            let size = {
-                let (lo, hi) = mesh
-                    .points
-                    .iter()
-                    .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), p| {
-                        (lo.min(*p), hi.max(*p))
-                    });
-                (hi - lo).length()
-            };
+            let size = mesh.bbox_diag();
             let params = CcParams {
                 tolerance: rel * size,
                 max_depth: 6,

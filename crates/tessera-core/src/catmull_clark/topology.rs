@@ -58,6 +58,16 @@ pub struct PatchMesh {
 }
 
 impl PatchMesh {
+    /// Diagonal of the level-1 points' bounding box: the surface's size (the limit
+    /// surface lies in their hull).
+    pub fn bbox_diag(&self) -> f64 {
+        let (lo, hi) = self.points.iter().fold(
+            (glam::DVec3::INFINITY, glam::DVec3::NEG_INFINITY),
+            |(lo, hi), p| (lo.min(*p), hi.max(*p)),
+        );
+        (hi - lo).length()
+    }
+
     /// Validates `mesh` and makes its first subdivision level.
     pub fn new(mesh: &ControlMesh) -> Result<Self> {
         let unreferenced_vertices = validate(mesh)?;

@@ -653,11 +653,7 @@ impl CcStage {
         queue: &wgpu::Queue,
         status: &CcStatus,
     ) -> Result<Mesh> {
-        if status.overflowed() {
-            return Err(Error::Wgpu(
-                "the last run overflowed its buffers; grow and rerun".into(),
-            ));
-        }
+        completed(status)?;
         self.buffers
             .output
             .read_mesh(device, queue, status.vertices(), status.indices)
@@ -689,11 +685,7 @@ impl CcStage {
         queue: &wgpu::Queue,
         status: &CcStatus,
     ) -> Result<CcPolygons> {
-        if status.overflowed() {
-            return Err(Error::Wgpu(
-                "the last run overflowed its buffers; grow and rerun".into(),
-            ));
-        }
+        completed(status)?;
         let b = &self.buffers;
         let read = |buffer: &wgpu::Buffer, offset: u64, size: u64| {
             crate::headless::read_buffer(device, queue, buffer, offset, size)
@@ -734,6 +726,16 @@ impl GrowingStage for CcStage {
     fn grow_to(&mut self, device: &wgpu::Device, status: &CcStatus) -> Result<bool> {
         self.grow(device, status)
     }
+}
+
+/// An error if the run overflowed: its buffers hold nothing whole.
+fn completed(status: &CcStatus) -> Result<()> {
+    if status.overflowed() {
+        return Err(Error::Wgpu(
+            "the last run overflowed its buffers; grow and rerun".into(),
+        ));
+    }
+    Ok(())
 }
 
 /// The word of the state buffer at this byte offset of [`CcState`].
