@@ -10,7 +10,7 @@
 @compute @workgroup_size(64)
 fn main(@builtin(global_invocation_id) gid: vec3u, @builtin(num_workgroups) groups: vec3u) {
     let p = cc_invocation(gid, groups);
-    if p >= cc_params.patch_count || cc_state.round >= CC_SEARCH_ROUNDS {
+    if p >= cc_params.patch_count || cc_state.round >= cc_params.search_rounds {
         return;
     }
     let tried = round_trials(p);
@@ -28,7 +28,7 @@ fn main(@builtin(global_invocation_id) gid: vec3u, @builtin(num_workgroups) grou
     }
     best[p] = b;
     // Patches without a surface (holes) have no trial.
-    if cc_state.round + 1u == CC_SEARCH_ROUNDS && b.y < CC_TRIALS {
+    if cc_state.round + 1u == cc_params.search_rounds && b.y < CC_TRIALS {
         atomicMax(&cc_state.max_bound_bits, atomicLoad(&cc_state.trials[cc_trial_slot(1u, p, b.y)]));
         atomicAdd(&cc_state.unmet, atomicLoad(&cc_state.trials[cc_trial_slot(2u, p, b.y)]));
     }

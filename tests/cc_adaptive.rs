@@ -22,6 +22,7 @@ fn adaptive(model: &SurfaceModel, tolerance: f64) -> CcTessellation {
         &CcParams {
             tolerance,
             max_depth: 10,
+            first_split: Default::default(),
         },
     )
     .unwrap()

@@ -161,7 +161,7 @@ fn needed(t: u32, b: vec2u) -> bool {
 // could still beat or tie its best so far.
 fn round_trials(p: u32) -> vec2u {
     var tried = vec2u(0u);
-    if cc_roots[p] == CC_NO_ROOT || cc_state.round >= CC_SEARCH_ROUNDS {
+    if cc_roots[p] == CC_NO_ROOT || cc_state.round >= cc_params.search_rounds {
         return tried;
     }
     let b = best_before(p);

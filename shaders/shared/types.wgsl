@@ -157,7 +157,7 @@ struct CcTessParams {
     poly_capacity: u32,
     index_capacity: u32,
     search_leaf_capacity: u32,
-    pad0: u32,
+    search_rounds: u32,
     pad1: u32,
     pad2: u32,
 }

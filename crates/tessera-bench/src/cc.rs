@@ -84,6 +84,7 @@ pub fn run(assets: &Path, out_dir: &Path, quick: bool) {
             let params = CcParams {
                 tolerance,
                 max_depth: MAX_DEPTH,
+                first_split: Default::default(),
             };
             let (ms, out) = crate::median_time(repeats, || {
                 tessellate_adaptive(&model, &params).expect("adaptive")

@@ -166,6 +166,7 @@ pub fn run(assets: &Path, out_dir: &Path, quick: bool, model_filter: Option<&str
             let params = CcParams {
                 tolerance: rel * diag,
                 max_depth: MAX_DEPTH,
+                first_split: Default::default(),
             };
             let (gpu_ms, mesh, phases, gpu_bounds_per_leaf) =
                 gpu_time(&gpu, &model, &params, repeats);

@@ -33,6 +33,8 @@ struct Stats {
     boundary: tessera_core::catmull_clark::BoundaryRule,
     tolerance: Option<f64>,
     max_depth: Option<u32>,
+    /// Adaptive: how each patch was first split.
+    first_split: Option<tessera_core::catmull_clark::FirstSplit>,
     segments: Option<u32>,
     triangles: usize,
     vertices: usize,
@@ -145,6 +147,7 @@ pub fn tessellate(args: TessellateArgs) -> Result<(), Error> {
             let params = CcParams {
                 tolerance,
                 max_depth,
+                first_split: args.first_split.into(),
             };
             params.validate(&model)?;
             if on_gpu {
@@ -192,6 +195,7 @@ pub fn tessellate(args: TessellateArgs) -> Result<(), Error> {
         boundary: model.mesh.boundary,
         tolerance,
         max_depth: tolerance.map(|_| max_depth),
+        first_split: tolerance.map(|_| args.first_split.into()),
         segments,
         triangles: out.mesh.triangle_count(),
         vertices: out.mesh.vertices.len(),

@@ -35,6 +35,27 @@ pub enum Method {
     Adaptive,
 }
 
+/// How the adaptive Catmull-Clark method first splits each patch.
+#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum FirstSplit {
+    /// Try the near-square k×k and k×(k+1) splits (k ≤ 8) and keep the one with the
+    /// fewest leaves: fewest triangles.
+    #[default]
+    Search,
+    /// Midpoint splits only, as in Lai and Cheng's paper: more triangles, fewer flatness
+    /// bounds (faster at fine tolerances).
+    Midpoint,
+}
+
+impl From<FirstSplit> for tessera_core::catmull_clark::FirstSplit {
+    fn from(f: FirstSplit) -> Self {
+        match f {
+            FirstSplit::Search => Self::Search,
+            FirstSplit::Midpoint => Self::Midpoint,
+        }
+    }
+}
+
 #[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Backend {
     /// The CPU reference (the kernels' twins).
@@ -75,6 +96,9 @@ pub struct TessellateArgs {
     /// Segments per patch side for `--method uniform` (default 8).
     #[arg(long)]
     pub segments: Option<u32>,
+    /// Catmull-Clark adaptive: how each patch is first split.
+    #[arg(long, value_enum, default_value = "search")]
+    pub first_split: FirstSplit,
     /// Search the threshold (or the uniform segment count) for this many triangles (±2%).
     #[arg(long, conflicts_with = "threshold")]
     pub target_triangles: Option<usize>,
@@ -125,6 +149,9 @@ pub struct RenderArgs {
     /// Levels of recursive subdivision (Bézier default 6, Catmull-Clark 10).
     #[arg(long)]
     pub max_depth: Option<u32>,
+    /// Catmull-Clark adaptive: how each patch is first split.
+    #[arg(long, value_enum, default_value = "search")]
+    pub first_split: FirstSplit,
     /// Draw the triangle edges over the shading.
     #[arg(long)]
     pub wireframe: bool,

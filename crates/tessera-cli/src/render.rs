@@ -118,6 +118,7 @@ pub fn render(args: RenderArgs) -> Result<(), Error> {
         let params = CcParams {
             tolerance: rel * control.bbox_diag(),
             max_depth: args.max_depth.unwrap_or(MAX_DEPTH),
+            first_split: args.first_split.into(),
         };
         params.validate(&model)?;
         let gpu = crate::gpu::open(&mut timings)?;

@@ -402,7 +402,9 @@ pub struct CcTessParams {
     pub index_capacity: u32,
     /// Leaves of every trial of the search, kept until the best one is known.
     pub search_leaf_capacity: u32,
-    pub pad: [u32; 3],
+    /// Rounds of the first-split search run ([`crate::catmull_clark::FirstSplit::search_rounds`]).
+    pub search_rounds: u32,
+    pub pad: [u32; 2],
 }
 
 /// Counters of the adaptive Catmull-Clark kernels, read back to check capacities. In

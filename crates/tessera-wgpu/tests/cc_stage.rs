@@ -124,6 +124,7 @@ fn gpu_adaptive_matches_the_cpu_reference() {
         let params = CcParams {
             tolerance: rel * s,
             max_depth: 6,
+            first_split: Default::default(),
         };
         let cpu = tessellate_adaptive(&model, &params).expect("cpu");
         let (mesh, status) = run(&gpu, &model, &params, None);
@@ -164,6 +165,7 @@ fn gpu_adaptive_matches_the_cpu_reference() {
     let params = CcParams {
         tolerance: 3e-4 * size(&model),
         max_depth: 1,
+        first_split: Default::default(),
     };
     let cpu = tessellate_adaptive(&model, &params).expect("cpu");
     let (mesh, status) = run(&gpu, &model, &params, None);
@@ -190,6 +192,7 @@ fn the_polygon_kernel_matches_its_twin() {
         let params = CcParams {
             tolerance: rel * size(&model),
             max_depth: 6,
+            first_split: Default::default(),
         };
         let mut stage = CcStage::new(&gpu.device, &model, &params).expect("stage");
         let status = stage.run_blocking(&gpu.device, &gpu.queue).expect("run");
@@ -267,6 +270,7 @@ fn tiny_capacities_grow_to_the_same_mesh_and_runs_are_byte_identical() {
     let params = CcParams {
         tolerance: 2e-3 * size(&model),
         max_depth: 5,
+        first_split: Default::default(),
     };
     let tiny = CcCapacities {
         cells: 1,
@@ -340,6 +344,7 @@ fn moved_control_points_retessellate_in_place() {
     let params = CcParams {
         tolerance: 3e-3 * size(&model),
         max_depth: 5,
+        first_split: Default::default(),
     };
     let mut stage = CcStage::new(&gpu.device, &model, &params).expect("stage");
     stage.run_blocking(&gpu.device, &gpu.queue).expect("run");
@@ -433,6 +438,7 @@ fn a_model_larger_than_the_device_allows_is_an_error_not_a_wgpu_failure() {
     let params = CcParams {
         tolerance: 3e-3 * size(&model),
         max_depth: 5,
+        first_split: Default::default(),
     };
     for result in [
         CcStage::new(&gpu.device, &model, &params).map(|_| ()),

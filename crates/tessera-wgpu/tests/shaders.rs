@@ -293,9 +293,9 @@ fn catmull_clark_parameters_and_counters_match_their_rust_twins() {
             "search_leaf_capacity",
             offset_of!(CcTessParams, search_leaf_capacity),
         ),
-        ("pad0", offset_of!(CcTessParams, pad)),
-        ("pad1", offset_of!(CcTessParams, pad) + 4),
-        ("pad2", offset_of!(CcTessParams, pad) + 8),
+        ("search_rounds", offset_of!(CcTessParams, search_rounds)),
+        ("pad1", offset_of!(CcTessParams, pad)),
+        ("pad2", offset_of!(CcTessParams, pad) + 4),
     ];
     let members: Vec<(&str, usize)> = members
         .iter()

@@ -12,7 +12,7 @@
 //! use tessera_core::catmull_clark::{load_surface, tessellate_adaptive, CcParams};
 //! # let cube = concat!(env!("CARGO_MANIFEST_DIR"), "/../../assets/opensubdiv/catmark_cube.obj");
 //! let model = load_surface(std::path::Path::new(cube))?;
-//! let params = CcParams { tolerance: 1e-3, max_depth: 8 };
+//! let params = CcParams { tolerance: 1e-3, max_depth: 8, first_split: Default::default() };
 //! let out = tessellate_adaptive(&model, &params)?;
 //! assert_eq!(out.unmet, 0);
 //! assert!(out.max_bound <= 1e-3);
@@ -37,7 +37,7 @@ pub mod vertex_hash;
 
 use std::path::Path;
 
-pub use adaptive::{first_splits, tessellate_adaptive, CcParams, CcTessellation};
+pub use adaptive::{first_splits, tessellate_adaptive, CcParams, CcTessellation, FirstSplit};
 pub use control_mesh::{BoundaryRule, ControlMesh};
 pub use patch::{PatchSurface, SurfaceModel, SurfacePoint};
 pub use topology::PatchMesh;

@@ -33,7 +33,7 @@
 //! # fn main() -> Result<(), Box<dyn std::error::Error>> {
 //! let gpu = Gpu::new()?;
 //! let model = load_surface(std::path::Path::new("assets/opensubdiv/catmark_car.obj"))?;
-//! let params = CcParams { tolerance: 1e-2, max_depth: 8 };
+//! let params = CcParams { tolerance: 1e-2, max_depth: 8, first_split: Default::default() };
 //! let mut stage = CcStage::new(&gpu.device, &model, &params)?;
 //! // Once (and after set_params): run to completion, growing buffers that were too small.
 //! let status = stage.run_blocking(&gpu.device, &gpu.queue)?;
@@ -448,7 +448,7 @@ impl CcStage {
         encoder.clear_buffer(&self.state, 0, None);
         encoder.clear_buffer(&b.hash.status, 0, None);
         let p = self.patch_count;
-        for round in 0..CC_SEARCH_ROUNDS {
+        for round in 0..self.params.first_split.search_rounds() {
             {
                 let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                     label: Some("tessera cc marking"),
@@ -758,7 +758,8 @@ fn tess_params(patch_count: u32, params: &CcParams, caps: CcCapacities) -> CcTes
         poly_capacity: caps.poly,
         index_capacity: caps.indices,
         search_leaf_capacity: caps.search_leaves,
-        pad: [0; 3],
+        search_rounds: params.first_split.search_rounds(),
+        pad: [0; 2],
     }
 }
 
