@@ -1,13 +1,15 @@
 //! Catmull-Clark: adaptive (Lai–Cheng, guaranteed bound) against uniform tessellation
-//! at equal measured max error, any segment count per patch. Writes
+//! at equal measured max error, any segment count per patch, and the paper's own
+//! subdivision (midpoint splits alone, [`FirstSplit::Midpoint`]) against uniform the same
+//! way. Writes
 //! `OUT/catmull_clark_cpu.{json,md}`.
 
 use std::path::Path;
 
 use serde::Serialize;
 use tessera_core::catmull_clark::{
-    surface_samples, tessellate_adaptive, tessellate_uniform, CcParams, PatchMesh, SurfaceModel,
-    MAX_DEPTH, TREE_DEPTH,
+    surface_samples, tessellate_adaptive, tessellate_uniform, CcParams, FirstSplit, PatchMesh,
+    SurfaceModel, MAX_DEPTH, TREE_DEPTH,
 };
 use tessera_core::io::load_control_mesh;
 use tessera_core::measure::{measure_error, ErrorStats};
@@ -38,6 +40,11 @@ struct Row {
     /// would pick with a uniform grid, knowing its error).
     uniform_triangles_at_tolerance: usize,
     ratio_at_tolerance: f64,
+    /// The paper's subdivision (midpoint splits alone) at the same tolerance: its
+    /// triangles, time, and ratio to the uniform grid at or under its measured max error.
+    midpoint_triangles: usize,
+    midpoint_time_ms: f64,
+    midpoint_ratio_to_uniform: f64,
 }
 
 /// (file, detailed)
@@ -100,6 +107,19 @@ pub fn run(assets: &Path, out_dir: &Path, quick: bool) {
                 m += 1;
             }
             let ut_tol = uniform_at(m).0;
+            let midpoint = CcParams {
+                first_split: FirstSplit::Midpoint,
+                ..params
+            };
+            let (midpoint_ms, paper) = crate::median_time(repeats, || {
+                tessellate_adaptive(&model, &midpoint).expect("midpoint")
+            });
+            let paper_error = measure_error(&samples, &paper.mesh).max_error;
+            let mut k = 1;
+            while uniform_at(k).1.max_error > paper_error && k < 256 {
+                k += 1;
+            }
+            let paper_triangles = paper.mesh.triangle_count();
             let row = Row {
                 model: Path::new(file)
                     .file_stem()
@@ -123,6 +143,9 @@ pub fn run(assets: &Path, out_dir: &Path, quick: bool) {
                 ratio_to_uniform: out.mesh.triangle_count() as f64 / ut as f64,
                 uniform_triangles_at_tolerance: ut_tol,
                 ratio_at_tolerance: out.mesh.triangle_count() as f64 / ut_tol as f64,
+                midpoint_triangles: paper_triangles,
+                midpoint_time_ms: midpoint_ms,
+                midpoint_ratio_to_uniform: paper_triangles as f64 / uniform_at(k).0 as f64,
             };
             eprintln!(
                 "cc {} {rel:e}: {} tris (max {:.3e}), uniform n={n} {} tris (max {:.3e}): {:.3}×",
@@ -141,11 +164,11 @@ pub fn run(assets: &Path, out_dir: &Path, quick: bool) {
 
 fn table(rows: &[Row]) -> String {
     let mut s = String::from(
-        "| model | patches | ε (of diagonal) | adaptive tris | guaranteed bound (model units) | measured max (model units) | mean | time ms | bounds per leaf | uniform n | uniform tris | uniform max | **ratio** | ratio at ε |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
+        "| model | patches | ε (of diagonal) | adaptive tris | guaranteed bound (model units) | measured max (model units) | mean | time ms | bounds per leaf | uniform n | uniform tris | uniform max | **ratio** | ratio at ε | midpoint (paper) tris | midpoint ms | midpoint ratio |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
     );
     for r in rows {
         s += &format!(
-            "| {}{} | {} | {:.0e} | {} | {:.2e} | {:.2e} | {:.2e} | {:.1} | {:.2} | {} | {} | {:.2e} | **{:.2}** | {:.2} |\n",
+            "| {}{} | {} | {:.0e} | {} | {:.2e} | {:.2e} | {:.2e} | {:.1} | {:.2} | {} | {} | {:.2e} | **{:.2}** | {:.2} | {} | {:.1} | {:.2} |\n",
             r.model,
             if r.detailed { "" } else { " (simple)" },
             r.patches,
@@ -160,7 +183,10 @@ fn table(rows: &[Row]) -> String {
             r.uniform_triangles,
             r.uniform_max_error,
             r.ratio_to_uniform,
-            r.ratio_at_tolerance
+            r.ratio_at_tolerance,
+            r.midpoint_triangles,
+            r.midpoint_time_ms,
+            r.midpoint_ratio_to_uniform
         );
     }
     s

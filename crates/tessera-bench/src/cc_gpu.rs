@@ -1,7 +1,8 @@
 //! Catmull-Clark on the GPU: the adaptive stage against the CPU reference (time,
 //! triangles per second), the time to reach a max error of 5e-4 of the diagonal against
 //! uniform tessellation (at the smallest grid that reaches it: the CPU's, and the GPU
-//! uniform stage's on the same device), and how the GPU time grows with the output.
+//! uniform stage's on the same device), and how the GPU time grows with the output; with
+//! the first-split search (the default) and with midpoint splits alone (the paper's).
 //! Writes `OUT/catmull_clark_gpu.{json,md}`.
 
 use std::path::Path;
@@ -12,8 +13,8 @@ use serde::Serialize;
 use crate::gpu::gpu_median_ms;
 use crate::median;
 use tessera_core::catmull_clark::{
-    surface_samples, tessellate_adaptive, tessellate_uniform, CcParams, PatchMesh, SurfaceModel,
-    MAX_DEPTH, TREE_DEPTH,
+    surface_samples, tessellate_adaptive, tessellate_uniform, CcParams, FirstSplit, PatchMesh,
+    SurfaceModel, MAX_DEPTH, TREE_DEPTH,
 };
 use tessera_core::io::load_control_mesh;
 use tessera_core::measure::measure_error;
@@ -27,6 +28,7 @@ struct Row {
     device: String,
     patches: usize,
     tolerance_rel: f64,
+    first_split: FirstSplit,
     triangles: usize,
     /// Measured max error of the GPU output, as a fraction of the diagonal.
     max_error_rel: f64,
@@ -162,11 +164,14 @@ pub fn run(assets: &Path, out_dir: &Path, quick: bool, model_filter: Option<&str
         let model = SurfaceModel::new(PatchMesh::new(&control).expect("valid"), TREE_DEPTH);
         let diag = control.bbox_diag();
         let samples = surface_samples(&model, 32);
-        for rel in [3e-3, 5e-4] {
+        for (first_split, rel) in [FirstSplit::Search, FirstSplit::Midpoint]
+            .into_iter()
+            .flat_map(|f| [(f, 3e-3), (f, 5e-4)])
+        {
             let params = CcParams {
                 tolerance: rel * diag,
                 max_depth: MAX_DEPTH,
-                first_split: Default::default(),
+                first_split,
             };
             let (gpu_ms, mesh, phases, gpu_bounds_per_leaf) =
                 gpu_time(&gpu, &model, &params, repeats);
@@ -212,6 +217,7 @@ pub fn run(assets: &Path, out_dir: &Path, quick: bool, model_filter: Option<&str
                 device: device.clone(),
                 patches: model.mesh.surface_patches().count(),
                 tolerance_rel: rel,
+                first_split,
                 triangles: tris,
                 max_error_rel: e.max_error / diag,
                 gpu_ms,
@@ -230,7 +236,7 @@ pub fn run(assets: &Path, out_dir: &Path, quick: bool, model_filter: Option<&str
                 cpu_bounds_per_leaf,
             };
             eprintln!(
-                "cc gpu {} {rel:e}: {} tris, gpu {:.1} ms, cpu {:.1} ms, uniform n={} {:.1} ms (GPU {:.1} ms)",
+                "cc gpu {} {rel:e} {first_split:?}: {} tris, gpu {:.1} ms, cpu {:.1} ms, uniform n={} {:.1} ms (GPU {:.1} ms)",
                 row.model, tris, gpu_ms, cpu_ms, n, uniform_ms, uniform_gpu_ms
             );
             rows.push(row);
@@ -247,15 +253,16 @@ pub fn run(assets: &Path, out_dir: &Path, quick: bool, model_filter: Option<&str
 
 fn table(rows: &[Row]) -> String {
     let mut s = String::from(
-        "| model | device | patches | ε (of diagonal) | triangles | measured max (of diag.) | GPU ms | CPU ms | GPU/CPU | GPU Mtri/s | uniform n (same error) | uniform tris | uniform CPU ms | **GPU/uniform** | uniform GPU ms | **GPU/uniform GPU** |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
+        "| model | device | patches | ε (of diagonal) | first split | triangles | measured max (of diag.) | GPU ms | CPU ms | GPU/CPU | GPU Mtri/s | uniform n (same error) | uniform tris | uniform CPU ms | **GPU/uniform** | uniform GPU ms | **GPU/uniform GPU** |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
     );
     for r in rows {
         s += &format!(
-            "| {} | {} | {} | {:.0e} | {} | {:.2e} | {:.1} | {:.1} | {:.2} | {:.3} | {} | {} | {:.1} | **{:.2}** | {:.1} | **{:.2}** |\n",
+            "| {} | {} | {} | {:.0e} | {} | {} | {:.2e} | {:.1} | {:.1} | {:.2} | {:.3} | {} | {} | {:.1} | **{:.2}** | {:.1} | **{:.2}** |\n",
             r.model,
             r.device,
             r.patches,
             r.tolerance_rel,
+            r.first_split.name(),
             r.triangles,
             r.max_error_rel,
             r.gpu_ms,
@@ -271,7 +278,7 @@ fn table(rows: &[Row]) -> String {
         );
     }
     if rows.iter().any(|r| !r.phases.is_empty()) {
-        s += "\nWhere the GPU time goes (ms, timestamps after each phase of one run):\n\n| model | ε |";
+        s += "\nWhere the GPU time goes (ms, timestamps after each phase of one run):\n\n| model | ε | first split |";
         let names: Vec<&str> = rows
             .iter()
             .find(|r| !r.phases.is_empty())
@@ -280,17 +287,45 @@ fn table(rows: &[Row]) -> String {
         for n in &names {
             s += &format!(" {n} |");
         }
-        s += " bounds per leaf (GPU / CPU) |\n|---|---|";
+        s += " bounds per leaf (GPU / CPU) |\n|---|---|---|";
         s += &"---|".repeat(names.len() + 1);
         s += "\n";
         for r in rows.iter().filter(|r| !r.phases.is_empty()) {
-            s += &format!("| {} | {:.0e} |", r.model, r.tolerance_rel);
+            s += &format!(
+                "| {} | {:.0e} | {} |",
+                r.model,
+                r.tolerance_rel,
+                r.first_split.name()
+            );
             for (_, ms) in &r.phases {
                 s += &format!(" {ms:.1} |");
             }
             s += &format!(
                 " {:.2} / {:.2} |\n",
                 r.gpu_bounds_per_leaf, r.cpu_bounds_per_leaf
+            );
+        }
+    }
+    // Scaling: coarsest to finest tolerance, per model and first split.
+    s += "\nScaling with the output (GPU), coarsest to finest tolerance:\n\n| model | first split | triangles ratio | GPU time ratio | **time per triangle ratio** |\n|---|---|---|---|---|\n";
+    for (k, a) in rows.iter().enumerate() {
+        let finest = rows[k + 1..]
+            .iter()
+            .filter(|b| b.model == a.model && b.first_split == a.first_split)
+            .last();
+        let coarsest = !rows[..k]
+            .iter()
+            .any(|b| b.model == a.model && b.first_split == a.first_split);
+        if let (true, Some(b)) = (coarsest, finest) {
+            let tris = b.triangles as f64 / a.triangles as f64;
+            let time = b.gpu_ms / a.gpu_ms;
+            s += &format!(
+                "| {} | {} | {:.1}× | {:.1}× | **{:.2}** |\n",
+                a.model,
+                a.first_split.name(),
+                tris,
+                time,
+                time / tris
             );
         }
     }

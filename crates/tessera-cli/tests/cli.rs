@@ -427,6 +427,30 @@ fn catmull_clark_adaptive_and_uniform_write_ply_and_stats() {
     let text = std::fs::read_to_string(&ply).unwrap();
     assert!(text.contains(&format!("element face {}", json["triangles"])));
     assert!(text.contains("property float nx") && text.contains("property uint patch"));
+    assert_eq!(json["first_split"], "search");
+
+    // --first-split midpoint: the paper's subdivision, one quadtree per patch (L leaves
+    // over P patches cost L + (L - P) / 3 bounds), more triangles, still within ε.
+    let (search_tris, search_bounds) = (json["triangles"].clone(), json["flatness_bounds"].clone());
+    run_ok(
+        tessera()
+            .args(["tessellate"])
+            .arg(asset("catmull_clark/blub_control_mesh.obj"))
+            .args(["--tolerance-rel", "0.003", "--backend", "cpu"])
+            .args(["--first-split", "midpoint", "--stats"])
+            .arg(&stats),
+    );
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&stats).unwrap()).unwrap();
+    assert_eq!(json["first_split"], "midpoint");
+    let (leaves, patches) = (
+        json["leaves"].as_u64().unwrap(),
+        json["patches"].as_u64().unwrap(),
+    );
+    assert_eq!(json["flatness_bounds"], leaves + (leaves - patches) / 3);
+    assert!(json["triangles"].as_u64() > search_tris.as_u64());
+    assert!(json["flatness_bounds"].as_u64() < search_bounds.as_u64());
+    assert!(json["guaranteed_error"].as_f64().unwrap() <= tol);
 
     // --level L is the 2^L grid per patch: 2·4^L triangles per patch.
     run_ok(

@@ -10,7 +10,9 @@ use tessera_core::catmull_clark::gpu_model::patch_topology;
 use tessera_core::catmull_clark::keys::point_key;
 use tessera_core::catmull_clark::polygon::PolygonKernel;
 use tessera_core::catmull_clark::vertex_hash::split_key;
-use tessera_core::catmull_clark::{load_surface, tessellate_adaptive, CcParams, SurfaceModel};
+use tessera_core::catmull_clark::{
+    load_surface, tessellate_adaptive, CcParams, FirstSplit, SurfaceModel,
+};
 use tessera_core::Mesh;
 use tessera_wgpu::catmull_clark::{CcCapacities, CcStage};
 use tessera_wgpu::headless::Gpu;
@@ -176,6 +178,44 @@ fn gpu_adaptive_matches_the_cpu_reference() {
     assert_eq!(status.state.unmet as usize, cpu.unmet, "unmet");
     assert!((status.max_bound() as f64 - cpu.max_bound).abs() <= 1e-5 * cpu.max_bound);
     same_mesh(&mesh, &cpu.mesh, size(&model)).expect("depth-limited mesh");
+}
+
+#[test]
+fn gpu_midpoint_splits_match_the_cpu_reference() {
+    // The paper's subdivision (the search's first round alone): the CPU's mesh and the
+    // very same bounds (one tree per patch, nothing dropped), and not the search's mesh.
+    let gpu = gpu();
+    for (name, rel) in [
+        ("catmull_clark/spot_control_mesh.obj", 1e-3),
+        ("opensubdiv/catmark_xord_boundary.obj", 3e-3),
+    ] {
+        let model = model(name);
+        let params = CcParams {
+            tolerance: rel * size(&model),
+            max_depth: 6,
+            first_split: FirstSplit::Midpoint,
+        };
+        let cpu = tessellate_adaptive(&model, &params).expect("cpu");
+        let (mesh, status) = run(&gpu, &model, &params, None);
+        assert_eq!(status.state.leaves as usize, cpu.leaves, "{name}: leaves");
+        assert_eq!(status.state.bounds as u64, cpu.bounds, "{name}: bounds");
+        assert!(status.max_bound() as f64 <= params.tolerance * (1.0 + 1e-6));
+        assert!((status.max_bound() as f64 - cpu.max_bound).abs() <= 1e-5 * cpu.max_bound);
+        same_mesh(&mesh, &cpu.mesh, size(&model)).unwrap_or_else(|e| panic!("{name}: {e}"));
+        let search = tessellate_adaptive(
+            &model,
+            &CcParams {
+                first_split: FirstSplit::Search,
+                ..params
+            },
+        )
+        .expect("search");
+        assert!(search.leaves < cpu.leaves, "{name}: the search must matter");
+        assert!(
+            same_mesh(&mesh, &search.mesh, size(&model)).is_err(),
+            "{name}"
+        );
+    }
 }
 
 #[test]

@@ -79,6 +79,14 @@ pub enum FirstSplit {
 }
 
 impl FirstSplit {
+    /// The name the CLI and the bench use: `search` or `midpoint`.
+    pub fn name(self) -> &'static str {
+        match self {
+            FirstSplit::Search => "search",
+            FirstSplit::Midpoint => "midpoint",
+        }
+    }
+
     /// The first splits tried, in order.
     pub fn splits(self) -> Vec<(u32, u32)> {
         match self {
@@ -623,6 +631,50 @@ mod tests {
             bounds >= leaves + (leaves - patches) / 3,
             "{bounds} bounds, {leaves} leaves"
         );
+    }
+
+    #[test]
+    fn midpoint_splits_grow_one_tree_per_patch() {
+        // Without the search every bound belongs to the one quadtree of its patch: a
+        // tree with L leaves over P roots has (L - P) / 3 inner cells, so exactly
+        // L + (L - P) / 3 bounds, and the 1×1 split everywhere. The search may only
+        // do better, and on Spot it must (it is why the search exists).
+        let assets = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets");
+        for (name, rel) in [
+            ("opensubdiv/catmark_cube.obj", 1e-3),
+            ("catmull_clark/spot_control_mesh.obj", 3e-3),
+        ] {
+            let model = crate::catmull_clark::load_surface(&assets.join(name)).expect(name);
+            let search = CcParams {
+                tolerance: rel * model.mesh.bbox_diag(),
+                max_depth: 6,
+                first_split: FirstSplit::Search,
+            };
+            let midpoint = CcParams {
+                first_split: FirstSplit::Midpoint,
+                ..search
+            };
+            let paper = tessellate_adaptive(&model, &midpoint).expect("midpoint");
+            let ours = tessellate_adaptive(&model, &search).expect("search");
+            let patches = model.mesh.surface_patches().count() as u64;
+            let leaves = paper.leaves as u64;
+            assert_eq!(paper.bounds, leaves + (leaves - patches) / 3, "{name}");
+            assert_eq!((paper.unmet, ours.unmet), (0, 0), "{name}");
+            assert!(paper.max_bound <= midpoint.tolerance, "{name}");
+            assert!(ours.leaves < paper.leaves, "{name}: {} leaves", ours.leaves);
+            assert!(ours.bounds > paper.bounds, "{name}");
+            let mut eval = Evaluator {
+                model: &model,
+                n: BASE_GRID << midpoint.max_depth,
+                bounds: 0,
+                points: HashMap::new(),
+            };
+            let marking = mark_patches(&mut eval, &midpoint, &FirstSplit::Midpoint.splits());
+            assert!(model
+                .mesh
+                .surface_patches()
+                .all(|p| marking.first_split[p] == 0));
+        }
     }
 
     #[test]
