@@ -311,8 +311,8 @@ fn table(rows: &[Row]) -> String {
     for (k, a) in rows.iter().enumerate() {
         let finest = rows[k + 1..]
             .iter()
-            .filter(|b| b.model == a.model && b.first_split == a.first_split)
-            .last();
+            .rev()
+            .find(|b| b.model == a.model && b.first_split == a.first_split);
         let coarsest = !rows[..k]
             .iter()
             .any(|b| b.model == a.model && b.first_split == a.first_split);
