@@ -84,6 +84,10 @@ pub fn tessellate(args: TessellateArgs) -> Result<(), Error> {
         )
         .into());
     }
+    if method == Method::Uniform && args.first_split.is_some() {
+        return Err(CoreError::Param("--first-split is for --method adaptive".into()).into());
+    }
+    let first_split = args.first_split.unwrap_or_default().into();
     if method == Method::Adaptive && (args.level.is_some() || args.segments.is_some()) {
         return Err(
             CoreError::Param("--level and --segments are for --method uniform".into()).into(),
@@ -147,7 +151,7 @@ pub fn tessellate(args: TessellateArgs) -> Result<(), Error> {
             let params = CcParams {
                 tolerance,
                 max_depth,
-                first_split: args.first_split.into(),
+                first_split,
             };
             params.validate(&model)?;
             if on_gpu {
@@ -195,7 +199,7 @@ pub fn tessellate(args: TessellateArgs) -> Result<(), Error> {
         boundary: model.mesh.boundary,
         tolerance,
         max_depth: tolerance.map(|_| max_depth),
-        first_split: tolerance.map(|_| args.first_split.into()),
+        first_split: tolerance.map(|_| first_split),
         segments,
         triangles: out.mesh.triangle_count(),
         vertices: out.mesh.vertices.len(),

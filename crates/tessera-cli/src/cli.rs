@@ -96,9 +96,9 @@ pub struct TessellateArgs {
     /// Segments per patch side for `--method uniform` (default 8).
     #[arg(long)]
     pub segments: Option<u32>,
-    /// Catmull-Clark adaptive: how each patch is first split.
-    #[arg(long, value_enum, default_value = "search")]
-    pub first_split: FirstSplit,
+    /// Catmull-Clark adaptive: how each patch is first split (default search).
+    #[arg(long, value_enum)]
+    pub first_split: Option<FirstSplit>,
     /// Search the threshold (or the uniform segment count) for this many triangles (±2%).
     #[arg(long, conflicts_with = "threshold")]
     pub target_triangles: Option<usize>,
@@ -149,9 +149,9 @@ pub struct RenderArgs {
     /// Levels of recursive subdivision (Bézier default 6, Catmull-Clark 10).
     #[arg(long)]
     pub max_depth: Option<u32>,
-    /// Catmull-Clark adaptive: how each patch is first split.
-    #[arg(long, value_enum, default_value = "search")]
-    pub first_split: FirstSplit,
+    /// Catmull-Clark adaptive: how each patch is first split (default search).
+    #[arg(long, value_enum)]
+    pub first_split: Option<FirstSplit>,
     /// Draw the triangle edges over the shading.
     #[arg(long)]
     pub wireframe: bool,

@@ -71,14 +71,15 @@ pub fn render(args: RenderArgs) -> Result<(), Error> {
         )
         .into());
     }
-    if uniform && args.tolerance_rel.is_some() {
-        return Err(
-            CoreError::Param("--method uniform takes --segments, not a tolerance".into()).into(),
-        );
-    }
-    if !cc && args.tolerance_rel.is_some() {
+    if uniform && (args.tolerance_rel.is_some() || args.first_split.is_some()) {
         return Err(CoreError::Param(
-            "--tolerance-rel is a Catmull-Clark option; Bézier surfaces take --threshold".into(),
+            "--method uniform takes --segments, not a tolerance or --first-split".into(),
+        )
+        .into());
+    }
+    if !cc && (args.tolerance_rel.is_some() || args.first_split.is_some()) {
+        return Err(CoreError::Param(
+            "--tolerance-rel and --first-split are Catmull-Clark options; Bézier surfaces take --threshold".into(),
         )
         .into());
     }
@@ -118,7 +119,7 @@ pub fn render(args: RenderArgs) -> Result<(), Error> {
         let params = CcParams {
             tolerance: rel * control.bbox_diag(),
             max_depth: args.max_depth.unwrap_or(MAX_DEPTH),
-            first_split: args.first_split.into(),
+            first_split: args.first_split.unwrap_or_default().into(),
         };
         params.validate(&model)?;
         let gpu = crate::gpu::open(&mut timings)?;

@@ -190,9 +190,13 @@ fn tessellate(args: TessellateArgs) -> Result<(), Error> {
     if is_control_mesh(&args.input) {
         return crate::catmull_clark::tessellate(args);
     }
-    if args.tolerance.is_some() || args.tolerance_rel.is_some() || args.level.is_some() {
+    if args.tolerance.is_some()
+        || args.tolerance_rel.is_some()
+        || args.level.is_some()
+        || args.first_split.is_some()
+    {
         return Err(CoreError::Param(
-            "--tolerance, --tolerance-rel and --level are Catmull-Clark options; Bézier inputs take --threshold and --segments".into(),
+            "--tolerance, --tolerance-rel, --level and --first-split are Catmull-Clark options; Bézier inputs take --threshold and --segments".into(),
         )
         .into());
     }

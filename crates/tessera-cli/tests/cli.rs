@@ -218,6 +218,16 @@ fn bad_parameters_fail_cleanly() {
         ),
         (&teapot, &["--measure-samples", "40"], "add --measure"),
         (
+            &teapot,
+            &["--first-split", "midpoint"],
+            "--first-split are Catmull-Clark options",
+        ),
+        (
+            &cube,
+            &["--method", "uniform", "--first-split", "midpoint"],
+            "--first-split is for --method adaptive",
+        ),
+        (
             &cube,
             &["--tolerance-rel", "1e-300"],
             "finer than single-precision output can hold",
@@ -603,13 +613,38 @@ fn catmull_clark_on_the_gpu_writes_what_the_cpu_writes_and_renders() {
     assert_eq!(&std::fs::read(&png).unwrap()[..8], b"\x89PNG\r\n\x1a\n");
     // --segments without --method uniform, and options of the other kind of surface,
     // are refused.
-    for (option, expect) in [
-        (["--segments", "3"], "--method uniform"),
-        (["--threshold", "0.1"], "--tolerance-rel"),
+    for (option, file, expect) in [
+        (
+            &["--segments", "3"][..],
+            "opensubdiv/catmark_pyramid.obj",
+            "--method uniform",
+        ),
+        (
+            &["--threshold", "0.1"],
+            "opensubdiv/catmark_pyramid.obj",
+            "--tolerance-rel",
+        ),
+        (
+            &[
+                "--method",
+                "uniform",
+                "--segments",
+                "3",
+                "--first-split",
+                "search",
+            ],
+            "opensubdiv/catmark_pyramid.obj",
+            "not a tolerance or --first-split",
+        ),
+        (
+            &["--first-split", "midpoint"],
+            "teaset/teapot",
+            "--first-split are Catmull-Clark options",
+        ),
     ] {
         let out = tessera()
             .args(["render"])
-            .arg(asset("opensubdiv/catmark_pyramid.obj"))
+            .arg(asset(file))
             .args(option)
             .arg("-o")
             .arg(tmp("never.png"))
