@@ -215,6 +215,27 @@ fn gpu_midpoint_splits_match_the_cpu_reference() {
             same_mesh(&mesh, &search.mesh, size(&model)).is_err(),
             "{name}"
         );
+        // A stage switched from the search by set_params makes the same mesh.
+        let mut stage = CcStage::new(
+            &gpu.device,
+            &model,
+            &CcParams {
+                first_split: FirstSplit::Search,
+                ..params
+            },
+        )
+        .expect("stage");
+        stage.run_blocking(&gpu.device, &gpu.queue).expect("search");
+        stage.set_params(&gpu.queue, &params).expect("set_params");
+        let status = stage
+            .run_blocking(&gpu.device, &gpu.queue)
+            .expect("midpoint");
+        let switched = stage
+            .read_mesh(&gpu.device, &gpu.queue, &status)
+            .expect("read");
+        gpu.check().expect("no wgpu errors");
+        assert!((status.max_bound() as f64 - cpu.max_bound).abs() <= 1e-5 * cpu.max_bound);
+        same_mesh(&switched, &cpu.mesh, size(&model)).unwrap_or_else(|e| panic!("{name}: {e}"));
     }
 }
 

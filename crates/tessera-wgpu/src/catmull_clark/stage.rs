@@ -354,7 +354,7 @@ impl CcStage {
         })
     }
 
-    /// The tolerance and depth of the next runs.
+    /// The tolerance, depth and first split of the next runs.
     pub fn set_params(&mut self, queue: &wgpu::Queue, params: &CcParams) -> Result<()> {
         if !(params.tolerance.is_finite() && params.tolerance > 0.0) {
             return Err(tessera_core::Error::Param(format!(
