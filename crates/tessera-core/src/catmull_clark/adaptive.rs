@@ -190,7 +190,17 @@ struct Evaluator<'a> {
     points: HashMap<u64, (SurfacePoint, usize, u32, u32)>,
 }
 
-impl Evaluator<'_> {
+impl<'a> Evaluator<'a> {
+    /// An evaluator on the grid of `params` (`840 · 2^max_depth` units per patch side).
+    fn new(model: &'a SurfaceModel, params: &CcParams) -> Self {
+        Evaluator {
+            model,
+            n: BASE_GRID << params.max_depth,
+            bounds: 0,
+            points: HashMap::new(),
+        }
+    }
+
     fn get(&mut self, p: usize, i: u32, j: u32) -> SurfacePoint {
         let key = point_key(&self.model.mesh, p, i, j, self.n);
         let (model, n) = (self.model, self.n as f64);
@@ -261,13 +271,8 @@ fn tessellate_with_splits(
     splits: &[(u32, u32)],
 ) -> Result<CcTessellation> {
     params.validate(model)?;
-    let n = BASE_GRID << params.max_depth;
-    let mut eval = Evaluator {
-        model,
-        n,
-        bounds: 0,
-        points: HashMap::new(),
-    };
+    let mut eval = Evaluator::new(model, params);
+    let n = eval.n;
     let mesh = &model.mesh;
     let mut out = CcTessellation::default();
     // 1. Adaptive marking. 2. Base-quadrilateral replacement.
@@ -665,12 +670,7 @@ mod tests {
             assert!(paper.max_bound <= midpoint.tolerance, "{name}");
             assert!(ours.leaves < paper.leaves, "{name}: {} leaves", ours.leaves);
             assert!(ours.bounds > paper.bounds, "{name}");
-            let mut eval = Evaluator {
-                model: &model,
-                n: BASE_GRID << midpoint.max_depth,
-                bounds: 0,
-                points: HashMap::new(),
-            };
+            let mut eval = Evaluator::new(&model, &midpoint);
             let marking = mark_patches(&mut eval, &midpoint, &FirstSplit::Midpoint.splits());
             assert!(model
                 .mesh
@@ -706,13 +706,8 @@ mod tests {
                 max_depth: 6,
                 first_split: Default::default(),
             };
-            let n = BASE_GRID << params.max_depth;
-            let mut eval = Evaluator {
-                model: &model,
-                n,
-                bounds: 0,
-                points: HashMap::new(),
-            };
+            let mut eval = Evaluator::new(&model, &params);
+            let n = eval.n;
             let marking = mark_patches(&mut eval, &params, &splits);
             let polygons = leaf_polygons(mesh, &marking.leaves, n);
             // The hash holds the leaves' corners; any numbering will do.
