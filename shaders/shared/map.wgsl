@@ -1,6 +1,8 @@
 // Displacement-map reads and the map edge tests (SPEC §1, paper Eq. 1–3).
 // Twin of `tessera_core::bezier::{prepare::map_read, edge_tests}`.
-// Reads `maps: array<DisplacementMap>` (declared by the kernel).
+// Reads `maps: texture_2d<f32>`, the map atlas (declared by the kernel): per patch a tile
+// of MAP_CELLS × MAP_RES texels, texel (i, j) the pair (d[i, j], d[i+1, j])
+// (`tessera_core::gpu_types::MapAtlas`).
 
 fn map_read(p: u32, u: f32, v: f32) -> f32 {
     let last = f32(MAP_RES - 1u);
@@ -10,14 +12,14 @@ fn map_read(p: u32, u: f32, v: f32) -> f32 {
     let j0 = min(floor(y), last - 1.0);
     let fx = x - i0;
     let fy = y - j0;
-    let i = u32(i0);
-    let j = u32(j0);
-    let a = maps[p].d[MAP_RES * j + i];
-    let b = maps[p].d[MAP_RES * j + i + 1u];
-    let c = maps[p].d[MAP_RES * (j + 1u) + i];
-    let d = maps[p].d[MAP_RES * (j + 1u) + i + 1u];
-    let top = a + (b - a) * fx;
-    let bottom = c + (d - c) * fx;
+    let tile = vec2u(p % MAP_ATLAS_TILES_PER_ROW, p / MAP_ATLAS_TILES_PER_ROW) * vec2u(MAP_RES - 1u, MAP_RES);
+    let at = tile + vec2u(u32(i0), u32(j0));
+    // The cell's corners in two fetches, rows j and j + 1, where four storage reads were
+    // each a scalar loop over the lanes on a CPU device.
+    let row0 = textureLoad(maps, at, 0);
+    let row1 = textureLoad(maps, at + vec2u(0u, 1u), 0);
+    let top = row0.x + (row0.y - row0.x) * fx;
+    let bottom = row1.x + (row1.y - row1.x) * fx;
     return top + (bottom - top) * fy;
 }
 

@@ -3,6 +3,7 @@
 // layouts against the Rust `#[repr(C)]` twins through naga's reflection.
 
 const MAP_RES: u32 = 16u;
+const MAP_ATLAS_TILES_PER_ROW: u32 = 256u;
 const COARSE_SEGMENTS: u32 = 3u;
 const COARSE_TRIANGLES_PER_PATCH: u32 = 18u;
 const INTERIOR_EDGES_PER_PATCH: u32 = 21u;

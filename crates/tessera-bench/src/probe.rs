@@ -1,8 +1,10 @@
 //! What one memory-bound operation costs on this machine: a bilinear displacement-map
 //! read, the operation the Bézier decision kernels are built from. The CPU twin
-//! (`tessera_core::bezier::prepare::map_read`, one thread) against the same WGSL function
-//! (`shaders/shared/map.wgsl`) run by the adapter with every lane busy and no branches,
-//! and against the same arithmetic on an `r32float` texture atlas (`textureLoad`).
+//! (`tessera_core::bezier::prepare::map_read`, one thread) against the same arithmetic run
+//! by the adapter with every lane busy and no branches, three ways: the kernels' own
+//! `map_read` (`shaders/shared/map.wgsl`: two fetches from the `rg32float` atlas of
+//! pairs, `MapAtlas`), four reads from a storage buffer (how the kernels read the maps
+//! before the atlas), and four fetches from an `r32float` texture.
 //!
 //! It bounds what the kernels can gain over their CPU twins while they read the maps
 //! this way: a twin does the same reads, so when a straight-line read with every lane
@@ -17,6 +19,7 @@ use wgpu::util::DeviceExt;
 
 use tessera_core::bezier::prepare::map_read;
 use tessera_core::bezier::{BezierModel, PreparedBezier};
+use tessera_core::gpu_types::MapAtlas;
 use tessera_wgpu::headless::Gpu;
 use tessera_wgpu::shaders;
 
@@ -58,9 +61,10 @@ fn probe_uv(i: u32, k: u32) -> (f32, f32) {
 
 const PROBE_MAIN: &str = r#"
 @group(0) @binding(1) var<storage, read> patches: array<GpuPatch>;
-@group(0) @binding(2) var<storage, read> maps: array<DisplacementMap>;
+@group(0) @binding(2) var maps: texture_2d<f32>;
 @group(0) @binding(3) var<storage, read_write> probe_out: array<f32>;
 @group(0) @binding(4) var atlas: texture_2d<f32>;
+@group(0) @binding(5) var<storage, read> map_buffer: array<DisplacementMap>;
 
 const PROBE_READS: u32 = 64u;
 const ATLAS_MAPS_PER_ROW: u32 = 64u;
@@ -73,7 +77,27 @@ fn probe_uv(i: u32, k: u32) -> vec2f {
     return vec2f(f32(h & 0xffffu) / 65535.0, f32(h >> 16u) / 65535.0);
 }
 
-// `map_read` with the map in a texture atlas instead of a storage buffer.
+// `map_read` from a storage buffer: four reads.
+fn map_read_storage(p: u32, u: f32, v: f32) -> f32 {
+    let last = f32(MAP_RES - 1u);
+    let x = clamp(u, 0.0, 1.0) * last;
+    let y = clamp(v, 0.0, 1.0) * last;
+    let i0 = min(floor(x), last - 1.0);
+    let j0 = min(floor(y), last - 1.0);
+    let fx = x - i0;
+    let fy = y - j0;
+    let i = u32(i0);
+    let j = u32(j0);
+    let a = map_buffer[p].d[MAP_RES * j + i];
+    let b = map_buffer[p].d[MAP_RES * j + i + 1u];
+    let c = map_buffer[p].d[MAP_RES * (j + 1u) + i];
+    let d = map_buffer[p].d[MAP_RES * (j + 1u) + i + 1u];
+    let top = a + (b - a) * fx;
+    let bottom = c + (d - c) * fx;
+    return top + (bottom - top) * fy;
+}
+
+// `map_read` from an `r32float` texture atlas of whole maps: four fetches.
 fn map_read_texture(p: u32, u: f32, v: f32) -> f32 {
     let last = f32(MAP_RES - 1u);
     let x = clamp(u, 0.0, 1.0) * last;
@@ -94,11 +118,21 @@ fn map_read_texture(p: u32, u: f32, v: f32) -> f32 {
 }
 
 @compute @workgroup_size(64)
-fn probe_buffer(@builtin(global_invocation_id) gid: vec3u) {
+fn probe_atlas(@builtin(global_invocation_id) gid: vec3u) {
     var acc = 0.0;
     for (var k = 0u; k < PROBE_READS; k++) {
         let uv = probe_uv(gid.x, k);
         acc += map_read(gid.x / 18u, uv.x, uv.y);
+    }
+    probe_out[gid.x] = acc;
+}
+
+@compute @workgroup_size(64)
+fn probe_buffer(@builtin(global_invocation_id) gid: vec3u) {
+    var acc = 0.0;
+    for (var k = 0u; k < PROBE_READS; k++) {
+        let uv = probe_uv(gid.x, k);
+        acc += map_read_storage(gid.x / 18u, uv.x, uv.y);
     }
     probe_out[gid.x] = acc;
 }
@@ -215,6 +249,29 @@ pub fn run(assets: &std::path::Path, out_dir: &std::path::Path, quick: bool) {
         bytemuck::cast_slice(&texels),
     );
     let atlas_view = atlas.create_view(&Default::default());
+    // The kernels' atlas of pairs (`MapAtlas`), uploaded directly (the bench has a queue).
+    let pairs = MapAtlas::new(&maps);
+    let pairs_view = device
+        .create_texture_with_data(
+            &gpu.queue,
+            &wgpu::TextureDescriptor {
+                label: Some("probe map atlas"),
+                size: wgpu::Extent3d {
+                    width: pairs.width,
+                    height: pairs.height,
+                    depth_or_array_layers: 1,
+                },
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format: wgpu::TextureFormat::Rg32Float,
+                usage: wgpu::TextureUsages::TEXTURE_BINDING,
+                view_formats: &[],
+            },
+            wgpu::util::TextureDataOrder::LayerMajor,
+            bytemuck::cast_slice(&pairs.texels),
+        )
+        .create_view(&Default::default());
     let out = device.create_buffer(&wgpu::BufferDescriptor {
         label: Some("probe out"),
         size: invocations as u64 * 4,
@@ -223,10 +280,17 @@ pub fn run(assets: &std::path::Path, out_dir: &std::path::Path, quick: bool) {
     });
     let mut gpu_sums = Vec::new();
     for (entry, label) in [
-        ("probe_buffer", "GPU, the same `map_read` (storage buffer)"),
+        (
+            "probe_atlas",
+            "GPU, the kernels' `map_read` (two fetches from the `rg32float` atlas of pairs)",
+        ),
+        (
+            "probe_buffer",
+            "GPU, four reads from a storage buffer (the kernels before the atlas)",
+        ),
         (
             "probe_texture",
-            "GPU, the same arithmetic on a texture (`textureLoad`)",
+            "GPU, four fetches from an `r32float` texture",
         ),
     ] {
         let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
@@ -237,16 +301,19 @@ pub fn run(assets: &std::path::Path, out_dir: &std::path::Path, quick: bool) {
             compilation_options: Default::default(),
             cache: None,
         });
-        let map_entry = if entry == "probe_buffer" {
-            wgpu::BindGroupEntry {
-                binding: 2,
+        let map_entry = match entry {
+            "probe_buffer" => wgpu::BindGroupEntry {
+                binding: 5,
                 resource: map_buffer.as_entire_binding(),
-            }
-        } else {
-            wgpu::BindGroupEntry {
+            },
+            "probe_texture" => wgpu::BindGroupEntry {
                 binding: 4,
                 resource: wgpu::BindingResource::TextureView(&atlas_view),
-            }
+            },
+            _ => wgpu::BindGroupEntry {
+                binding: 2,
+                resource: wgpu::BindingResource::TextureView(&pairs_view),
+            },
         };
         let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some(entry),

@@ -38,6 +38,80 @@ pub struct DisplacementMap {
     pub d: [f32; MAP_RES * MAP_RES],
 }
 
+/// Cells per side of a displacement map: a bilinear read interpolates the four corners
+/// of one cell.
+pub const MAP_CELLS: usize = MAP_RES - 1;
+/// Patches per row of the map atlas: a power of two, so that the shaders find a patch's
+/// tile with a mask and a shift (an integer division is a scalar loop over the lanes on
+/// a CPU device).
+pub const MAP_ATLAS_TILES_PER_ROW: u32 = 256;
+
+/// The displacement maps as the GPU kernels read them: an `rg32float` texture whose
+/// texel `(i, j)` of a patch's tile holds the pair `(d[i, j], d[i+1, j])`, for
+/// `i < MAP_CELLS`, `j < MAP_RES`. Patch `p`'s tile, `MAP_CELLS` × `MAP_RES` texels, is
+/// at column `p % MAP_ATLAS_TILES_PER_ROW`, row `p / MAP_ATLAS_TILES_PER_ROW`.
+///
+/// A bilinear read is then two texel fetches (rows `j` and `j + 1`) where a storage
+/// buffer took four reads: on a CPU device (lavapipe) a read at a per-lane address is a
+/// scalar loop over the lanes whatever its width, and the decision kernels spent most of
+/// their time in those reads. Pairs keep the map within SPEC's budget of 2 KB per patch
+/// (1920 bytes); a texel per cell with all four corners would make one fetch but 3.6 KB.
+/// The values are the map's own, so the reads stay bit-identical to the CPU twin
+/// ([`crate::bezier::prepare::map_read`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct MapAtlas {
+    pub width: u32,
+    pub height: u32,
+    /// Row-major, `width × height` texels.
+    pub texels: Vec<[f32; 2]>,
+}
+
+impl MapAtlas {
+    /// Texels per tile side: (width, height).
+    pub const TILE: (u32, u32) = (MAP_CELLS as u32, MAP_RES as u32);
+
+    /// Texture size (width, height) in texels for `patches` maps; at least one tile.
+    pub fn size(patches: usize) -> (u32, u32) {
+        let per_row = MAP_ATLAS_TILES_PER_ROW as usize;
+        let columns = patches.clamp(1, per_row) as u32;
+        let rows = patches.div_ceil(per_row).max(1) as u32;
+        (columns * Self::TILE.0, rows * Self::TILE.1)
+    }
+
+    /// Texel coordinates of pair `(i, j)` of patch `p` (twin of the shader's `map_read`).
+    pub fn texel_of(p: u32, i: u32, j: u32) -> (u32, u32) {
+        (
+            (p % MAP_ATLAS_TILES_PER_ROW) * Self::TILE.0 + i,
+            (p / MAP_ATLAS_TILES_PER_ROW) * Self::TILE.1 + j,
+        )
+    }
+
+    pub fn new(maps: &[DisplacementMap]) -> Self {
+        let (width, height) = Self::size(maps.len());
+        let mut texels = vec![[0.0; 2]; width as usize * height as usize];
+        for (p, map) in maps.iter().enumerate() {
+            for j in 0..MAP_RES {
+                for i in 0..MAP_CELLS {
+                    let (x, y) = Self::texel_of(p as u32, i as u32, j as u32);
+                    let k = MAP_RES * j + i;
+                    texels[y as usize * width as usize + x as usize] = [map.d[k], map.d[k + 1]];
+                }
+            }
+        }
+        MapAtlas {
+            width,
+            height,
+            texels,
+        }
+    }
+
+    /// Bytes of the texture.
+    pub fn bytes(patches: usize) -> u64 {
+        let (w, h) = Self::size(patches);
+        w as u64 * h as u64 * std::mem::size_of::<[f32; 2]>() as u64
+    }
+}
+
 /// Connectivity of one patch.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq, Eq)]
@@ -184,12 +258,11 @@ pub struct BezierStatus {
     pub evaluations: u32,
 }
 
-/// Bytes uploaded per patch and once per model for the map-based tessellator.
+/// Bytes uploaded per patch and once per model for the map-based tessellator: patches,
+/// the map atlas, topology, curves and coarse vertices.
 pub fn bezier_upload_bytes(patches: usize, curves: usize, coarse_vertices: usize) -> usize {
-    patches
-        * (std::mem::size_of::<GpuPatch>()
-            + std::mem::size_of::<DisplacementMap>()
-            + std::mem::size_of::<GpuPatchTopo>())
+    patches * (std::mem::size_of::<GpuPatch>() + std::mem::size_of::<GpuPatchTopo>())
+        + MapAtlas::bytes(patches) as usize
         + curves * std::mem::size_of::<GpuCurve>()
         + coarse_vertices * std::mem::size_of::<VertexRecord>()
 }
@@ -207,6 +280,36 @@ mod tests {
         assert_eq!(std::mem::size_of::<VertexRecord>(), 12);
         assert_eq!(std::mem::size_of::<OutVertex>(), 36);
         assert_eq!(std::mem::size_of::<DrawIndexedIndirectArgs>(), 20);
+    }
+
+    #[test]
+    fn the_atlas_holds_each_map_row_as_pairs_in_its_patch_tile() {
+        // 300 maps: two rows of tiles, the second partly filled.
+        let maps: Vec<DisplacementMap> = (0..300)
+            .map(|p| DisplacementMap {
+                d: std::array::from_fn(|k| (p * 1000 + k) as f32),
+            })
+            .collect();
+        let atlas = MapAtlas::new(&maps);
+        assert_eq!((atlas.width, atlas.height), (256 * 15, 2 * 16));
+        assert_eq!(atlas.texels.len(), (atlas.width * atlas.height) as usize);
+        assert_eq!(MapAtlas::size(1), (15, 16));
+        assert_eq!(MapAtlas::size(0), (15, 16));
+        for (p, i, j) in [(0, 0, 0), (3, 14, 2), (255, 7, 15), (256, 0, 0), (299, 14, 15)] {
+            let (x, y) = MapAtlas::texel_of(p, i, j);
+            let texel = atlas.texels[(y * atlas.width + x) as usize];
+            let d = |i: u32, j: u32| maps[p as usize].d[(16 * j + i) as usize];
+            assert_eq!(texel, [d(i, j), d(i + 1, j)], "patch {p} pair ({i}, {j})");
+        }
+        // Every value of every map is in the atlas, so no tile overwrote another (the
+        // unused tiles hold 0.0, which is also map 0's first value).
+        let mut seen: Vec<f32> = atlas.texels.iter().flatten().copied().collect();
+        seen.sort_by(f32::total_cmp);
+        seen.dedup();
+        assert_eq!(seen.len(), 300 * 256);
+        // The budget of SPEC §1: map plus topology under 2 KB per patch.
+        let per_patch = MapAtlas::bytes(256) as usize / 256 + std::mem::size_of::<GpuPatchTopo>();
+        assert!(per_patch < 2048, "{per_patch} bytes per patch");
     }
 
     #[test]

@@ -44,7 +44,7 @@ use std::sync::{Arc, OnceLock};
 use tessera_core::bezier::lattice::{inv_lattice, Lattice};
 use tessera_core::bezier::{AdaptiveParams, EdgeTest, PreparedBezier};
 use tessera_core::gpu_types::{
-    BezierParams, BezierStatus, OutVertex, VertexRecord, EDGE_BIT_WORDS,
+    BezierParams, BezierStatus, MapAtlas, OutVertex, VertexRecord, EDGE_BIT_WORDS,
 };
 use tessera_core::Mesh;
 use wgpu::util::DeviceExt;
@@ -200,7 +200,6 @@ impl BindGroups {
         let all = [
             (PARAMS, &b.uniform),
             (PATCHES, &b.patches),
-            (MAPS, &b.maps),
             (TOPO, &b.topo),
             (CURVES, &b.curves),
             (EDGE_BITS, &b.edge_bits),
@@ -213,13 +212,15 @@ impl BindGroups {
             (STATUS, &b.status),
             (EVALUATIONS, &b.evaluations),
         ];
+        let textures = [(MAPS, &b.map_atlas)];
+        let bind = |k: &Kernel| k.bind_with_textures(device, &all, &textures);
         BindGroups {
-            edge_decide: t.edge_decide.bind(device, &all),
-            tri_mark: t.tri_mark.bind(device, &all),
-            finish: p.finish.bind(device, &all),
-            edge_emit: p.edge_emit.bind(device, &all),
-            tri_emit: t.tri_emit.bind(device, &all),
-            vertex_eval: p.vertex_eval.bind(device, &all),
+            edge_decide: bind(&t.edge_decide),
+            tri_mark: bind(&t.tri_mark),
+            finish: bind(&p.finish),
+            edge_emit: bind(&p.edge_emit),
+            tri_emit: bind(&t.tri_emit),
+            vertex_eval: bind(&p.vertex_eval),
         }
     }
 }
@@ -227,6 +228,8 @@ impl BindGroups {
 /// The embeddable Bézier stage: uploads a prepared model once, records its kernels into
 /// the caller's encoder, and leaves [`MeshBuffers`] on the GPU.
 pub struct BezierStage {
+    /// The map atlas's texels, until the first recording copies them into the texture.
+    atlas_upload: Option<AtlasUpload>,
     prepared_layout: tessera_core::bezier::prepare::CoarseLayout,
     params: AdaptiveParams,
     buffers: Buffers,
@@ -236,11 +239,19 @@ pub struct BezierStage {
     bind_groups: BindGroups,
 }
 
+struct AtlasUpload {
+    staging: wgpu::Buffer,
+    texture: wgpu::Texture,
+    extent: wgpu::Extent3d,
+    bytes_per_row: u32,
+}
+
 /// Every buffer of a stage: the upload, the working buffers, the output.
 struct Buffers {
     uniform: wgpu::Buffer,
     patches: wgpu::Buffer,
-    maps: wgpu::Buffer,
+    /// The displacement maps, one texel per map cell ([`MapAtlas`]).
+    map_atlas: wgpu::TextureView,
     topo: wgpu::Buffer,
     curves: wgpu::Buffer,
     coarse_records: wgpu::Buffer,
@@ -273,6 +284,48 @@ fn scratch_buffer(
     let bytes = 4 * (points + pole) as u64 * coarse_triangles as u64;
     check_size(device, "triangle scratch", bytes)?;
     Ok(storage(device, "tessera triangle scratch", bytes))
+}
+
+/// The atlas texture, empty, and a mapped-at-creation buffer holding its texels: the
+/// constructor has no queue, so the first recording copies one into the other.
+fn map_atlas_texture(device: &wgpu::Device, atlas: &MapAtlas) -> (wgpu::Texture, wgpu::Buffer) {
+    let texture = device.create_texture(&wgpu::TextureDescriptor {
+        label: Some("tessera displacement-map atlas"),
+        size: map_atlas_extent(atlas),
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format: wgpu::TextureFormat::Rg32Float,
+        usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+        view_formats: &[],
+    });
+    // Buffer-to-texture copies take rows padded to 256 bytes.
+    let row = atlas_row_bytes(atlas);
+    let mut contents = vec![0u8; row as usize * atlas.height as usize];
+    for (y, texels) in atlas.texels.chunks(atlas.width as usize).enumerate() {
+        let bytes: &[u8] = bytemuck::cast_slice(texels);
+        contents[y * row as usize..][..bytes.len()].copy_from_slice(bytes);
+    }
+    let staging = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+        label: Some("tessera displacement-map atlas upload"),
+        contents: &contents,
+        usage: wgpu::BufferUsages::COPY_SRC,
+    });
+    (texture, staging)
+}
+
+/// Bytes per row of the atlas upload: the texels' own, padded to the copy alignment.
+fn atlas_row_bytes(atlas: &MapAtlas) -> u32 {
+    (atlas.width * std::mem::size_of::<[f32; 2]>() as u32)
+        .next_multiple_of(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT)
+}
+
+fn map_atlas_extent(atlas: &MapAtlas) -> wgpu::Extent3d {
+    wgpu::Extent3d {
+        width: atlas.width,
+        height: atlas.height,
+        depth_or_array_layers: 1,
+    }
 }
 
 fn upload(device: &wgpu::Device, label: &str, bytes: &[u8]) -> wgpu::Buffer {
@@ -362,10 +415,6 @@ impl BezierStage {
                 std::mem::size_of_val(prepared.patches.as_slice()),
             ),
             (
-                "displacement maps",
-                std::mem::size_of_val(prepared.maps.as_slice()),
-            ),
-            (
                 "patch topology",
                 std::mem::size_of_val(prepared.topo.as_slice()),
             ),
@@ -380,6 +429,17 @@ impl BezierStage {
         ] {
             check_upload(device, what, bytes as u64)?;
         }
+        let atlas = MapAtlas::new(&prepared.maps);
+        let max_side = device.limits().max_texture_dimension_2d;
+        if atlas.width > max_side || atlas.height > max_side {
+            return Err(Error::MapAtlasTooLarge {
+                patches: l.patches,
+                width: atlas.width,
+                height: atlas.height,
+                limit: max_side,
+            });
+        }
+        let (atlas_texture, atlas_staging) = map_atlas_texture(device, &atlas);
         let buffers = Buffers {
             uniform,
             patches: upload(
@@ -387,7 +447,7 @@ impl BezierStage {
                 "tessera patches",
                 bytemuck::cast_slice(&prepared.patches),
             ),
-            maps: upload(device, "tessera maps", bytemuck::cast_slice(&prepared.maps)),
+            map_atlas: atlas_texture.create_view(&Default::default()),
             topo: upload(
                 device,
                 "tessera topology",
@@ -422,6 +482,12 @@ impl BezierStage {
             output,
         };
         Ok(BezierStage {
+            atlas_upload: Some(AtlasUpload {
+                staging: atlas_staging,
+                texture: atlas_texture,
+                extent: map_atlas_extent(&atlas),
+                bytes_per_row: atlas_row_bytes(&atlas),
+            }),
             prepared_layout: l,
             params: *params,
             bind_groups: BindGroups::new(device, &pipelines.0, &test_kernels, &buffers),
@@ -536,7 +602,22 @@ impl BezierStage {
     /// Copies the parameters into their uniform inside the encoder, not by
     /// `queue.write_buffer` (which lands before the whole submission): recordings that
     /// share a submission, with `set_params` between them, each run with their own.
-    fn record_params(&self, device: &wgpu::Device, encoder: &mut wgpu::CommandEncoder) {
+    /// The first recording also copies the map atlas into its texture.
+    fn record_params(&mut self, device: &wgpu::Device, encoder: &mut wgpu::CommandEncoder) {
+        if let Some(up) = self.atlas_upload.take() {
+            encoder.copy_buffer_to_texture(
+                wgpu::TexelCopyBufferInfo {
+                    buffer: &up.staging,
+                    layout: wgpu::TexelCopyBufferLayout {
+                        offset: 0,
+                        bytes_per_row: Some(up.bytes_per_row),
+                        rows_per_image: None,
+                    },
+                },
+                up.texture.as_image_copy(),
+                up.extent,
+            );
+        }
         let staging = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("tessera bezier params upload"),
             contents: bytemuck::bytes_of(&self.gpu_params()),

@@ -27,6 +27,15 @@ pub enum Error {
         bytes: u64,
         limit: u64,
     },
+    /// The displacement-map atlas of a Bézier model needs a texture larger than the
+    /// device allows (256 patches per row of 16×16 texels).
+    #[error("the model's {patches} patches need a {width}×{height} displacement-map atlas, over the device's texture limit of {limit}; tessellate it with --backend cpu or split the model")]
+    MapAtlasTooLarge {
+        patches: u32,
+        width: u32,
+        height: u32,
+        limit: u32,
+    },
     /// Waiting for the GPU or mapping a buffer failed.
     #[error("GPU readback failed: {0}")]
     Readback(String),

@@ -45,13 +45,26 @@ impl Kernel {
 
     /// A bind group of those `entries` this kernel uses.
     pub fn bind(&self, device: &wgpu::Device, entries: &[(u32, &wgpu::Buffer)]) -> wgpu::BindGroup {
-        let entries: Vec<wgpu::BindGroupEntry> = entries
+        self.bind_with_textures(device, entries, &[])
+    }
+
+    /// As [`Kernel::bind`], with texture views among the entries.
+    pub fn bind_with_textures(
+        &self,
+        device: &wgpu::Device,
+        buffers: &[(u32, &wgpu::Buffer)],
+        textures: &[(u32, &wgpu::TextureView)],
+    ) -> wgpu::BindGroup {
+        let buffers = buffers
             .iter()
+            .map(|(binding, buffer)| (*binding, buffer.as_entire_binding()));
+        let textures = textures
+            .iter()
+            .map(|(binding, view)| (*binding, wgpu::BindingResource::TextureView(view)));
+        let entries: Vec<wgpu::BindGroupEntry> = buffers
+            .chain(textures)
             .filter(|(binding, _)| self.bindings.contains(binding))
-            .map(|(binding, buffer)| wgpu::BindGroupEntry {
-                binding: *binding,
-                resource: buffer.as_entire_binding(),
-            })
+            .map(|(binding, resource)| wgpu::BindGroupEntry { binding, resource })
             .collect();
         device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: None,

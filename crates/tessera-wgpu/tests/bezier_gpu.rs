@@ -23,9 +23,13 @@ fn gpu() -> Gpu {
     Gpu::new().expect("a wgpu adapter (CI installs Mesa's lavapipe; see `cargo xtask test`)")
 }
 
-fn model(name: &str) -> PreparedBezier {
+fn load(name: &str) -> BezierModel {
     let path = format!("{}/../../assets/teaset/{name}", env!("CARGO_MANIFEST_DIR"));
-    PreparedBezier::new(&BezierModel::load(std::path::Path::new(&path)).expect("model loads"))
+    BezierModel::load(std::path::Path::new(&path)).expect("model loads")
+}
+
+fn model(name: &str) -> PreparedBezier {
+    PreparedBezier::new(&load(name))
 }
 
 fn with_threshold(p: &AdaptiveParams, th: f32) -> AdaptiveParams {
@@ -363,3 +367,79 @@ fn two_collapsed_sides_count_by_replay_and_match_the_cpu() {
     }
     gpu.check().expect("no wgpu validation errors");
 }
+
+/// `copies` teapots side by side, each taller than the one before, so that no two have
+/// the same maps (a patch reading another's map changes the mesh).
+fn teapots(copies: usize) -> PreparedBezier {
+    let base = load("teapot");
+    let (mut points, mut nets) = (Vec::new(), Vec::new());
+    for c in 0..copies {
+        let offset = Vec3::new(8.0 * c as f32, 0.0, 0.0);
+        let stretch = Vec3::new(1.0, 1.0, 1.0 + 0.15 * c as f32);
+        let first = points.len() as u32;
+        points.extend(base.points.iter().map(|p| *p * stretch + offset));
+        nets.extend(base.nets.iter().map(|n| n.map(|i| i + first)));
+    }
+    PreparedBezier::new(&BezierModel::from_nets(points, nets))
+}
+
+/// The maps of patches 256 and up lie in the atlas's second row of tiles: a model that
+/// long gives the CPU's mesh, index for index.
+#[test]
+fn a_model_past_one_atlas_row_matches_the_cpu() {
+    let gpu = gpu();
+    let prep = teapots(9);
+    assert!(prep.layout.patches > tessera_core::gpu_types::MAP_ATLAS_TILES_PER_ROW);
+    let params = AdaptiveParams {
+        test: EdgeTest::Map4p,
+        threshold: 0.002 * bbox_diagonal(&model("teapot")),
+        max_depth: 4,
+    };
+    let mut stage = BezierStage::new(&gpu.device, &prep, &params).expect("stage");
+    let status = stage.run_blocking(&gpu.device, &gpu.queue).expect("run");
+    let mesh = stage
+        .read_mesh(&gpu.device, &gpu.queue, &status)
+        .expect("mesh");
+    let cpu = tessellate_adaptive(&prep, &params).expect("cpu").mesh;
+    assert!(cpu.triangle_count() > 9 * 32 * 18, "the threshold refines");
+    assert_eq!(mesh.triangle_count(), cpu.triangle_count(), "triangles");
+    assert!(mesh.indices == cpu.indices, "the topology differs from the CPU's");
+    for (k, (g, c)) in mesh.vertices.iter().zip(&cpu.vertices).enumerate() {
+        let d = (Vec3::from_array(g.position) - Vec3::from_array(c.position)).length();
+        assert!(d <= 1e-4, "vertex {k} is {d} from the CPU's");
+    }
+    gpu.check().expect("no wgpu validation errors");
+}
+
+/// A device whose textures cannot hold the atlas refuses the model with an error that
+/// says so, before wgpu sees an oversized texture.
+#[test]
+fn a_map_atlas_past_the_texture_limit_is_an_error() {
+    let gpu = Gpu::with_limits(|adapter| tessera_wgpu::wgpu::Limits {
+        max_texture_dimension_2d: 256,
+        ..tessera_wgpu::bezier::required_limits(adapter)
+    })
+    .expect("device");
+    let params = AdaptiveParams {
+        test: EdgeTest::Map4p,
+        threshold: 0.01,
+        max_depth: 4,
+    };
+    // The teapot's 32 patches make an atlas 32 · 15 = 480 texels wide.
+    let err = BezierStage::new(&gpu.device, &model("teapot"), &params)
+        .err()
+        .expect("the atlas does not fit");
+    assert!(
+        matches!(err, tessera_wgpu::Error::MapAtlasTooLarge { patches: 32, width: 480, limit: 256, .. }),
+        "{err}"
+    );
+    // Sixteen patches fit (240 texels).
+    let teapot = load("teapot");
+    let small = PreparedBezier::new(&BezierModel::from_nets(
+        teapot.points,
+        teapot.nets[..16].to_vec(),
+    ));
+    BezierStage::new(&gpu.device, &small, &params).expect("sixteen patches fit");
+    gpu.check().expect("no wgpu validation errors");
+}
+
