@@ -1,8 +1,8 @@
 // Displacement-map reads and the map edge tests (SPEC §1, paper Eq. 1–3).
 // Twin of `tessera_core::bezier::{prepare::map_read, edge_tests}`.
 // Reads `maps: texture_2d<f32>`, the map atlas (declared by the kernel): per patch a tile
-// of MAP_CELLS × MAP_RES texels, texel (i, j) the pair (d[i, j], d[i+1, j])
-// (`tessera_core::gpu_types::MapAtlas`).
+// of MAP_CELLS × MAP_RES texels, texel (i, j) the pair (d[i, j], d[i+1, j]) in half
+// precision, divided by params.map_scale (`tessera_core::gpu_types::MapAtlas`).
 
 fn map_read(p: u32, u: f32, v: f32) -> f32 {
     let last = f32(MAP_RES - 1u);
@@ -16,8 +16,9 @@ fn map_read(p: u32, u: f32, v: f32) -> f32 {
     let at = tile + vec2u(u32(i0), u32(j0));
     // The cell's corners in two fetches, rows j and j + 1, where four storage reads were
     // each a scalar loop over the lanes on a CPU device.
-    let row0 = textureLoad(maps, at, 0);
-    let row1 = textureLoad(maps, at + vec2u(0u, 1u), 0);
+    // Scaling by a power of two is exact: the values are the CPU's bit for bit.
+    let row0 = textureLoad(maps, at, 0).xy * params.map_scale;
+    let row1 = textureLoad(maps, at + vec2u(0u, 1u), 0).xy * params.map_scale;
     let top = row0.x + (row0.y - row0.x) * fx;
     let bottom = row1.x + (row1.y - row1.x) * fx;
     return top + (bottom - top) * fy;

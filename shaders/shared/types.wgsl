@@ -22,10 +22,6 @@ struct GpuPatch {
     cp: array<f32, 48>,
 }
 
-struct DisplacementMap {
-    d: array<f32, 256>,
-}
-
 struct GpuPatchTopo {
     corners: array<u32, 4>,
     sides: array<u32, 4>,
@@ -78,9 +74,10 @@ struct BezierParams {
     inv_lattice: f32,
     vertex_capacity: u32,
     index_capacity: u32,
+    // What the map atlas's half-precision values are multiplied by (a power of two).
+    map_scale: f32,
     _pad0: u32,
     _pad1: u32,
-    _pad2: u32,
 }
 
 // What the run needed and whether it fit; read back only when the caller asks.

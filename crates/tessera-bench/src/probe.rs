@@ -2,7 +2,7 @@
 //! read, the operation the Bézier decision kernels are built from. The CPU twin
 //! (`tessera_core::bezier::prepare::map_read`, one thread) against the same arithmetic run
 //! by the adapter with every lane busy and no branches, three ways: the kernels' own
-//! `map_read` (`shaders/shared/map.wgsl`: two fetches from the `rg32float` atlas of
+//! `map_read` (`shaders/shared/map.wgsl`: two fetches from the `rg16float` atlas of
 //! pairs, `MapAtlas`), four reads from a storage buffer (how the kernels read the maps
 //! before the atlas), and four fetches from an `r32float` texture.
 //!
@@ -17,9 +17,10 @@ use serde::Serialize;
 use tessera_wgpu::wgpu;
 use wgpu::util::DeviceExt;
 
+use bytemuck::Zeroable;
 use tessera_core::bezier::prepare::map_read;
 use tessera_core::bezier::{BezierModel, PreparedBezier};
-use tessera_core::gpu_types::MapAtlas;
+use tessera_core::gpu_types::{BezierParams, MapAtlas};
 use tessera_wgpu::headless::Gpu;
 use tessera_wgpu::shaders;
 
@@ -60,6 +61,10 @@ fn probe_uv(i: u32, k: u32) -> (f32, f32) {
 }
 
 const PROBE_MAIN: &str = r#"
+struct DisplacementMap {
+    d: array<f32, 256>,
+}
+
 @group(0) @binding(1) var<storage, read> patches: array<GpuPatch>;
 @group(0) @binding(2) var maps: texture_2d<f32>;
 @group(0) @binding(3) var<storage, read_write> probe_out: array<f32>;
@@ -250,7 +255,7 @@ pub fn run(assets: &std::path::Path, out_dir: &std::path::Path, quick: bool) {
     );
     let atlas_view = atlas.create_view(&Default::default());
     // The kernels' atlas of pairs (`MapAtlas`), uploaded directly (the bench has a queue).
-    let pairs = MapAtlas::new(&maps);
+    let pairs = MapAtlas::new(&maps, prep.map_scale);
     let pairs_view = device
         .create_texture_with_data(
             &gpu.queue,
@@ -264,7 +269,7 @@ pub fn run(assets: &std::path::Path, out_dir: &std::path::Path, quick: bool) {
                 mip_level_count: 1,
                 sample_count: 1,
                 dimension: wgpu::TextureDimension::D2,
-                format: wgpu::TextureFormat::Rg32Float,
+                format: wgpu::TextureFormat::Rg16Float,
                 usage: wgpu::TextureUsages::TEXTURE_BINDING,
                 view_formats: &[],
             },
@@ -272,6 +277,15 @@ pub fn run(assets: &std::path::Path, out_dir: &std::path::Path, quick: bool) {
             bytemuck::cast_slice(&pairs.texels),
         )
         .create_view(&Default::default());
+    // The kernels' `map_read` scales the atlas's values by `params.map_scale`.
+    let params = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+        label: Some("probe params"),
+        contents: bytemuck::bytes_of(&BezierParams {
+            map_scale: prep.map_scale,
+            ..Zeroable::zeroed()
+        }),
+        usage: wgpu::BufferUsages::UNIFORM,
+    });
     let out = device.create_buffer(&wgpu::BufferDescriptor {
         label: Some("probe out"),
         size: invocations as u64 * 4,
@@ -282,7 +296,7 @@ pub fn run(assets: &std::path::Path, out_dir: &std::path::Path, quick: bool) {
     for (entry, label) in [
         (
             "probe_atlas",
-            "GPU, the kernels' `map_read` (two fetches from the `rg32float` atlas of pairs)",
+            "GPU, the kernels' `map_read` (two fetches from the `rg16float` atlas of pairs)",
         ),
         (
             "probe_buffer",
@@ -301,6 +315,10 @@ pub fn run(assets: &std::path::Path, out_dir: &std::path::Path, quick: bool) {
             compilation_options: Default::default(),
             cache: None,
         });
+        let params_entry = wgpu::BindGroupEntry {
+            binding: 0,
+            resource: params.as_entire_binding(),
+        };
         let map_entry = match entry {
             "probe_buffer" => wgpu::BindGroupEntry {
                 binding: 5,
@@ -315,16 +333,20 @@ pub fn run(assets: &std::path::Path, out_dir: &std::path::Path, quick: bool) {
                 resource: wgpu::BindingResource::TextureView(&pairs_view),
             },
         };
+        let mut entries = vec![
+            map_entry,
+            wgpu::BindGroupEntry {
+                binding: 3,
+                resource: out.as_entire_binding(),
+            },
+        ];
+        if entry == "probe_atlas" {
+            entries.push(params_entry);
+        }
         let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some(entry),
             layout: &pipeline.get_bind_group_layout(0),
-            entries: &[
-                map_entry,
-                wgpu::BindGroupEntry {
-                    binding: 3,
-                    resource: out.as_entire_binding(),
-                },
-            ],
+            entries: &entries,
         });
         let dispatch = || {
             let mut encoder = device.create_command_encoder(&Default::default());

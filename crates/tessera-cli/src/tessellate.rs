@@ -393,8 +393,7 @@ fn tessellate(args: TessellateArgs) -> Result<(), Error> {
         Some(_) => prep.upload_bytes(),
         // The uniform peer uploads control points and topology only.
         None => {
-            prep.upload_bytes()
-                - prep.maps.len() * std::mem::size_of::<tessera_core::gpu_types::DisplacementMap>()
+            prep.upload_bytes() - tessera_core::gpu_types::MapAtlas::bytes(prep.maps.len()) as usize
         }
     };
     let stats = Stats {

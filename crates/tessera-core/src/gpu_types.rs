@@ -46,24 +46,26 @@ pub const MAP_CELLS: usize = MAP_RES - 1;
 /// a CPU device).
 pub const MAP_ATLAS_TILES_PER_ROW: u32 = 256;
 
-/// The displacement maps as the GPU kernels read them: an `rg32float` texture whose
-/// texel `(i, j)` of a patch's tile holds the pair `(d[i, j], d[i+1, j])`, for
-/// `i < MAP_CELLS`, `j < MAP_RES`. Patch `p`'s tile, `MAP_CELLS` × `MAP_RES` texels, is
-/// at column `p % MAP_ATLAS_TILES_PER_ROW`, row `p / MAP_ATLAS_TILES_PER_ROW`.
+/// The displacement maps as the GPU kernels read them: an `rg16float` texture whose
+/// texel `(i, j)` of a patch's tile holds the pair `(d[i, j], d[i+1, j]) / map_scale`,
+/// for `i < MAP_CELLS`, `j < MAP_RES`. Patch `p`'s tile, `MAP_CELLS` × `MAP_RES` texels,
+/// is at column `p % MAP_ATLAS_TILES_PER_ROW`, row `p / MAP_ATLAS_TILES_PER_ROW`.
 ///
 /// A bilinear read is then two texel fetches (rows `j` and `j + 1`) where a storage
 /// buffer took four reads: on a CPU device (lavapipe) a read at a per-lane address is a
 /// scalar loop over the lanes whatever its width, and the decision kernels spent most of
-/// their time in those reads. Pairs keep the map within SPEC's budget of 2 KB per patch
-/// (1920 bytes); a texel per cell with all four corners would make one fetch but 3.6 KB.
-/// The values are the map's own, so the reads stay bit-identical to the CPU twin
+/// their time in those reads. Pairs in half precision take 960 bytes per patch, within
+/// SPEC's budget of 2 KB; pairs in single precision would take 1920, and a texel per
+/// cell with all four corners (one fetch) 3600. The maps are rounded to half precision
+/// when prepared ([`crate::bezier::prepare::quantize_maps`]), so the texels hold their
+/// values exactly and the reads stay bit-identical to the CPU twin
 /// ([`crate::bezier::prepare::map_read`]).
 #[derive(Clone, Debug, PartialEq)]
 pub struct MapAtlas {
     pub width: u32,
     pub height: u32,
-    /// Row-major, `width × height` texels.
-    pub texels: Vec<[f32; 2]>,
+    /// Row-major, `width × height` texels, each two `f16` bit patterns.
+    pub texels: Vec<[u16; 2]>,
 }
 
 impl MapAtlas {
@@ -86,15 +88,18 @@ impl MapAtlas {
         )
     }
 
-    pub fn new(maps: &[DisplacementMap]) -> Self {
+    /// The atlas of `maps`, whose values are half-precision multiples of `map_scale`.
+    pub fn new(maps: &[DisplacementMap], map_scale: f32) -> Self {
         let (width, height) = Self::size(maps.len());
-        let mut texels = vec![[0.0; 2]; width as usize * height as usize];
+        let mut texels = vec![[0u16; 2]; width as usize * height as usize];
+        let half = |d: f32| half::f16::from_f32(d / map_scale).to_bits();
         for (p, map) in maps.iter().enumerate() {
             for j in 0..MAP_RES {
                 for i in 0..MAP_CELLS {
                     let (x, y) = Self::texel_of(p as u32, i as u32, j as u32);
                     let k = MAP_RES * j + i;
-                    texels[y as usize * width as usize + x as usize] = [map.d[k], map.d[k + 1]];
+                    texels[y as usize * width as usize + x as usize] =
+                        [half(map.d[k]), half(map.d[k + 1])];
                 }
             }
         }
@@ -108,7 +113,7 @@ impl MapAtlas {
     /// Bytes of the texture.
     pub fn bytes(patches: usize) -> u64 {
         let (w, h) = Self::size(patches);
-        w as u64 * h as u64 * std::mem::size_of::<[f32; 2]>() as u64
+        w as u64 * h as u64 * std::mem::size_of::<[u16; 2]>() as u64
     }
 }
 
@@ -216,7 +221,9 @@ pub struct BezierParams {
     pub inv_lattice: f32,
     pub vertex_capacity: u32,
     pub index_capacity: u32,
-    pub _pad: [u32; 3],
+    /// What the map atlas's half-precision values are multiplied by (a power of two).
+    pub map_scale: f32,
+    pub _pad: [u32; 2],
 }
 
 impl BezierParams {
@@ -235,9 +242,9 @@ impl BezierParams {
         "inv_lattice",
         "vertex_capacity",
         "index_capacity",
+        "map_scale",
         "_pad0",
         "_pad1",
-        "_pad2",
     ];
 }
 
@@ -284,32 +291,34 @@ mod tests {
 
     #[test]
     fn the_atlas_holds_each_map_row_as_pairs_in_its_patch_tile() {
-        // 300 maps: two rows of tiles, the second partly filled.
+        // 300 maps of values that half precision holds exactly (integers under 2048,
+        // scale 1/4): two rows of tiles, the second partly filled.
         let maps: Vec<DisplacementMap> = (0..300)
             .map(|p| DisplacementMap {
-                d: std::array::from_fn(|k| (p * 1000 + k) as f32),
+                d: std::array::from_fn(|k| ((p * 7 + k) % 2000) as f32 * 0.25),
             })
             .collect();
-        let atlas = MapAtlas::new(&maps);
+        let atlas = MapAtlas::new(&maps, 0.25);
         assert_eq!((atlas.width, atlas.height), (256 * 15, 2 * 16));
         assert_eq!(atlas.texels.len(), (atlas.width * atlas.height) as usize);
         assert_eq!(MapAtlas::size(1), (15, 16));
         assert_eq!(MapAtlas::size(0), (15, 16));
-        for (p, i, j) in [(0, 0, 0), (3, 14, 2), (255, 7, 15), (256, 0, 0), (299, 14, 15)] {
-            let (x, y) = MapAtlas::texel_of(p, i, j);
-            let texel = atlas.texels[(y * atlas.width + x) as usize];
-            let d = |i: u32, j: u32| maps[p as usize].d[(16 * j + i) as usize];
-            assert_eq!(texel, [d(i, j), d(i + 1, j)], "patch {p} pair ({i}, {j})");
+        let value = |bits: u16| half::f16::from_bits(bits).to_f32() * 0.25;
+        for p in 0..300u32 {
+            for (i, j) in [(0, 0), (14, 2), (7, 15), (14, 15)] {
+                let (x, y) = MapAtlas::texel_of(p, i, j);
+                let [a, b] = atlas.texels[(y * atlas.width + x) as usize];
+                let d = |i: u32, j: u32| maps[p as usize].d[(16 * j + i) as usize];
+                assert_eq!(
+                    [value(a), value(b)],
+                    [d(i, j), d(i + 1, j)],
+                    "patch {p} pair ({i}, {j})"
+                );
+            }
         }
-        // Every value of every map is in the atlas, so no tile overwrote another (the
-        // unused tiles hold 0.0, which is also map 0's first value).
-        let mut seen: Vec<f32> = atlas.texels.iter().flatten().copied().collect();
-        seen.sort_by(f32::total_cmp);
-        seen.dedup();
-        assert_eq!(seen.len(), 300 * 256);
-        // The budget of SPEC §1: map plus topology under 2 KB per patch.
-        let per_patch = MapAtlas::bytes(256) as usize / 256 + std::mem::size_of::<GpuPatchTopo>();
-        assert!(per_patch < 2048, "{per_patch} bytes per patch");
+        assert_eq!(MapAtlas::texel_of(256, 0, 0), (0, 16));
+        // SPEC §1: the map plus the coarse mesh under 2 KB per patch.
+        assert_eq!(MapAtlas::bytes(256) / 256, 960);
     }
 
     #[test]

@@ -228,6 +228,8 @@ impl BindGroups {
 /// The embeddable Bézier stage: uploads a prepared model once, records its kernels into
 /// the caller's encoder, and leaves [`MeshBuffers`] on the GPU.
 pub struct BezierStage {
+    /// See [`BezierParams::map_scale`].
+    map_scale: f32,
     /// The map atlas's texels, until the first recording copies them into the texture.
     atlas_upload: Option<AtlasUpload>,
     prepared_layout: tessera_core::bezier::prepare::CoarseLayout,
@@ -295,7 +297,7 @@ fn map_atlas_texture(device: &wgpu::Device, atlas: &MapAtlas) -> (wgpu::Texture,
         mip_level_count: 1,
         sample_count: 1,
         dimension: wgpu::TextureDimension::D2,
-        format: wgpu::TextureFormat::Rg32Float,
+        format: wgpu::TextureFormat::Rg16Float,
         usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
         view_formats: &[],
     });
@@ -316,7 +318,7 @@ fn map_atlas_texture(device: &wgpu::Device, atlas: &MapAtlas) -> (wgpu::Texture,
 
 /// Bytes per row of the atlas upload: the texels' own, padded to the copy alignment.
 fn atlas_row_bytes(atlas: &MapAtlas) -> u32 {
-    (atlas.width * std::mem::size_of::<[f32; 2]>() as u32)
+    (atlas.width * std::mem::size_of::<[u16; 2]>() as u32)
         .next_multiple_of(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT)
 }
 
@@ -429,7 +431,7 @@ impl BezierStage {
         ] {
             check_upload(device, what, bytes as u64)?;
         }
-        let atlas = MapAtlas::new(&prepared.maps);
+        let atlas = MapAtlas::new(&prepared.maps, prepared.map_scale);
         let max_side = device.limits().max_texture_dimension_2d;
         if atlas.width > max_side || atlas.height > max_side {
             return Err(Error::MapAtlasTooLarge {
@@ -482,6 +484,7 @@ impl BezierStage {
             output,
         };
         Ok(BezierStage {
+            map_scale: prepared.map_scale,
             atlas_upload: Some(AtlasUpload {
                 staging: atlas_staging,
                 texture: atlas_texture,
@@ -555,7 +558,8 @@ impl BezierStage {
             inv_lattice: inv_lattice(self.params.max_depth),
             vertex_capacity: self.buffers.output.vertex_capacity,
             index_capacity: self.buffers.output.index_capacity,
-            _pad: [0; 3],
+            map_scale: self.map_scale,
+            _pad: [0; 2],
         }
     }
 

@@ -403,7 +403,10 @@ fn a_model_past_one_atlas_row_matches_the_cpu() {
     let cpu = tessellate_adaptive(&prep, &params).expect("cpu").mesh;
     assert!(cpu.triangle_count() > 9 * 32 * 18, "the threshold refines");
     assert_eq!(mesh.triangle_count(), cpu.triangle_count(), "triangles");
-    assert!(mesh.indices == cpu.indices, "the topology differs from the CPU's");
+    assert!(
+        mesh.indices == cpu.indices,
+        "the topology differs from the CPU's"
+    );
     for (k, (g, c)) in mesh.vertices.iter().zip(&cpu.vertices).enumerate() {
         let d = (Vec3::from_array(g.position) - Vec3::from_array(c.position)).length();
         assert!(d <= 1e-4, "vertex {k} is {d} from the CPU's");
@@ -430,7 +433,15 @@ fn a_map_atlas_past_the_texture_limit_is_an_error() {
         .err()
         .expect("the atlas does not fit");
     assert!(
-        matches!(err, tessera_wgpu::Error::MapAtlasTooLarge { patches: 32, width: 480, limit: 256, .. }),
+        matches!(
+            err,
+            tessera_wgpu::Error::MapAtlasTooLarge {
+                patches: 32,
+                width: 480,
+                limit: 256,
+                ..
+            }
+        ),
         "{err}"
     );
     // Sixteen patches fit (240 texels).
@@ -442,4 +453,3 @@ fn a_map_atlas_past_the_texture_limit_is_an_error() {
     BezierStage::new(&gpu.device, &small, &params).expect("sixteen patches fit");
     gpu.check().expect("no wgpu validation errors");
 }
-

@@ -99,12 +99,6 @@ fn shared_structs_match_their_rust_twins() {
     );
     check(
         &module,
-        "DisplacementMap",
-        size_of::<DisplacementMap>(),
-        &[("d", offset_of!(DisplacementMap, d))],
-    );
-    check(
-        &module,
         "GpuPatchTopo",
         size_of::<GpuPatchTopo>(),
         &[
@@ -365,4 +359,43 @@ fn every_kernel_fits_webgpu_default_limits() {
             );
         }
     }
+}
+
+/// The value of WGSL `const NAME: u32` in `module`.
+fn wgsl_u32(module: &naga::Module, name: &str) -> u32 {
+    let (_, c) = module
+        .constants
+        .iter()
+        .find(|(_, c)| c.name.as_deref() == Some(name))
+        .unwrap_or_else(|| panic!("no WGSL constant {name}"));
+    match module.global_expressions[c.init] {
+        naga::Expression::Literal(naga::Literal::U32(v)) => v,
+        ref e => panic!("{name} is not a u32 literal: {e:?}"),
+    }
+}
+
+#[test]
+fn bezier_constants_match_their_rust_twins() {
+    let (module, _) = parse("bezier_tri_mark.wgsl");
+    for (name, rust) in [
+        ("MAP_RES", MAP_RES as u32),
+        ("MAP_ATLAS_TILES_PER_ROW", MAP_ATLAS_TILES_PER_ROW),
+        ("COARSE_SEGMENTS", COARSE_SEGMENTS as u32),
+        (
+            "COARSE_TRIANGLES_PER_PATCH",
+            COARSE_TRIANGLES_PER_PATCH as u32,
+        ),
+        ("INTERIOR_EDGES_PER_PATCH", INTERIOR_EDGES_PER_PATCH as u32),
+        (
+            "INTERIOR_COARSE_VERTICES_PER_PATCH",
+            INTERIOR_COARSE_VERTICES_PER_PATCH as u32,
+        ),
+        ("MAX_DEPTH_LIMIT", MAX_DEPTH_LIMIT),
+        ("EDGE_BIT_WORDS", EDGE_BIT_WORDS as u32),
+        ("DYADIC_SCALE", 1 << MAX_DEPTH_LIMIT),
+    ] {
+        assert_eq!(wgsl_u32(&module, name), rust, "{name}");
+    }
+    // The atlas's tile lookup divides by a power of two (a shift).
+    assert!(MAP_ATLAS_TILES_PER_ROW.is_power_of_two());
 }
