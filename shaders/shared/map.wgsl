@@ -4,24 +4,39 @@
 // of MAP_CELLS × MAP_RES texels, texel (i, j) the pair (d[i, j], d[i+1, j]) in half
 // precision, divided by params.map_scale (`tessera_core::gpu_types::MapAtlas`).
 
-fn map_read(p: u32, u: f32, v: f32) -> f32 {
+// The cell of a bilinear read at (u, v), clamped to the patch, and where in it.
+struct MapCell {
+    ij: vec2u,
+    f: vec2f,
+}
+
+fn map_cell(u: f32, v: f32) -> MapCell {
     let last = f32(MAP_RES - 1u);
     let x = clamp(u, 0.0, 1.0) * last;
     let y = clamp(v, 0.0, 1.0) * last;
     let i0 = min(floor(x), last - 1.0);
     let j0 = min(floor(y), last - 1.0);
-    let fx = x - i0;
-    let fy = y - j0;
+    return MapCell(vec2u(u32(i0), u32(j0)), vec2f(x - i0, y - j0));
+}
+
+// Bilinear interpolation between the cell's corners: row0 = (d[i, j], d[i+1, j]),
+// row1 the same at j + 1.
+fn map_bilinear(row0: vec2f, row1: vec2f, f: vec2f) -> f32 {
+    let top = row0.x + (row0.y - row0.x) * f.x;
+    let bottom = row1.x + (row1.y - row1.x) * f.x;
+    return top + (bottom - top) * f.y;
+}
+
+fn map_read(p: u32, u: f32, v: f32) -> f32 {
+    let cell = map_cell(u, v);
     let tile = vec2u(p % MAP_ATLAS_TILES_PER_ROW, p / MAP_ATLAS_TILES_PER_ROW) * vec2u(MAP_RES - 1u, MAP_RES);
-    let at = tile + vec2u(u32(i0), u32(j0));
+    let at = tile + cell.ij;
     // The cell's corners in two fetches, rows j and j + 1, where four storage reads were
-    // each a scalar loop over the lanes on a CPU device.
-    // Scaling by a power of two is exact: the values are the CPU's bit for bit.
+    // each a scalar loop over the lanes on a CPU device. Scaling by a power of two is
+    // exact: the values are the CPU's bit for bit.
     let row0 = textureLoad(maps, at, 0).xy * params.map_scale;
     let row1 = textureLoad(maps, at + vec2u(0u, 1u), 0).xy * params.map_scale;
-    let top = row0.x + (row0.y - row0.x) * fx;
-    let bottom = row1.x + (row1.y - row1.x) * fx;
-    return top + (bottom - top) * fy;
+    return map_bilinear(row0, row1, cell.f);
 }
 
 // The affine function through the map values at a triangle's corners; the map tests

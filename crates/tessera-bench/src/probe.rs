@@ -84,42 +84,21 @@ fn probe_uv(i: u32, k: u32) -> vec2f {
 
 // `map_read` from a storage buffer: four reads.
 fn map_read_storage(p: u32, u: f32, v: f32) -> f32 {
-    let last = f32(MAP_RES - 1u);
-    let x = clamp(u, 0.0, 1.0) * last;
-    let y = clamp(v, 0.0, 1.0) * last;
-    let i0 = min(floor(x), last - 1.0);
-    let j0 = min(floor(y), last - 1.0);
-    let fx = x - i0;
-    let fy = y - j0;
-    let i = u32(i0);
-    let j = u32(j0);
-    let a = map_buffer[p].d[MAP_RES * j + i];
-    let b = map_buffer[p].d[MAP_RES * j + i + 1u];
-    let c = map_buffer[p].d[MAP_RES * (j + 1u) + i];
-    let d = map_buffer[p].d[MAP_RES * (j + 1u) + i + 1u];
-    let top = a + (b - a) * fx;
-    let bottom = c + (d - c) * fx;
-    return top + (bottom - top) * fy;
+    let cell = map_cell(u, v);
+    let k = MAP_RES * cell.ij.y + cell.ij.x;
+    let row0 = vec2f(map_buffer[p].d[k], map_buffer[p].d[k + 1u]);
+    let row1 = vec2f(map_buffer[p].d[k + MAP_RES], map_buffer[p].d[k + MAP_RES + 1u]);
+    return map_bilinear(row0, row1, cell.f);
 }
 
 // `map_read` from an `r32float` texture atlas of whole maps: four fetches.
 fn map_read_texture(p: u32, u: f32, v: f32) -> f32 {
-    let last = f32(MAP_RES - 1u);
-    let x = clamp(u, 0.0, 1.0) * last;
-    let y = clamp(v, 0.0, 1.0) * last;
-    let i0 = min(floor(x), last - 1.0);
-    let j0 = min(floor(y), last - 1.0);
-    let fx = x - i0;
-    let fy = y - j0;
+    let cell = map_cell(u, v);
     let o = vec2i(i32((p % ATLAS_MAPS_PER_ROW) * MAP_RES), i32((p / ATLAS_MAPS_PER_ROW) * MAP_RES))
-        + vec2i(i32(i0), i32(j0));
-    let a = textureLoad(atlas, o, 0).x;
-    let b = textureLoad(atlas, o + vec2i(1, 0), 0).x;
-    let c = textureLoad(atlas, o + vec2i(0, 1), 0).x;
-    let d = textureLoad(atlas, o + vec2i(1, 1), 0).x;
-    let top = a + (b - a) * fx;
-    let bottom = c + (d - c) * fx;
-    return top + (bottom - top) * fy;
+        + vec2i(cell.ij);
+    let row0 = vec2f(textureLoad(atlas, o, 0).x, textureLoad(atlas, o + vec2i(1, 0), 0).x);
+    let row1 = vec2f(textureLoad(atlas, o + vec2i(0, 1), 0).x, textureLoad(atlas, o + vec2i(1, 1), 0).x);
+    return map_bilinear(row0, row1, cell.f);
 }
 
 @compute @workgroup_size(64)

@@ -5,6 +5,7 @@
 //!
 //! | # | kernel | per | writes |
 //! |---|---|---|---|
+//! | 0 | copy, first recording only | — | the displacement-map atlas texture (the constructor has no queue) |
 //! | 1 | `bezier_edge_decide` | coarse edge | edge bit sets, edge vertex counts |
 //! | 2 | `bezier_tri_mark` | coarse triangle | lattice points, inner vertex and triangle counts |
 //! | 3 | `scan` (multi-level) | — | offsets of all three counts in one exclusive scan |
@@ -252,7 +253,7 @@ struct AtlasUpload {
 struct Buffers {
     uniform: wgpu::Buffer,
     patches: wgpu::Buffer,
-    /// The displacement maps, one texel per map cell ([`MapAtlas`]).
+    /// The displacement maps as half-precision pairs ([`MapAtlas`]).
     map_atlas: wgpu::TextureView,
     topo: wgpu::Buffer,
     curves: wgpu::Buffer,
@@ -565,7 +566,8 @@ impl BezierStage {
 
     /// Records the whole tessellation into `encoder`: the straight-line script of the
     /// module docs. Nothing is submitted; the output is valid once the caller's
-    /// submission has run.
+    /// submission has run. The first call also records the one-time copy of the maps
+    /// into their texture, so its encoder must be submitted, not dropped.
     pub fn prepare(
         &mut self,
         device: &wgpu::Device,

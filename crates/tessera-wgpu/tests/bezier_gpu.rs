@@ -356,16 +356,25 @@ fn two_collapsed_sides_count_by_replay_and_match_the_cpu() {
             threshold: 0.01,
             max_depth: AdaptiveParams::DEFAULT_MAX_DEPTH,
         };
-        let mut stage = BezierStage::new(&gpu.device, &prep, &params).expect("stage");
-        let status = stage.run_blocking(&gpu.device, &gpu.queue).expect("run");
-        let mesh = stage
-            .read_mesh(&gpu.device, &gpu.queue, &status)
-            .expect("mesh");
-        let cpu = tessellate_adaptive(&prep, &params).expect("cpu").mesh;
+        let (mesh, cpu) = gpu_and_cpu_meshes(&gpu, &prep, &params);
         assert!(cpu.triangle_count() > 0);
         assert_eq!(mesh.indices, cpu.indices, "{test:?}: topology");
     }
     gpu.check().expect("no wgpu validation errors");
+}
+
+/// The mesh of a fresh stage run to completion, and the CPU reference's.
+fn gpu_and_cpu_meshes(
+    gpu: &Gpu,
+    prep: &PreparedBezier,
+    params: &AdaptiveParams,
+) -> (tessera_core::Mesh, tessera_core::Mesh) {
+    let mut stage = BezierStage::new(&gpu.device, prep, params).expect("stage");
+    let status = stage.run_blocking(&gpu.device, &gpu.queue).expect("run");
+    let mesh = stage
+        .read_mesh(&gpu.device, &gpu.queue, &status)
+        .expect("mesh");
+    (mesh, tessellate_adaptive(prep, params).expect("cpu").mesh)
 }
 
 /// `copies` teapots side by side, each taller than the one before, so that no two have
@@ -395,12 +404,7 @@ fn a_model_past_one_atlas_row_matches_the_cpu() {
         threshold: 0.002 * bbox_diagonal(&model("teapot")),
         max_depth: 4,
     };
-    let mut stage = BezierStage::new(&gpu.device, &prep, &params).expect("stage");
-    let status = stage.run_blocking(&gpu.device, &gpu.queue).expect("run");
-    let mesh = stage
-        .read_mesh(&gpu.device, &gpu.queue, &status)
-        .expect("mesh");
-    let cpu = tessellate_adaptive(&prep, &params).expect("cpu").mesh;
+    let (mesh, cpu) = gpu_and_cpu_meshes(&gpu, &prep, &params);
     assert!(cpu.triangle_count() > 9 * 32 * 18, "the threshold refines");
     assert_eq!(mesh.triangle_count(), cpu.triangle_count(), "triangles");
     assert!(
