@@ -291,10 +291,15 @@ fn scratch_buffer(
 
 /// The atlas texture, empty, and a mapped-at-creation buffer holding its texels: the
 /// constructor has no queue, so the first recording copies one into the other.
-fn map_atlas_texture(device: &wgpu::Device, atlas: &MapAtlas) -> (wgpu::Texture, wgpu::Buffer) {
+fn map_atlas_upload(device: &wgpu::Device, atlas: &MapAtlas) -> AtlasUpload {
+    let extent = wgpu::Extent3d {
+        width: atlas.width,
+        height: atlas.height,
+        depth_or_array_layers: 1,
+    };
     let texture = device.create_texture(&wgpu::TextureDescriptor {
         label: Some("tessera displacement-map atlas"),
-        size: map_atlas_extent(atlas),
+        size: extent,
         mip_level_count: 1,
         sample_count: 1,
         dimension: wgpu::TextureDimension::D2,
@@ -303,31 +308,23 @@ fn map_atlas_texture(device: &wgpu::Device, atlas: &MapAtlas) -> (wgpu::Texture,
         view_formats: &[],
     });
     // Buffer-to-texture copies take rows padded to 256 bytes.
-    let row = atlas_row_bytes(atlas);
-    let mut contents = vec![0u8; row as usize * atlas.height as usize];
+    let bytes_per_row = (atlas.width * std::mem::size_of::<[u16; 2]>() as u32)
+        .next_multiple_of(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT);
+    let mut contents = vec![0u8; bytes_per_row as usize * atlas.height as usize];
     for (y, texels) in atlas.texels.chunks(atlas.width as usize).enumerate() {
         let bytes: &[u8] = bytemuck::cast_slice(texels);
-        contents[y * row as usize..][..bytes.len()].copy_from_slice(bytes);
+        contents[y * bytes_per_row as usize..][..bytes.len()].copy_from_slice(bytes);
     }
     let staging = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
         label: Some("tessera displacement-map atlas upload"),
         contents: &contents,
         usage: wgpu::BufferUsages::COPY_SRC,
     });
-    (texture, staging)
-}
-
-/// Bytes per row of the atlas upload: the texels' own, padded to the copy alignment.
-fn atlas_row_bytes(atlas: &MapAtlas) -> u32 {
-    (atlas.width * std::mem::size_of::<[u16; 2]>() as u32)
-        .next_multiple_of(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT)
-}
-
-fn map_atlas_extent(atlas: &MapAtlas) -> wgpu::Extent3d {
-    wgpu::Extent3d {
-        width: atlas.width,
-        height: atlas.height,
-        depth_or_array_layers: 1,
+    AtlasUpload {
+        staging,
+        texture,
+        extent,
+        bytes_per_row,
     }
 }
 
@@ -442,7 +439,7 @@ impl BezierStage {
                 limit: max_side,
             });
         }
-        let (atlas_texture, atlas_staging) = map_atlas_texture(device, &atlas);
+        let atlas_upload = map_atlas_upload(device, &atlas);
         let buffers = Buffers {
             uniform,
             patches: upload(
@@ -450,7 +447,7 @@ impl BezierStage {
                 "tessera patches",
                 bytemuck::cast_slice(&prepared.patches),
             ),
-            map_atlas: atlas_texture.create_view(&Default::default()),
+            map_atlas: atlas_upload.texture.create_view(&Default::default()),
             topo: upload(
                 device,
                 "tessera topology",
@@ -486,12 +483,7 @@ impl BezierStage {
         };
         Ok(BezierStage {
             map_scale: prepared.map_scale,
-            atlas_upload: Some(AtlasUpload {
-                staging: atlas_staging,
-                texture: atlas_texture,
-                extent: map_atlas_extent(&atlas),
-                bytes_per_row: atlas_row_bytes(&atlas),
-            }),
+            atlas_upload: Some(atlas_upload),
             prepared_layout: l,
             params: *params,
             bind_groups: BindGroups::new(device, &pipelines.0, &test_kernels, &buffers),

@@ -24,8 +24,7 @@ fn gpu() -> Gpu {
 }
 
 fn load(name: &str) -> BezierModel {
-    let path = format!("{}/../../assets/teaset/{name}", env!("CARGO_MANIFEST_DIR"));
-    BezierModel::load(std::path::Path::new(&path)).expect("model loads")
+    BezierModel::load(&tessera_tests::asset(&format!("teaset/{name}"))).expect("model loads")
 }
 
 fn model(name: &str) -> PreparedBezier {
