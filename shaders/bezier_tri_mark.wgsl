@@ -46,7 +46,7 @@ fn tri_mark(c: TriCtx) {
         let pl = place(c.l, lattice_mid(item.t.a, item.t.b));
         if pl.kind == PLACE_INSIDE {
             scratch[c.points_base + pl.f / 32u] |= 1u << (pl.f % 32u);
-        } else if pl.kind == PLACE_SIDE && c.side_collapsed[pl.k] {
+        } else if pl.kind == PLACE_SIDE && side_collapsed(c, pl.k) {
             let i = pole_index(c.l, pl.k, pl.f);
             scratch[c.pole_base + i / 32u] |= 1u << (i % 32u);
         }

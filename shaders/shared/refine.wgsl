@@ -21,13 +21,15 @@ fn edge_bit_rank(e: u32, k: u32) -> u32 {
 }
 
 // What the triangle stages of one coarse triangle read (twin of `TriContext`).
+// Per side k (or corner k) as vector components, read through `pick`: an array indexed
+// by a per-lane k is a memory gather on a CPU device, three selects are not.
 struct TriCtx {
     tri: u32,
     l: Lattice,
-    side_edge: array<u32, 3>,
-    side_forward: array<bool, 3>,
-    side_collapsed: array<bool, 3>,
-    corner_ids: array<u32, 3>,
+    side_edges: vec3u,
+    sides_forward: vec3<bool>,
+    sides_collapsed: vec3<bool>,
+    corner_ids: vec3u,
     flipped: bool,
     // Offsets of this triangle's lattice points and pole points in `scratch`.
     points_base: u32,
@@ -39,28 +41,48 @@ fn tri_ctx(t: u32) -> TriCtx {
     c.tri = t;
     c.l = lattice_new(t, params.max_depth);
     let p = c.l.patch_id;
-    let g = array<vec2u, 3>(c.l.g0, c.l.g1, c.l.g2);
-    for (var k = 0u; k < 3u; k++) {
-        let r = coarse_edge_of(p, g[k], g[(k + 1u) % 3u]);
-        c.side_edge[k] = r.edge;
-        c.side_forward[k] = r.forward;
-        c.side_collapsed[k] = edge_collapsed(r.edge);
-        c.corner_ids[k] = coarse_vertex(p, g[k]);
-    }
+    let r0 = coarse_edge_of(p, c.l.g0, c.l.g1);
+    let r1 = coarse_edge_of(p, c.l.g1, c.l.g2);
+    let r2 = coarse_edge_of(p, c.l.g2, c.l.g0);
+    c.side_edges = vec3u(r0.edge, r1.edge, r2.edge);
+    c.sides_forward = vec3<bool>(r0.forward, r1.forward, r2.forward);
+    c.sides_collapsed = vec3<bool>(edge_collapsed(r0.edge), edge_collapsed(r1.edge), edge_collapsed(r2.edge));
+    c.corner_ids = vec3u(coarse_vertex(p, c.l.g0), coarse_vertex(p, c.l.g1), coarse_vertex(p, c.l.g2));
     c.flipped = patch_flipped(p);
     c.points_base = t * (params.points_words + params.pole_words);
     c.pole_base = c.points_base + params.points_words;
     return c;
 }
 
+fn pick(v: vec3u, k: u32) -> u32 {
+    return select(select(v.z, v.y, k == 1u), v.x, k == 0u);
+}
+
+fn pick_bool(v: vec3<bool>, k: u32) -> bool {
+    return select(select(v.z, v.y, k == 1u), v.x, k == 0u);
+}
+
+fn tri_side_edge(c: TriCtx, k: u32) -> u32 {
+    return pick(c.side_edges, k);
+}
+
+fn side_collapsed(c: TriCtx, k: u32) -> bool {
+    return pick_bool(c.sides_collapsed, k);
+}
+
+fn corner_id(c: TriCtx, k: u32) -> u32 {
+    return pick(c.corner_ids, k);
+}
+
 // Canonical position (in 1/256ths) of the point f lattice steps along side k.
 fn side_canonical(c: TriCtx, k: u32, f: u32) -> u32 {
-    let q = f * (DYADIC_SCALE / c.l.n);
-    return select(DYADIC_SCALE - q, q, c.side_forward[k]);
+    // DYADIC_SCALE / n as a shift: an integer division is a scalar loop over the lanes.
+    let q = f << (countTrailingZeros(DYADIC_SCALE) - c.l.depth);
+    return select(DYADIC_SCALE - q, q, pick_bool(c.sides_forward, k));
 }
 
 fn side_point(c: TriCtx, k: u32, f: u32) -> bool {
-    return edge_bit(c.side_edge[k], side_canonical(c, k, f));
+    return edge_bit(tri_side_edge(c, k), side_canonical(c, k, f));
 }
 
 fn pole_index(l: Lattice, k: u32, f: u32) -> u32 {
@@ -78,7 +100,7 @@ fn exists(c: TriCtx, p: vec2u) -> bool {
         return true;
     }
     if pl.kind == PLACE_SIDE {
-        if c.side_collapsed[pl.k] {
+        if side_collapsed(c, pl.k) {
             return scratch_bit(c.pole_base, pole_index(c.l, pl.k, pl.f));
         }
         return side_point(c, pl.k, pl.f);
@@ -104,13 +126,13 @@ fn vref_eq(x: VRef, y: VRef) -> bool {
 fn vertex_ref(c: TriCtx, p: vec2u) -> VRef {
     let pl = place(c.l, p);
     if pl.kind == PLACE_CORNER {
-        return VRef(VREF_COARSE, c.corner_ids[pl.k], 0u);
+        return VRef(VREF_COARSE, corner_id(c, pl.k), 0u);
     }
     if pl.kind == PLACE_SIDE {
-        if c.side_collapsed[pl.k] {
-            return VRef(VREF_COARSE, c.corner_ids[pl.k], 0u);
+        if side_collapsed(c, pl.k) {
+            return VRef(VREF_COARSE, corner_id(c, pl.k), 0u);
         }
-        let e = c.side_edge[pl.k];
+        let e = tri_side_edge(c, pl.k);
         return VRef(VREF_EDGE, e, edge_bit_rank(e, side_canonical(c, pl.k, pl.f)));
     }
     return VRef(VREF_INNER, inner_rank(c, pl.f), 0u);
@@ -122,7 +144,7 @@ fn splits(c: TriCtx, t: Tri, level: u32) -> bool {
         return false;
     }
     let side = common_side(c.l, t.a, t.b);
-    if side < 3u && !c.side_collapsed[side] {
+    if side < 3u && !side_collapsed(c, side) {
         let pl = place(c.l, lattice_mid(t.a, t.b));
         return side_point(c, side, pl.f);
     }
@@ -165,14 +187,14 @@ fn euler_count(c: TriCtx) -> u32 {
     // one vertex, and `applies` turns false.
     var applies = true;
     for (var k = 0u; k < 3u; k++) {
-        let a = c.corner_ids[k];
-        let b = c.corner_ids[(k + 1u) % 3u];
-        let other = c.corner_ids[(k + 2u) % 3u];
-        if c.side_collapsed[k] {
+        let a = corner_id(c, k);
+        let b = corner_id(c, (k + 1u) % 3u);
+        let other = corner_id(c, (k + 2u) % 3u);
+        if side_collapsed(c, k) {
             count -= 1u;
             applies = applies && a == b && other != a;
         } else {
-            count += edge_point_count(c.side_edge[k]);
+            count += edge_point_count(tri_side_edge(c, k));
             applies = applies && a != b;
         }
     }
