@@ -1,6 +1,8 @@
 //! Decisions of Map2p, Map4p, Map8p and the flat test on hand-checked cases.
 
-use tessera_core::bezier::edge_tests::{bit_positions, map_test, subdivide_segment, TestInputs};
+use tessera_core::bezier::edge_tests::{
+    bit_positions, map_test, map_test_with, subdivide_segment, TestInputs,
+};
 use tessera_core::bezier::EdgeTest;
 use tessera_core::gpu_types::{DisplacementMap, MAP_RES};
 use tessera_tests::parabolic_cylinder;
@@ -113,4 +115,65 @@ fn recursion_refines_where_the_test_fires_and_stops_at_max_depth() {
     let (bits, evals) = subdivide_segment(&inputs, [0.0, 0.5], [1.0, 0.5]);
     assert!(bit_positions(&bits).count() > 3);
     assert_eq!(evals, 0);
+}
+
+/// Whether `p` is in triangle `t` with `slack` (in barycentric units), as
+/// `refine::TrianglePlane` decides it.
+fn in_triangle(t: [[f32; 2]; 3], p: [f32; 2], slack: f32) -> bool {
+    let (e1, e2) = (
+        [t[1][0] - t[0][0], t[1][1] - t[0][1]],
+        [t[2][0] - t[0][0], t[2][1] - t[0][1]],
+    );
+    let det = e1[0] * e2[1] - e1[1] * e2[0];
+    let (du, dv) = (p[0] - t[0][0], p[1] - t[0][1]);
+    let s = (du * e2[1] - dv * e2[0]) / det;
+    let r = (e1[0] * dv - e1[1] * du) / det;
+    s >= -slack && r >= -slack && s + r <= 1.0 + slack
+}
+
+/// Counts the sides of right triangles where reading one point of each mirrored pair
+/// (`one_inside`) decides differently from reading both, with a displacement defined
+/// inside the triangle (with `slack`).
+fn one_inside_disagreements(slack: f32) -> (usize, usize) {
+    let m = map_of(|u, v| (7.0 * u).sin() * (5.0 * v).cos() + 0.3 * u * v);
+    let (mut differ, mut positive) = (0, 0);
+    for size in [0.02f32, 0.07, 0.2] {
+        for k in 0..24 {
+            // Right angle at r, legs of length `size`, turned by k · 15°.
+            let angle = k as f32 * std::f32::consts::PI / 12.0;
+            let (c, s) = (angle.cos() * size, angle.sin() * size);
+            let r = [0.4 + 0.01 * k as f32, 0.3 + 0.013 * k as f32];
+            let t = [r, [r[0] + c, r[1] + s], [r[0] - s, r[1] + c]];
+            let d = |u: f32, v: f32| {
+                in_triangle(t, [u, v], slack)
+                    .then(|| tessera_core::bezier::prepare::map_read(&m, u, v))
+            };
+            for (a, b) in [(t[1], t[2]), (t[0], t[1]), (t[2], t[0])] {
+                for test in [EdgeTest::Map4p, EdgeTest::Map8p] {
+                    for th in [0.001, 0.01, 0.05] {
+                        let ends = [d(a[0], a[1]), d(b[0], b[1])];
+                        let one = map_test_with(test, th, [a, b], ends, true, d);
+                        let both = map_test_with(test, th, [a, b], ends, false, d);
+                        differ += usize::from(one != both);
+                        positive += usize::from(both);
+                    }
+                }
+            }
+        }
+    }
+    (differ, positive)
+}
+
+#[test]
+fn reading_one_point_of_a_mirrored_pair_decides_as_reading_both_on_a_side() {
+    // The slack `interior_need` uses: the outer point of a pair is half a side away.
+    let (differ, positive) = one_inside_disagreements(1e-4);
+    assert!(
+        positive > 100,
+        "the cases must not all be negative ({positive})"
+    );
+    assert_eq!(differ, 0);
+    // Test of the test: a region reaching past the sides (slack 1, so both points of a
+    // pair have values) makes the shortcut miss some.
+    assert!(one_inside_disagreements(1.0).0 > 0);
 }

@@ -40,7 +40,8 @@ fn map_read(p: u32, u: f32, v: f32) -> f32 {
 }
 
 // The affine function through the map values at a triangle's corners; the map tests
-// inside a coarse triangle read the displacement from it (see `refine.rs`).
+// inside a coarse triangle read the displacement from it (see `refine.rs`). d0..d2 are
+// the map values at p0..p2, read once by the caller (they are also its segments' ends).
 struct TrianglePlane {
     patch_id: u32,
     origin: vec2f,
@@ -51,10 +52,7 @@ struct TrianglePlane {
     det: f32,
 }
 
-fn triangle_plane(p: u32, p0: vec2f, p1: vec2f, p2: vec2f) -> TrianglePlane {
-    let d0 = map_read(p, p0.x, p0.y);
-    let d1 = map_read(p, p1.x, p1.y);
-    let d2 = map_read(p, p2.x, p2.y);
+fn triangle_plane(p: u32, p0: vec2f, p1: vec2f, p2: vec2f, d0: f32, d1: f32, d2: f32) -> TrianglePlane {
     let e1 = p1 - p0;
     let e2 = p2 - p0;
     let det = e1.x * e2.y - e1.y * e2.x;
@@ -64,47 +62,65 @@ fn triangle_plane(p: u32, p0: vec2f, p1: vec2f, p2: vec2f) -> TrianglePlane {
     return TrianglePlane(p, p0, d0, grad, e1, e2, det);
 }
 
-// Displacement from the plane at `uv`; `valid` false outside the triangle.
+// A displacement; `valid` false outside the triangle.
 struct MaybeF32 {
     valid: bool,
     value: f32,
 }
 
-fn plane_displacement(pl: TrianglePlane, uv: vec2f) -> MaybeF32 {
+fn plane_inside(pl: TrianglePlane, uv: vec2f) -> bool {
     let du = uv.x - pl.origin.x;
     let dv = uv.y - pl.origin.y;
     let s = (du * pl.e2.y - dv * pl.e2.x) / pl.det;
     let t = (pl.e1.x * dv - pl.e1.y * du) / pl.det;
     let slack = 1e-4;
-    if s < -slack || t < -slack || s + t > 1.0 + slack {
-        return MaybeF32(false, 0.0);
-    }
-    let value = map_read(pl.patch_id, uv.x, uv.y) - (pl.d0 + pl.grad.x * du + pl.grad.y * dv);
-    return MaybeF32(true, value);
+    return !(s < -slack || t < -slack || s + t > 1.0 + slack);
+}
+
+// Displacement from the plane at `uv`, where the map value is `raw`.
+fn plane_value(pl: TrianglePlane, uv: vec2f, raw: f32) -> MaybeF32 {
+    let du = uv.x - pl.origin.x;
+    let dv = uv.y - pl.origin.y;
+    return MaybeF32(plane_inside(pl, uv), raw - (pl.d0 + pl.grad.x * du + pl.grad.y * dv));
 }
 
 // One read of the displacement: the raw map (`use_plane` false) or from the plane.
 fn displacement(pl: TrianglePlane, use_plane: bool, uv: vec2f) -> MaybeF32 {
+    let raw = map_read(pl.patch_id, uv.x, uv.y);
     if use_plane {
-        return plane_displacement(pl, uv);
+        return plane_value(pl, uv, raw);
     }
-    return MaybeF32(true, map_read(pl.patch_id, uv.x, uv.y));
+    return MaybeF32(true, raw);
 }
 
-fn differs(pl: TrianglePlane, use_plane: bool, uv: vec2f, d12: f32, th: f32) -> bool {
-    let d = displacement(pl, use_plane, uv);
+fn differs_from(d: MaybeF32, d12: f32, th: f32) -> bool {
     return d.valid && abs(d.value - d12) > th;
 }
 
-// Map2p / Map4p / Map8p on the segment uv1 → uv2 (twin of `map_test_with`).
-fn map_test_with(test: u32, th: f32, uv1: vec2f, uv2: vec2f, pl: TrianglePlane, use_plane: bool) -> bool {
+fn differs(pl: TrianglePlane, use_plane: bool, uv: vec2f, d12: f32, th: f32) -> bool {
+    return differs_from(displacement(pl, use_plane, uv), d12, th);
+}
+
+// The test of two points mirrored across the segment. When the segment is a side of the
+// plane's triangle (`one_inside`), at most one of them is inside (the other lies half
+// the side's length beyond it) and only that one is read: a CPU device would read both.
+fn mirrored_differ(pl: TrianglePlane, use_plane: bool, p: vec2f, q: vec2f, d12: f32, th: f32, one_inside: bool) -> bool {
+    if one_inside {
+        return differs(pl, use_plane, select(q, p, plane_inside(pl, p)), d12, th);
+    }
+    return differs(pl, use_plane, p, d12, th) || differs(pl, use_plane, q, d12, th);
+}
+
+// Map2p / Map4p / Map8p on the segment uv1 → uv2, whose ends have displacements d1, d2
+// (twin of `map_test_with`).
+fn map_test_with(test: u32, th: f32, uv1: vec2f, uv2: vec2f, d1: MaybeF32, d2: MaybeF32, pl: TrianglePlane, use_plane: bool, one_inside: bool) -> bool {
     let m = vec2f((uv1.x + uv2.x) * 0.5, (uv1.y + uv2.y) * 0.5);
     let mid = displacement(pl, use_plane, m);
     if !mid.valid {
         return false;
     }
     let d12 = mid.value;
-    if differs(pl, use_plane, uv1, d12, th) || differs(pl, use_plane, uv2, d12, th) {
+    if differs_from(d1, d12, th) || differs_from(d2, d12, th) {
         return true;
     }
     if test == TEST_MAP2P {
@@ -112,20 +128,18 @@ fn map_test_with(test: u32, th: f32, uv1: vec2f, uv2: vec2f, pl: TrianglePlane, 
     }
     let ue = uv1.x - m.x;
     let ve = uv1.y - m.y;
-    if differs(pl, use_plane, vec2f(m.x - ve, m.y + ue), d12, th)
-        || differs(pl, use_plane, vec2f(m.x + ve, m.y - ue), d12, th) {
+    if mirrored_differ(pl, use_plane, vec2f(m.x - ve, m.y + ue), vec2f(m.x + ve, m.y - ue), d12, th, one_inside) {
         return true;
     }
     if test == TEST_MAP4P {
         return false;
     }
-    let signs = array<vec2f, 4>(vec2f(1.0, 1.0), vec2f(1.0, -1.0), vec2f(-1.0, 1.0), vec2f(-1.0, -1.0));
-    for (var k = 0u; k < 4u; k++) {
-        let a = signs[k].x;
-        let b = signs[k].y;
-        let du = 0.5 * (a * ue - b * ve);
-        let dv = 0.5 * (a * ve + b * ue);
-        if differs(pl, use_plane, vec2f(m.x + du, m.y + dv), d12, th) {
+    // d5..d8: (a, b) = (1, ±1) and (-1, ±1), each pair mirrored across the segment.
+    for (var k = 0u; k < 2u; k++) {
+        let a = select(1.0, -1.0, k == 1u);
+        let p = vec2f(m.x + 0.5 * (a * ue - ve), m.y + 0.5 * (a * ve + ue));
+        let q = vec2f(m.x + 0.5 * (a * ue + ve), m.y + 0.5 * (a * ve - ue));
+        if mirrored_differ(pl, use_plane, p, q, d12, th, one_inside) {
             return true;
         }
     }
@@ -135,7 +149,9 @@ fn map_test_with(test: u32, th: f32, uv1: vec2f, uv2: vec2f, pl: TrianglePlane, 
 // The raw-map test of patch `p` (the coarse-edge stage's own test).
 fn map_test(test: u32, p: u32, th: f32, uv1: vec2f, uv2: vec2f) -> bool {
     let unused = TrianglePlane(p, vec2f(0.0), 0.0, vec2f(0.0), vec2f(0.0), vec2f(0.0), 1.0);
-    return map_test_with(test, th, uv1, uv2, unused, false);
+    let d1 = MaybeF32(true, map_read(p, uv1.x, uv1.y));
+    let d2 = MaybeF32(true, map_read(p, uv2.x, uv2.y));
+    return map_test_with(test, th, uv1, uv2, d1, d2, unused, false, false);
 }
 
 // The edge test on uv1 → uv2 (twin of `segment_test`): map tests read the map; the

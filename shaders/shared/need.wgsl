@@ -21,29 +21,41 @@ fn lattice_edge_test(l: Lattice, a: vec2u, b: vec2u) -> bool {
     return segment_test(EDGE_TEST, l.patch_id, params.threshold, lattice_uv(l, ab[0]), lattice_uv(l, ab[1]));
 }
 
-// Whether right triangle t asks to be bisected (twin of `interior_need`).
-fn interior_need(l: Lattice, t: Tri) -> bool {
-    let m = lattice_mid(t.a, t.b);
-    var seg = array<vec2u, 8>(t.a, t.b, t.r, t.a, t.b, t.r, t.r, m);
-    let use_map = EDGE_TEST != TEST_FLAT;
-    var pl: TrianglePlane;
-    if use_map {
-        pl = triangle_plane(l.patch_id, lattice_uv(l, t.r), lattice_uv(l, t.a), lattice_uv(l, t.b));
-    }
-    for (var s = 0u; s < 4u; s++) {
-        let a = seg[2u * s];
-        let b = seg[2u * s + 1u];
-        var yes: bool;
-        if use_map {
-            let ab = canonical_order(l, a, b);
-            yes = map_test_with(EDGE_TEST, params.threshold, lattice_uv(l, ab[0]), lattice_uv(l, ab[1]), pl, true);
-        } else {
-            yes = lattice_edge_test(l, a, b);
-        }
-        if yes {
-            return true;
-        }
-    }
-    return false;
+// One segment of `interior_need` with the displacements at its ends, in canonical order.
+fn segment_need(l: Lattice, pl: TrianglePlane, a: vec2u, b: vec2u, ua: vec2f, ub: vec2f, da: MaybeF32, db: MaybeF32, one_inside: bool) -> bool {
+    let pa = patch_coords(l, a);
+    let pb = patch_coords(l, b);
+    let keep = pa.x < pb.x || (pa.x == pb.x && pa.y <= pb.y);
+    let d1 = MaybeF32(select(db.valid, da.valid, keep), select(db.value, da.value, keep));
+    let d2 = MaybeF32(select(da.valid, db.valid, keep), select(da.value, db.value, keep));
+    return map_test_with(EDGE_TEST, params.threshold, select(ub, ua, keep), select(ua, ub, keep), d1, d2, pl, true, one_inside);
 }
 
+// Whether right triangle t asks to be bisected (twin of `interior_need`). The map is
+// read once per corner and at the hypotenuse midpoint (each the end of two segments, and
+// the corners also fix the plane), where testing segment by segment read them again.
+fn interior_need(l: Lattice, t: Tri) -> bool {
+    let m = lattice_mid(t.a, t.b);
+    if EDGE_TEST == TEST_FLAT {
+        return lattice_edge_test(l, t.a, t.b) || lattice_edge_test(l, t.r, t.a)
+            || lattice_edge_test(l, t.b, t.r) || lattice_edge_test(l, t.r, m);
+    }
+    let p = l.patch_id;
+    let ur = lattice_uv(l, t.r);
+    let ua = lattice_uv(l, t.a);
+    let ub = lattice_uv(l, t.b);
+    let um = lattice_uv(l, m);
+    let raw_r = map_read(p, ur.x, ur.y);
+    let raw_a = map_read(p, ua.x, ua.y);
+    let raw_b = map_read(p, ub.x, ub.y);
+    let pl = triangle_plane(p, ur, ua, ub, raw_r, raw_a, raw_b);
+    let dr = plane_value(pl, ur, raw_r);
+    let da = plane_value(pl, ua, raw_a);
+    let db = plane_value(pl, ub, raw_b);
+    let dm = plane_value(pl, um, map_read(p, um.x, um.y));
+    // The hypotenuse and the legs are sides of t; the median r – m is not.
+    return segment_need(l, pl, t.a, t.b, ua, ub, da, db, true)
+        || segment_need(l, pl, t.r, t.a, ur, ua, dr, da, true)
+        || segment_need(l, pl, t.b, t.r, ub, ur, db, dr, true)
+        || segment_need(l, pl, t.r, m, ur, um, dr, dm, false);
+}

@@ -96,40 +96,65 @@ pub fn map_test(
     uv1: [f32; 2],
     uv2: [f32; 2],
 ) -> bool {
-    map_test_with(test, th, uv1, uv2, |u, v| Some(map_read(map, u, v)))
+    let read = |uv: [f32; 2]| Some(map_read(map, uv[0], uv[1]));
+    map_test_with(
+        test,
+        th,
+        [uv1, uv2],
+        [read(uv1), read(uv2)],
+        false,
+        |u, v| Some(map_read(map, u, v)),
+    )
 }
 
-/// The map test with the displacement read through `d` (SPEC §1, paper Eq. 1–3); a
-/// point where `d` has no value (`None`) takes no part.
+/// The map test (SPEC §1, paper Eq. 1–3) on the segment `uv[0] → uv[1]`, whose ends have
+/// the displacements `ends` (read once by the caller: an end is shared by several
+/// segments), reading the others through `d`; a point where `d` has no value (`None`)
+/// takes no part.
+///
+/// `one_inside`: the segment is a side of the region where `d` has values, so of two
+/// points mirrored across it at most one has a value (the other lies half the side's
+/// length beyond it) and only that one is asked for: the GPU reads one texel pair where
+/// it would read two (it runs both sides of a branch).
 pub fn map_test_with(
     test: EdgeTest,
     th: f32,
-    uv1: [f32; 2],
-    uv2: [f32; 2],
+    uv: [[f32; 2]; 2],
+    ends: [Option<f32>; 2],
+    one_inside: bool,
     d: impl Fn(f32, f32) -> Option<f32>,
 ) -> bool {
+    let [uv1, uv2] = uv;
     let m = [(uv1[0] + uv2[0]) * 0.5, (uv1[1] + uv2[1]) * 0.5];
     let Some(d12) = d(m[0], m[1]) else {
         return false;
     };
-    let differs = |u: f32, v: f32| d(u, v).is_some_and(|x| (x - d12).abs() > th);
-    if differs(uv1[0], uv1[1]) || differs(uv2[0], uv2[1]) {
+    let differs_from = |x: Option<f32>| x.is_some_and(|x| (x - d12).abs() > th);
+    if differs_from(ends[0]) || differs_from(ends[1]) {
         return true;
     }
     if test == EdgeTest::Map2p {
         return false;
     }
+    let mirrored_differ = |p: [f32; 2], q: [f32; 2]| {
+        if one_inside {
+            differs_from(d(p[0], p[1]).or_else(|| d(q[0], q[1])))
+        } else {
+            differs_from(d(p[0], p[1])) || differs_from(d(q[0], q[1]))
+        }
+    };
     let (ue, ve) = (uv1[0] - m[0], uv1[1] - m[1]);
-    if differs(m[0] - ve, m[1] + ue) || differs(m[0] + ve, m[1] - ue) {
+    if mirrored_differ([m[0] - ve, m[1] + ue], [m[0] + ve, m[1] - ue]) {
         return true;
     }
     if test == EdgeTest::Map4p {
         return false;
     }
-    for (a, b) in [(1.0, 1.0), (1.0, -1.0), (-1.0, 1.0), (-1.0, -1.0)] {
-        let du = 0.5 * (a * ue - b * ve);
-        let dv = 0.5 * (a * ve + b * ue);
-        if differs(m[0] + du, m[1] + dv) {
+    // d5..d8: (a, b) = (1, ±1) and (-1, ±1), each pair mirrored across the segment.
+    for a in [1.0, -1.0] {
+        let p = [m[0] + 0.5 * (a * ue - ve), m[1] + 0.5 * (a * ve + ue)];
+        let q = [m[0] + 0.5 * (a * ue + ve), m[1] + 0.5 * (a * ve - ue)];
+        if mirrored_differ(p, q) {
             return true;
         }
     }

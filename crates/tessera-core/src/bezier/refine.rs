@@ -79,29 +79,49 @@ pub fn lattice_edge_test(inp: &TestInputs, l: &Lattice, a: Lp, b: Lp) -> (bool, 
 /// slope of the surface against the coarse plane, which grows toward coarse vertices
 /// and over-refined them (measured: 2–3× uniform's triangles on the teapot).
 pub fn interior_need(inp: &TestInputs, l: &Lattice, t: [Lp; 3]) -> (bool, u32) {
-    let mut evals = 0;
-    let m = lattice_mid(t[1], t[2]);
-    let segments = [(t[1], t[2]), (t[0], t[1]), (t[2], t[0]), (t[0], m)];
-    let plane = (inp.test != EdgeTest::Flat).then(|| TrianglePlane::new(inp, l, t));
-    for (a, b) in segments {
-        let yes = match &plane {
-            Some(plane) => {
-                let (a, b) = canonical(l, a, b);
-                map_test_with(inp.test, inp.threshold, l.uv(a), l.uv(b), |u, v| {
-                    plane.displacement(inp.map, u, v)
-                })
+    let [r, a, b] = t;
+    let m = lattice_mid(a, b);
+    if inp.test == EdgeTest::Flat {
+        let mut evals = 0;
+        for (p, q) in [(a, b), (r, a), (b, r), (r, m)] {
+            let (yes, e) = lattice_edge_test(inp, l, p, q);
+            evals += e;
+            if yes {
+                return (true, evals);
             }
-            None => {
-                let (yes, e) = lattice_edge_test(inp, l, a, b);
-                evals += e;
-                yes
-            }
-        };
-        if yes {
-            return (true, evals);
         }
+        return (false, evals);
     }
-    (false, evals)
+    // The map is read once per corner and at the hypotenuse midpoint: each is the end of
+    // two segments, and the corners also fix the plane.
+    let [ur, ua, ub, um] = [r, a, b, m].map(|p| l.uv(p));
+    let raw = [ur, ua, ub].map(|p| map_read(inp.map, p[0], p[1]));
+    let plane = TrianglePlane::new([ur, ua, ub], raw);
+    let [dr, da, db] = [(ur, raw[0]), (ua, raw[1]), (ub, raw[2])].map(|(p, x)| plane.value(p, x));
+    let dm = plane.value(um, map_read(inp.map, um[0], um[1]));
+    // The hypotenuse and the legs are sides of t; the median r – m is not.
+    let segments = [
+        ((a, ua, da), (b, ub, db), true),
+        ((r, ur, dr), (a, ua, da), true),
+        ((b, ub, db), (r, ur, dr), true),
+        ((r, ur, dr), (m, um, dm), false),
+    ];
+    let yes = segments.into_iter().any(|(p, q, one_inside)| {
+        let ((_, u1, d1), (_, u2, d2)) = if l.patch_coords(p.0) <= l.patch_coords(q.0) {
+            (p, q)
+        } else {
+            (q, p)
+        };
+        map_test_with(
+            inp.test,
+            inp.threshold,
+            [u1, u2],
+            [d1, d2],
+            one_inside,
+            |u, v| plane.displacement(inp.map, u, v),
+        )
+    });
+    (yes, 0)
 }
 
 /// The affine function of `(u, v)` through the map values at a triangle's corners.
@@ -117,9 +137,10 @@ struct TrianglePlane {
 }
 
 impl TrianglePlane {
-    fn new(inp: &TestInputs, l: &Lattice, t: [Lp; 3]) -> Self {
-        let [p0, p1, p2] = t.map(|p| l.uv(p));
-        let [d0, d1, d2] = [p0, p1, p2].map(|p| map_read(inp.map, p[0], p[1]));
+    /// The plane through the map values `d` at the corners `p`.
+    fn new(p: [[f32; 2]; 3], d: [f32; 3]) -> Self {
+        let [p0, p1, p2] = p;
+        let [d0, d1, d2] = d;
         let (e1, e2) = (
             [p1[0] - p0[0], p1[1] - p0[1]],
             [p2[0] - p0[0], p2[1] - p0[1]],
@@ -141,18 +162,30 @@ impl TrianglePlane {
         }
     }
 
-    /// The map's displacement from the triangle's plane at `(u, v)`; `None` outside the
-    /// triangle, where the plane is an extrapolation and says nothing about this triangle
-    /// (a Map4p/Map8p point across an edge falls there).
-    fn displacement(&self, map: &crate::gpu_types::DisplacementMap, u: f32, v: f32) -> Option<f32> {
-        let (du, dv) = (u - self.origin[0], v - self.origin[1]);
+    /// Whether `p` is in the triangle (with a little slack for rounding).
+    fn inside(&self, p: [f32; 2]) -> bool {
+        let (du, dv) = (p[0] - self.origin[0], p[1] - self.origin[1]);
         let s = (du * self.e2[1] - dv * self.e2[0]) / self.det;
         let t = (self.e1[0] * dv - self.e1[1] * du) / self.det;
         const SLACK: f32 = 1e-4;
-        if s < -SLACK || t < -SLACK || s + t > 1.0 + SLACK {
+        !(s < -SLACK || t < -SLACK || s + t > 1.0 + SLACK)
+    }
+
+    /// The displacement from the plane at `p`, where the map value is `raw`; `None`
+    /// outside the triangle, where the plane is an extrapolation and says nothing about
+    /// this triangle (a Map4p/Map8p point across an edge falls there).
+    fn value(&self, p: [f32; 2], raw: f32) -> Option<f32> {
+        let (du, dv) = (p[0] - self.origin[0], p[1] - self.origin[1]);
+        self.inside(p)
+            .then(|| raw - (self.d0 + self.grad[0] * du + self.grad[1] * dv))
+    }
+
+    /// [`value`](Self::value) reading the map, only inside the triangle.
+    fn displacement(&self, map: &crate::gpu_types::DisplacementMap, u: f32, v: f32) -> Option<f32> {
+        if !self.inside([u, v]) {
             return None;
         }
-        Some(map_read(map, u, v) - (self.d0 + self.grad[0] * du + self.grad[1] * dv))
+        self.value([u, v], map_read(map, u, v))
     }
 }
 
