@@ -13,7 +13,7 @@
 @group(0) @binding(2) var maps: texture_2d<f32>;
 @group(0) @binding(3) var<storage, read> topo: array<GpuPatchTopo>;
 @group(0) @binding(4) var<storage, read> curves: array<GpuCurve>;
-@group(0) @binding(6) var<storage, read> edge_bits: array<u32>;
+@group(0) @binding(6) var<storage, read> edge_bits: array<vec4u>;
 @group(0) @binding(7) var<storage, read> counts: array<u32>;
 @group(0) @binding(8) var<storage, read> scratch: array<u32>;
 @group(0) @binding(9) var<storage, read_write> records: array<VertexRecord>;
@@ -34,12 +34,17 @@ fn inner_rank(c: TriCtx, i: u32) -> u32 {
     return word_below[i / 32u] + countOneBits(scratch[c.points_base + i / 32u] & mask);
 }
 
+// The triangle's side edges and the first vertex of each, read once (see `main`).
+var<private> side_edges: vec3u;
+var<private> side_first: vec3u;
+
 fn global_index(v: VRef) -> u32 {
     if v.kind == VREF_COARSE {
         return v.a;
     }
     if v.kind == VREF_EDGE {
-        return params.coarse_vertices + counts[v.a] + v.b;
+        let first = select(select(side_first.z, side_first.y, v.a == side_edges.y), side_first.x, v.a == side_edges.x);
+        return first + v.b;
     }
     return inner_base + v.a;
 }
@@ -64,6 +69,8 @@ fn main(@builtin(global_invocation_id) gid: vec3u, @builtin(num_workgroups) grou
     let e = params.coarse_edges;
     let tris = params.coarse_triangles;
     inner_base = params.coarse_vertices + counts[e + t];
+    side_edges = c.side_edges;
+    side_first = params.coarse_vertices + vec3u(counts[side_edges.x], counts[side_edges.y], counts[side_edges.z]);
     var next = inner_base;
     for (var w = 0u; w < params.points_words; w++) {
         word_below[w] = next - inner_base;

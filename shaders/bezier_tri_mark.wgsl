@@ -15,7 +15,7 @@
 @group(0) @binding(2) var maps: texture_2d<f32>;
 @group(0) @binding(3) var<storage, read> topo: array<GpuPatchTopo>;
 @group(0) @binding(4) var<storage, read> curves: array<GpuCurve>;
-@group(0) @binding(6) var<storage, read> edge_bits: array<u32>;
+@group(0) @binding(6) var<storage, read> edge_bits: array<vec4u>;
 @group(0) @binding(7) var<storage, read_write> counts: array<u32>;
 @group(0) @binding(14) var<storage, read_write> evaluations: atomic<u32>;
 @group(0) @binding(8) var<storage, read_write> scratch: array<u32>;

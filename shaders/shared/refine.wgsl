@@ -1,23 +1,46 @@
 // Refinement of one coarse triangle by right-triangle bisection on its lattice.
 // Twin of `tessera_core::bezier::refine` (read that file for the why).
-// Reads `edge_bits` (array<u32>, EDGE_BIT_WORDS per coarse edge) and `scratch`
+// Reads `edge_bits` (array<vec4u>, EDGE_BIT_WORDS / 4 per coarse edge) and `scratch`
 // (array<u32>, points then pole words per coarse triangle). Kernels that include this
 // file define the sink: `fn sink_triangle(a: VRef, b: VRef, c: VRef)` and
 // `fn inner_rank(ctx: TriCtx, i: u32) -> u32`.
 
-fn edge_bit(e: u32, k: u32) -> bool {
-    return ((edge_bits[e * EDGE_BIT_WORDS + k / 32u] >> (k % 32u)) & 1u) != 0u;
+// A coarse edge's bit set of inserted points (EDGE_BIT_WORDS = 8 words), held in two
+// vectors: a triangle loads its sides' sets once, and tests and ranks points without
+// memory accesses (each a scalar loop over the lanes on a CPU device).
+const_assert EDGE_BIT_WORDS == 8u;
+
+struct EdgeSet {
+    lo: vec4u,
+    hi: vec4u,
 }
 
-// Inserted points of edge e before position k.
-fn edge_bit_rank(e: u32, k: u32) -> u32 {
-    let w = k / 32u;
-    var below = 0u;
-    for (var i = 0u; i < w; i++) {
-        below += countOneBits(edge_bits[e * EDGE_BIT_WORDS + i]);
-    }
+fn edge_set(e: u32) -> EdgeSet {
+    return EdgeSet(edge_bits[2u * e], edge_bits[2u * e + 1u]);
+}
+
+fn set_word(b: EdgeSet, w: u32) -> u32 {
+    let v = select(b.hi, b.lo, w < 4u);
+    let i = w & 3u;
+    return select(select(select(v.w, v.z, i == 2u), v.y, i == 1u), v.x, i == 0u);
+}
+
+fn set_has(b: EdgeSet, k: u32) -> bool {
+    return ((set_word(b, k / 32u) >> (k % 32u)) & 1u) != 0u;
+}
+
+// Inserted points before position k.
+fn set_rank(b: EdgeSet, k: u32) -> u32 {
+    let w = vec4u(k / 32u);
+    let lanes = vec4u(0u, 1u, 2u, 3u);
+    let below = select(vec4u(0u), countOneBits(b.lo), lanes < w)
+        + select(vec4u(0u), countOneBits(b.hi), lanes + 4u < w);
     let mask = (1u << (k % 32u)) - 1u;
-    return below + countOneBits(edge_bits[e * EDGE_BIT_WORDS + w] & mask);
+    return dot(below, vec4u(1u)) + countOneBits(set_word(b, k / 32u) & mask);
+}
+
+fn set_count(b: EdgeSet) -> u32 {
+    return dot(countOneBits(b.lo) + countOneBits(b.hi), vec4u(1u));
 }
 
 // What the triangle stages of one coarse triangle read (twin of `TriContext`).
@@ -30,6 +53,10 @@ struct TriCtx {
     sides_forward: vec3<bool>,
     sides_collapsed: vec3<bool>,
     corner_ids: vec3u,
+    // The sides' edge sets.
+    set0: EdgeSet,
+    set1: EdgeSet,
+    set2: EdgeSet,
     flipped: bool,
     // Offsets of this triangle's lattice points and pole points in `scratch`.
     points_base: u32,
@@ -48,6 +75,9 @@ fn tri_ctx(t: u32) -> TriCtx {
     c.sides_forward = vec3<bool>(r0.forward, r1.forward, r2.forward);
     c.sides_collapsed = vec3<bool>(edge_collapsed(r0.edge), edge_collapsed(r1.edge), edge_collapsed(r2.edge));
     c.corner_ids = vec3u(coarse_vertex(p, c.l.g0), coarse_vertex(p, c.l.g1), coarse_vertex(p, c.l.g2));
+    c.set0 = edge_set(r0.edge);
+    c.set1 = edge_set(r1.edge);
+    c.set2 = edge_set(r2.edge);
     c.flipped = patch_flipped(p);
     c.points_base = t * (params.points_words + params.pole_words);
     c.pole_base = c.points_base + params.points_words;
@@ -70,6 +100,12 @@ fn side_collapsed(c: TriCtx, k: u32) -> bool {
     return pick_bool(c.sides_collapsed, k);
 }
 
+fn side_set(c: TriCtx, k: u32) -> EdgeSet {
+    let lo = select(select(c.set2.lo, c.set1.lo, k == 1u), c.set0.lo, k == 0u);
+    let hi = select(select(c.set2.hi, c.set1.hi, k == 1u), c.set0.hi, k == 0u);
+    return EdgeSet(lo, hi);
+}
+
 fn corner_id(c: TriCtx, k: u32) -> u32 {
     return pick(c.corner_ids, k);
 }
@@ -82,7 +118,7 @@ fn side_canonical(c: TriCtx, k: u32, f: u32) -> u32 {
 }
 
 fn side_point(c: TriCtx, k: u32, f: u32) -> bool {
-    return edge_bit(tri_side_edge(c, k), side_canonical(c, k, f));
+    return set_has(side_set(c, k), side_canonical(c, k, f));
 }
 
 fn pole_index(l: Lattice, k: u32, f: u32) -> u32 {
@@ -133,7 +169,7 @@ fn vertex_ref(c: TriCtx, p: vec2u) -> VRef {
             return VRef(VREF_COARSE, corner_id(c, pl.k), 0u);
         }
         let e = tri_side_edge(c, pl.k);
-        return VRef(VREF_EDGE, e, edge_bit_rank(e, side_canonical(c, pl.k, pl.f)));
+        return VRef(VREF_EDGE, e, set_rank(side_set(c, pl.k), side_canonical(c, pl.k, pl.f)));
     }
     return VRef(VREF_INNER, inner_rank(c, pl.f), 0u);
 }
@@ -167,15 +203,6 @@ fn inner_count(c: TriCtx) -> u32 {
     return n;
 }
 
-// Inserted points of edge e.
-fn edge_point_count(e: u32) -> u32 {
-    var n = 0u;
-    for (var w = 0u; w < EDGE_BIT_WORDS; w++) {
-        n += countOneBits(edge_bits[e * EDGE_BIT_WORDS + w]);
-    }
-    return n;
-}
-
 const NO_COUNT: u32 = 0xffffffffu;
 
 // The triangle count from the vertex counts alone, NO_COUNT where the formula does not
@@ -194,7 +221,7 @@ fn euler_count(c: TriCtx) -> u32 {
             count -= 1u;
             applies = applies && a == b && other != a;
         } else {
-            count += edge_point_count(tri_side_edge(c, k));
+            count += set_count(side_set(c, k));
             applies = applies && a != b;
         }
     }
