@@ -13,35 +13,30 @@
 @group(0) @binding(2) var maps: texture_2d<f32>;
 @group(0) @binding(3) var<storage, read> topo: array<GpuPatchTopo>;
 @group(0) @binding(4) var<storage, read> curves: array<GpuCurve>;
-@group(0) @binding(6) var<storage, read_write> edge_bits: array<u32>;
+@group(0) @binding(6) var<storage, read_write> edge_bits: array<vec4u>;
 @group(0) @binding(7) var<storage, read_write> counts: array<u32>;
 @group(0) @binding(14) var<storage, read_write> evaluations: atomic<u32>;
 
-struct Piece {
-    lo: u32,
-    hi: u32,
-    level: u32,
+// Whether a triangle beside the edge asks for piece [lo, hi] to be split.
+fn side_need(side: EdgeSide, lo: u32, hi: u32) -> bool {
+    let l = lattice_new(side.tri, params.max_depth);
+    // Dividing by DYADIC_SCALE / l.n, a power of two: a shift, not an integer
+    // division (a scalar loop over the lanes on a CPU device).
+    let shift = countTrailingZeros(DYADIC_SCALE) - l.depth;
+    var f0 = lo >> shift;
+    var f1 = hi >> shift;
+    if !side.forward {
+        f0 = (DYADIC_SCALE - hi) >> shift;
+        f1 = (DYADIC_SCALE - lo) >> shift;
+    }
+    return interior_need(l, triangle_on_side(l, side.k, f0, f1));
 }
 
-// Whether a triangle beside the edge asks for piece [lo, hi] to be split.
+// Unrolled over the (at most two) sides: an array indexed by a loop counter is a memory
+// access per lane on a CPU device.
 fn sides_need(sides: EdgeSides, lo: u32, hi: u32) -> bool {
-    for (var s = 0u; s < sides.count; s++) {
-        let side = sides.s[s];
-        let l = lattice_new(side.tri, params.max_depth);
-        // Dividing by DYADIC_SCALE / l.n, a power of two: a shift, not an integer
-        // division (a scalar loop over the lanes on a CPU device).
-        let shift = countTrailingZeros(DYADIC_SCALE) - l.depth;
-        var f0 = lo >> shift;
-        var f1 = hi >> shift;
-        if !side.forward {
-            f0 = (DYADIC_SCALE - hi) >> shift;
-            f1 = (DYADIC_SCALE - lo) >> shift;
-        }
-        if interior_need(l, triangle_on_side(l, side.k, f0, f1)) {
-            return true;
-        }
-    }
-    return false;
+    return (sides.count > 0u && side_need(sides.s[0], lo, hi))
+        || (sides.count > 1u && side_need(sides.s[1], lo, hi));
 }
 
 @compute @workgroup_size(64)
@@ -50,45 +45,56 @@ fn main(@builtin(global_invocation_id) gid: vec3u, @builtin(num_workgroups) grou
     if e >= params.coarse_edges {
         return;
     }
-    var bits: array<u32, EDGE_BIT_WORDS>;
+    var bits = EdgeSet(vec4u(0u), vec4u(0u));
     let depth = min(params.max_depth, MAX_DEPTH_LIMIT);
     if !edge_collapsed(e) && depth > 0u {
         let ends = edge_endpoints(e);
         let sides = coarse_edge_sides(e);
-        // The flat test measures every chord itself; a map test asks the owner's map
-        // about the whole coarse edge only (see `edge_decide`).
-        let own_test_levels = select(1u, 0xffffffffu, EDGE_TEST == TEST_FLAT);
-        var stack: array<Piece, 12>;
-        var top = 1u;
-        stack[0] = Piece(0u, DYADIC_SCALE, 0u);
-        while top > 0u {
-            top -= 1u;
-            let piece = stack[top];
-            let mid = (piece.lo + piece.hi) / 2u;
-            var split = false;
-            if piece.level < own_test_levels {
+        // A map test asks the owner's map about the whole coarse edge only (see
+        // `edge_decide`): asked once here, not masked on every piece. The flat test
+        // measures every piece itself.
+        var whole = false;
+        if EDGE_TEST != TEST_FLAT {
+            whole = segment_test(EDGE_TEST, ends.patch_id, params.threshold,
+                lerp_uv(ends.uv0, ends.uv1, 0u), lerp_uv(ends.uv0, ends.uv1, DYADIC_SCALE));
+        }
+        // Depth-first over the dyadic pieces [lo, lo + width] without a stack (twin of
+        // `subdivide_segment_with`): a piece is a second child when lo / width is odd.
+        let log_scale = countTrailingZeros(DYADIC_SCALE);
+        var lo = 0u;
+        var level = 0u;
+        loop {
+            let width = DYADIC_SCALE >> level;
+            let hi = lo + width;
+            let mid = lo + width / 2u;
+            var split: bool;
+            if EDGE_TEST == TEST_FLAT {
                 split = segment_test(EDGE_TEST, ends.patch_id, params.threshold,
-                    lerp_uv(ends.uv0, ends.uv1, piece.lo), lerp_uv(ends.uv0, ends.uv1, piece.hi));
+                    lerp_uv(ends.uv0, ends.uv1, lo), lerp_uv(ends.uv0, ends.uv1, hi));
+            } else {
+                split = level == 0u && whole;
             }
-            if !split {
-                split = sides_need(sides, piece.lo, piece.hi);
-            }
+            split = split || sides_need(sides, lo, hi);
             if split {
-                bits[mid / 32u] |= 1u << (mid % 32u);
-                if piece.level + 1u < depth {
-                    stack[top] = Piece(mid, piece.hi, piece.level + 1u);
-                    stack[top + 1u] = Piece(piece.lo, mid, piece.level + 1u);
-                    top += 2u;
+                bits = set_insert(bits, mid);
+                if level + 1u < depth {
+                    level += 1u;
+                    continue;
                 }
             }
+            while level > 0u && ((lo >> (log_scale - level)) & 1u) != 0u {
+                lo -= DYADIC_SCALE >> level;
+                level -= 1u;
+            }
+            if level == 0u {
+                break;
+            }
+            lo += DYADIC_SCALE >> level;
         }
     }
-    var count = 0u;
-    for (var w = 0u; w < EDGE_BIT_WORDS; w++) {
-        edge_bits[e * EDGE_BIT_WORDS + w] = bits[w];
-        count += countOneBits(bits[w]);
-    }
-    counts[e] = count;
+    edge_bits[2u * e] = bits.lo;
+    edge_bits[2u * e + 1u] = bits.hi;
+    counts[e] = set_count(bits);
     if flat_evaluations > 0u {
         atomicAdd(&evaluations, flat_evaluations);
     }

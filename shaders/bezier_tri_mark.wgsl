@@ -34,25 +34,23 @@ fn inner_rank(c: TriCtx, i: u32) -> u32 {
 // Stage "mark": the bisection tree as the points it makes (twin of `tri_mark`).
 // The triangle's scratch words must be zero.
 fn tri_mark(c: TriCtx) {
-    var stack: array<TriLevel, STACK_MAX>;
-    var top = 1u;
-    stack[0] = TriLevel(lattice_root(c.l), 0u);
-    while top > 0u {
-        top -= 1u;
-        let item = stack[top];
-        if !splits(c, item.t, item.level) {
-            continue;
+    var w = walk_start(lattice_root(c.l));
+    loop {
+        if splits(c, w.t, w.level) {
+            let pl = place(c.l, lattice_mid(w.t.a, w.t.b));
+            if pl.kind == PLACE_INSIDE {
+                scratch[c.points_base + pl.f / 32u] |= 1u << (pl.f % 32u);
+            } else if pl.kind == PLACE_SIDE && side_collapsed(c, pl.k) {
+                let i = pole_index(c.l, pl.k, pl.f);
+                scratch[c.pole_base + i / 32u] |= 1u << (i % 32u);
+            }
+            w = walk_down(w);
+        } else {
+            w = walk_next(w);
+            if w.done {
+                break;
+            }
         }
-        let pl = place(c.l, lattice_mid(item.t.a, item.t.b));
-        if pl.kind == PLACE_INSIDE {
-            scratch[c.points_base + pl.f / 32u] |= 1u << (pl.f % 32u);
-        } else if pl.kind == PLACE_SIDE && side_collapsed(c, pl.k) {
-            let i = pole_index(c.l, pl.k, pl.f);
-            scratch[c.pole_base + i / 32u] |= 1u << (i % 32u);
-        }
-        stack[top] = TriLevel(bisect_first(item.t), item.level + 1u);
-        stack[top + 1u] = TriLevel(bisect_second(item.t), item.level + 1u);
-        top += 2u;
     }
 }
 

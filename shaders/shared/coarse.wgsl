@@ -217,3 +217,45 @@ fn lerp_uv(a: vec2f, b: vec2f, k: u32) -> vec2f {
     let f = f32(k) * (1.0 / f32(DYADIC_SCALE));
     return vec2f(a.x + (b.x - a.x) * f, a.y + (b.y - a.y) * f);
 }
+
+// A coarse edge's bit set of inserted points (EDGE_BIT_WORDS = 8 words), held in two
+// vectors: the edge stage builds it and a triangle loads its sides' sets once, and
+// both set, test and rank points without memory accesses (an array indexed per lane,
+// or a storage access, is a scalar loop over the lanes on a CPU device).
+const_assert EDGE_BIT_WORDS == 8u;
+
+struct EdgeSet {
+    lo: vec4u,
+    hi: vec4u,
+}
+
+fn set_word(b: EdgeSet, w: u32) -> u32 {
+    let v = select(b.hi, b.lo, w < 4u);
+    let i = w & 3u;
+    return select(select(select(v.w, v.z, i == 2u), v.y, i == 1u), v.x, i == 0u);
+}
+
+fn set_has(b: EdgeSet, k: u32) -> bool {
+    return ((set_word(b, k / 32u) >> (k % 32u)) & 1u) != 0u;
+}
+
+// Inserted points before position k.
+fn set_rank(b: EdgeSet, k: u32) -> u32 {
+    let w = vec4u(k / 32u);
+    let lanes = vec4u(0u, 1u, 2u, 3u);
+    let below = select(vec4u(0u), countOneBits(b.lo), lanes < w)
+        + select(vec4u(0u), countOneBits(b.hi), lanes + 4u < w);
+    let mask = (1u << (k % 32u)) - 1u;
+    return dot(below, vec4u(1u)) + countOneBits(set_word(b, k / 32u) & mask);
+}
+
+fn set_count(b: EdgeSet) -> u32 {
+    return dot(countOneBits(b.lo) + countOneBits(b.hi), vec4u(1u));
+}
+
+fn set_insert(b: EdgeSet, k: u32) -> EdgeSet {
+    let w = vec4u(k / 32u);
+    let bit = vec4u(1u << (k % 32u));
+    let lanes = vec4u(0u, 1u, 2u, 3u);
+    return EdgeSet(b.lo | select(vec4u(0u), bit, lanes == w), b.hi | select(vec4u(0u), bit, lanes + 4u == w));
+}

@@ -172,6 +172,53 @@ fn bisect_second(t: Tri) -> Tri {
     return Tri(lattice_mid(t.a, t.b), t.r, t.a);
 }
 
+// The parent of a second child (m, r, a) is (r, a, b) with b = 2m − a.
+fn parent_of_second(c: Tri) -> Tri {
+    return Tri(c.a, c.b, 2u * c.r - c.b);
+}
+
+// The second child beside a first child (m, b, r): (m, r, a) with a = 2m − b.
+fn sibling_of_first(c: Tri) -> Tri {
+    return Tri(c.r, c.b, 2u * c.r - c.a);
+}
+
+// A depth-first walk of a bisection tree without a stack (twin of `TreeWalk`): a
+// parent is recomputed from its child, and bit i of `path` says whether the node at
+// level i + 1 is a second child. A stack is an array indexed per lane, a memory access
+// per lane and word on a CPU device.
+struct TreeWalk {
+    t: Tri,
+    level: u32,
+    path: u32,
+    done: bool,
+}
+
+fn walk_start(root: Tri) -> TreeWalk {
+    return TreeWalk(root, 0u, 0u, false);
+}
+
+// To the first child of the current node.
+fn walk_down(w: TreeWalk) -> TreeWalk {
+    return TreeWalk(bisect_first(w.t), w.level + 1u, w.path & ~(1u << w.level), false);
+}
+
+// Past the current node's subtree, to the next node in depth-first order (`done` when
+// there is none).
+fn walk_next(w0: TreeWalk) -> TreeWalk {
+    var w = w0;
+    while w.level > 0u && ((w.path >> (w.level - 1u)) & 1u) != 0u {
+        w.t = parent_of_second(w.t);
+        w.level -= 1u;
+    }
+    if w.level == 0u {
+        w.done = true;
+        return w;
+    }
+    w.t = sibling_of_first(w.t);
+    w.path |= 1u << (w.level - 1u);
+    return w;
+}
+
 fn points_words(depth: u32) -> u32 {
     let n = 1u << depth;
     return ((n + 1u) * (n + 2u) / 2u + 31u) / 32u;

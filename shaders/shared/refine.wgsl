@@ -5,42 +5,9 @@
 // file define the sink: `fn sink_triangle(a: VRef, b: VRef, c: VRef)` and
 // `fn inner_rank(ctx: TriCtx, i: u32) -> u32`.
 
-// A coarse edge's bit set of inserted points (EDGE_BIT_WORDS = 8 words), held in two
-// vectors: a triangle loads its sides' sets once, and tests and ranks points without
-// memory accesses (each a scalar loop over the lanes on a CPU device).
-const_assert EDGE_BIT_WORDS == 8u;
-
-struct EdgeSet {
-    lo: vec4u,
-    hi: vec4u,
-}
-
+// A side's set, loaded once per coarse triangle (`EdgeSet` is in coarse.wgsl).
 fn edge_set(e: u32) -> EdgeSet {
     return EdgeSet(edge_bits[2u * e], edge_bits[2u * e + 1u]);
-}
-
-fn set_word(b: EdgeSet, w: u32) -> u32 {
-    let v = select(b.hi, b.lo, w < 4u);
-    let i = w & 3u;
-    return select(select(select(v.w, v.z, i == 2u), v.y, i == 1u), v.x, i == 0u);
-}
-
-fn set_has(b: EdgeSet, k: u32) -> bool {
-    return ((set_word(b, k / 32u) >> (k % 32u)) & 1u) != 0u;
-}
-
-// Inserted points before position k.
-fn set_rank(b: EdgeSet, k: u32) -> u32 {
-    let w = vec4u(k / 32u);
-    let lanes = vec4u(0u, 1u, 2u, 3u);
-    let below = select(vec4u(0u), countOneBits(b.lo), lanes < w)
-        + select(vec4u(0u), countOneBits(b.hi), lanes + 4u < w);
-    let mask = (1u << (k % 32u)) - 1u;
-    return dot(below, vec4u(1u)) + countOneBits(set_word(b, k / 32u) & mask);
-}
-
-fn set_count(b: EdgeSet) -> u32 {
-    return dot(countOneBits(b.lo) + countOneBits(b.hi), vec4u(1u));
 }
 
 // What the triangle stages of one coarse triangle read (twin of `TriContext`).
@@ -186,14 +153,6 @@ fn splits(c: TriCtx, t: Tri, level: u32) -> bool {
     }
     return interior_need(c.l, t);
 }
-
-struct TriLevel {
-    t: Tri,
-    level: u32,
-}
-
-// Deepest stack of a depth-first bisection: one entry per level plus one.
-const STACK_MAX: u32 = 2u * MAX_DEPTH_LIMIT + 2u;
 
 fn inner_count(c: TriCtx) -> u32 {
     var n = 0u;
@@ -401,30 +360,16 @@ fn best_ear(c: TriCtx) -> u32 {
 // leaf: a SIMD device runs every statement of a loop body on every step, masked.
 fn tri_triangles(c: TriCtx) {
     let max_level = 2u * c.l.depth;
-    var stack: array<TriLevel, STACK_MAX>;
-    var top = 1u;
-    stack[0] = TriLevel(lattice_root(c.l), 0u);
+    var w = walk_start(lattice_root(c.l));
     loop {
-        var leaf = false;
-        var t: Tri;
-        while top > 0u {
-            top -= 1u;
-            let item = stack[top];
-            if item.level < max_level && exists(c, lattice_mid(item.t.a, item.t.b)) {
-                // Reversed push: the first child is visited first.
-                stack[top] = TriLevel(bisect_second(item.t), item.level + 1u);
-                stack[top + 1u] = TriLevel(bisect_first(item.t), item.level + 1u);
-                top += 2u;
-            } else {
-                t = item.t;
-                leaf = true;
-                break;
-            }
+        while w.level < max_level && exists(c, lattice_mid(w.t.a, w.t.b)) {
+            w = walk_down(w);
         }
-        if !leaf {
+        leaf_polygon(c, w.t);
+        clip_ears(c);
+        w = walk_next(w);
+        if w.done {
             break;
         }
-        leaf_polygon(c, t);
-        clip_ears(c);
     }
 }

@@ -189,13 +189,15 @@ pub fn subdivide_segment_with(
     let mut bits = [0u32; EDGE_BIT_WORDS];
     let mut evals = 0;
     let depth = inp.max_depth.min(MAX_DEPTH_LIMIT);
-    // Explicit stack (the shader has no recursion): a piece [lo, hi] and its level.
-    let mut stack: Vec<(u32, u32, u32)> = Vec::with_capacity(MAX_DEPTH_LIMIT as usize + 1);
-    if depth > 0 {
-        stack.push((0, DYADIC_SCALE, 0));
+    if depth == 0 {
+        return (bits, evals);
     }
-    while let Some((lo, hi, level)) = stack.pop() {
-        let mid = (lo + hi) / 2;
+    // Depth-first over the dyadic pieces [lo, lo + width] without a stack, as the shader
+    // walks them: a piece is a second child when lo / width is odd.
+    let (mut lo, mut level) = (0u32, 0u32);
+    loop {
+        let width = DYADIC_SCALE >> level;
+        let (hi, mid) = (lo + width, lo + width / 2);
         let (mut split, e) = if level >= own_test_levels {
             (false, 0)
         } else {
@@ -210,12 +212,19 @@ pub fn subdivide_segment_with(
         if split {
             bits[(mid / 32) as usize] |= 1 << (mid % 32);
             if level + 1 < depth {
-                stack.push((mid, hi, level + 1));
-                stack.push((lo, mid, level + 1));
+                level += 1;
+                continue;
             }
         }
+        while level > 0 && (lo / (DYADIC_SCALE >> level)) % 2 == 1 {
+            lo -= DYADIC_SCALE >> level;
+            level -= 1;
+        }
+        if level == 0 {
+            return (bits, evals);
+        }
+        lo += DYADIC_SCALE >> level;
     }
-    (bits, evals)
 }
 
 /// The edge test on the segment `uv1 → uv2` (SPEC §1): the map tests read the map; the

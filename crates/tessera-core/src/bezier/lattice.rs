@@ -196,6 +196,55 @@ pub fn bisect(t: [Lp; 3]) -> [[Lp; 3]; 2] {
     [[m, b, r], [m, r, a]]
 }
 
+/// A depth-first walk of a bisection tree without a stack, as the shaders walk it (a
+/// stack is an array indexed per lane there, a memory access per lane): a parent is
+/// recomputed from its child, and bit `i` of `path` says whether the node at level
+/// `i + 1` is a second child of [`bisect`].
+#[derive(Clone, Copy, Debug)]
+pub struct TreeWalk {
+    /// The current node and its level (the root is at 0).
+    pub t: [Lp; 3],
+    pub level: u32,
+    path: u32,
+}
+
+impl TreeWalk {
+    pub fn new(root: [Lp; 3]) -> Self {
+        TreeWalk {
+            t: root,
+            level: 0,
+            path: 0,
+        }
+    }
+
+    /// To the first child of the current node.
+    pub fn down(&mut self) {
+        self.t = bisect(self.t)[0];
+        self.path &= !(1 << self.level);
+        self.level += 1;
+    }
+
+    /// Past the current node's subtree, to the next node in depth-first order; false
+    /// when there is none.
+    pub fn next(&mut self) -> bool {
+        let twice = |m: Lp, p: Lp| [2 * m[0] - p[0], 2 * m[1] - p[1]];
+        while self.level > 0 && self.path >> (self.level - 1) & 1 != 0 {
+            // The second child (m, r, a) of (r, a, b), where b = 2m − a.
+            let [m, r, a] = self.t;
+            self.t = [r, a, twice(m, a)];
+            self.level -= 1;
+        }
+        if self.level == 0 {
+            return false;
+        }
+        // From the first child (m, b, r) to the second (m, r, a), where a = 2m − b.
+        let [m, b, r] = self.t;
+        self.t = [m, r, twice(m, b)];
+        self.path |= 1 << (self.level - 1);
+        true
+    }
+}
+
 pub fn bit_get(words: &[u32], k: usize) -> bool {
     words[k / 32] >> (k % 32) & 1 != 0
 }
@@ -207,6 +256,52 @@ pub fn bit_set(words: &mut [u32], k: usize) {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Pre-order of the bisection tree below `t` down to `max_level`, recursively,
+    /// entering a node when `enter` says so.
+    fn recursive(
+        t: [Lp; 3],
+        level: u32,
+        enter: &dyn Fn([Lp; 3], u32) -> bool,
+        out: &mut Vec<([Lp; 3], u32)>,
+    ) {
+        out.push((t, level));
+        if enter(t, level) {
+            for child in bisect(t) {
+                recursive(child, level + 1, enter, out);
+            }
+        }
+    }
+
+    #[test]
+    fn the_stackless_walk_visits_the_tree_in_depth_first_order() {
+        let l = Lattice::new(7, 4);
+        // Two trees: full to level 8, and an uneven one.
+        let full = |_: [Lp; 3], level: u32| level < 8;
+        let uneven = |t: [Lp; 3], level: u32| {
+            level < 8 && (level < 2 || (t[0][0] + 2 * t[0][1] + level) % 3 != 0)
+        };
+        for enter in [&full as &dyn Fn([Lp; 3], u32) -> bool, &uneven] {
+            let mut expected = Vec::new();
+            recursive(l.root(), 0, enter, &mut expected);
+            let mut walked = Vec::new();
+            let mut w = TreeWalk::new(l.root());
+            loop {
+                walked.push((w.t, w.level));
+                if enter(w.t, w.level) {
+                    w.down();
+                } else if !w.next() {
+                    break;
+                }
+            }
+            assert!(expected.len() > 20);
+            assert_eq!(walked, expected);
+        }
+        // The full tree has 2^9 − 1 nodes.
+        let mut expected = Vec::new();
+        recursive(l.root(), 0, &full, &mut expected);
+        assert_eq!(expected.len(), 511);
+    }
 
     #[test]
     fn index_and_point_are_inverse() {

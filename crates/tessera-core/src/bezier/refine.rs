@@ -33,7 +33,7 @@ use super::coarse_edges::coarse_edge_of;
 use super::edge_tests::{
     bit_is_set, bit_rank, map_test_with, segment_test, EdgeBits, EdgeTest, TestInputs, DYADIC_SCALE,
 };
-use super::lattice::{bisect, bit_get, bit_set, lattice_mid, Lattice, LatticePlace, Lp};
+use super::lattice::{bit_get, bit_set, lattice_mid, Lattice, LatticePlace, Lp, TreeWalk};
 use super::prepare::map_read;
 use super::prepare::PreparedBezier;
 
@@ -331,40 +331,39 @@ impl TriScratch {
 /// it makes. Returns the surface evaluations made (flat test only).
 pub fn tri_mark(ctx: &TriContext, scratch: &mut TriScratch) -> u32 {
     let mut evals = 0;
-    // Explicit stack (the shader has no recursion): triangle, level.
-    let mut stack = vec![(ctx.lattice.root(), 0u32)];
-    while let Some((t, level)) = stack.pop() {
-        let (yes, e) = splits(ctx, t, level);
+    let mut w = TreeWalk::new(ctx.lattice.root());
+    loop {
+        let (yes, e) = splits(ctx, w.t, w.level);
         evals += e;
         if !yes {
+            if !w.next() {
+                return evals;
+            }
             continue;
         }
-        match ctx.lattice.place(lattice_mid(t[1], t[2])) {
+        match ctx.lattice.place(lattice_mid(w.t[1], w.t[2])) {
             LatticePlace::Inside(i) => bit_set(&mut scratch.points, i),
             LatticePlace::Side(k, f) if ctx.sides[k].2 => {
                 bit_set(&mut scratch.pole, pole_index(&ctx.lattice, k, f))
             }
             _ => {}
         }
-        for child in bisect(t) {
-            stack.push((child, level + 1));
-        }
+        w.down();
     }
-    evals
 }
 
 /// Calls `leaf` on every leaf of the bisection replayed from the marked points, in
 /// depth-first order.
 fn for_each_leaf(ctx: &TriContext, scratch: &TriScratch, mut leaf: impl FnMut([Lp; 3])) {
     let max_level = 2 * ctx.lattice.depth;
-    let mut stack = vec![(ctx.lattice.root(), 0u32)];
-    while let Some((t, level)) = stack.pop() {
-        if level < max_level && ctx.exists(scratch, lattice_mid(t[1], t[2])) {
-            for child in bisect(t).into_iter().rev() {
-                stack.push((child, level + 1));
-            }
-        } else {
-            leaf(t);
+    let mut w = TreeWalk::new(ctx.lattice.root());
+    loop {
+        while w.level < max_level && ctx.exists(scratch, lattice_mid(w.t[1], w.t[2])) {
+            w.down();
+        }
+        leaf(w.t);
+        if !w.next() {
+            return;
         }
     }
 }
