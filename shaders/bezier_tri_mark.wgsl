@@ -46,7 +46,7 @@ fn tri_mark(c: TriCtx) {
             }
             w = walk_down(w);
         } else {
-            w = walk_next(w);
+            w = walk_advance(w);
             if w.done {
                 break;
             }

@@ -204,7 +204,7 @@ fn walk_down(w: TreeWalk) -> TreeWalk {
 
 // Past the current node's subtree, to the next node in depth-first order (`done` when
 // there is none).
-fn walk_next(w0: TreeWalk) -> TreeWalk {
+fn walk_advance(w0: TreeWalk) -> TreeWalk {
     var w = w0;
     while w.level > 0u && ((w.path >> (w.level - 1u)) & 1u) != 0u {
         w.t = parent_of_second(w.t);

@@ -367,7 +367,7 @@ fn tri_triangles(c: TriCtx) {
         }
         leaf_polygon(c, w.t);
         clip_ears(c);
-        w = walk_next(w);
+        w = walk_advance(w);
         if w.done {
             break;
         }

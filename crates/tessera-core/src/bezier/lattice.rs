@@ -226,7 +226,7 @@ impl TreeWalk {
 
     /// Past the current node's subtree, to the next node in depth-first order; false
     /// when there is none.
-    pub fn next(&mut self) -> bool {
+    pub fn advance(&mut self) -> bool {
         let twice = |m: Lp, p: Lp| [2 * m[0] - p[0], 2 * m[1] - p[1]];
         while self.level > 0 && self.path >> (self.level - 1) & 1 != 0 {
             // The second child (m, r, a) of (r, a, b), where b = 2m − a.
@@ -279,7 +279,7 @@ mod tests {
         // Two trees: full to level 8, and an uneven one.
         let full = |_: [Lp; 3], level: u32| level < 8;
         let uneven = |t: [Lp; 3], level: u32| {
-            level < 8 && (level < 2 || (t[0][0] + 2 * t[0][1] + level) % 3 != 0)
+            level < 8 && (level < 2 || !(t[0][0] + 2 * t[0][1] + level).is_multiple_of(3))
         };
         for enter in [&full as &dyn Fn([Lp; 3], u32) -> bool, &uneven] {
             let mut expected = Vec::new();
@@ -290,7 +290,7 @@ mod tests {
                 walked.push((w.t, w.level));
                 if enter(w.t, w.level) {
                     w.down();
-                } else if !w.next() {
+                } else if !w.advance() {
                     break;
                 }
             }

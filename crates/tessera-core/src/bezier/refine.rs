@@ -336,7 +336,7 @@ pub fn tri_mark(ctx: &TriContext, scratch: &mut TriScratch) -> u32 {
         let (yes, e) = splits(ctx, w.t, w.level);
         evals += e;
         if !yes {
-            if !w.next() {
+            if !w.advance() {
                 return evals;
             }
             continue;
@@ -362,7 +362,7 @@ fn for_each_leaf(ctx: &TriContext, scratch: &TriScratch, mut leaf: impl FnMut([L
             w.down();
         }
         leaf(w.t);
-        if !w.next() {
+        if !w.advance() {
             return;
         }
     }
