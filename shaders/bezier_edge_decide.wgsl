@@ -9,7 +9,7 @@
 #include "shared/coarse.wgsl"
 #include "shared/need.wgsl"
 
-@group(0) @binding(1) var<storage, read> patches: array<GpuPatch>;
+@group(0) @binding(1) var nets: texture_2d<f32>;
 @group(0) @binding(2) var maps: texture_2d<f32>;
 @group(0) @binding(3) var<storage, read> topo: array<GpuPatchTopo>;
 @group(0) @binding(4) var<storage, read> curves: array<GpuCurve>;

@@ -11,7 +11,7 @@
 #include "shared/need.wgsl"
 #include "shared/refine.wgsl"
 
-@group(0) @binding(1) var<storage, read> patches: array<GpuPatch>;
+@group(0) @binding(1) var nets: texture_2d<f32>;
 @group(0) @binding(2) var maps: texture_2d<f32>;
 @group(0) @binding(3) var<storage, read> topo: array<GpuPatchTopo>;
 @group(0) @binding(4) var<storage, read> curves: array<GpuCurve>;

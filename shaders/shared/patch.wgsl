@@ -1,5 +1,6 @@
 // Bicubic Bézier evaluation. Twin of `tessera_core::bezier::patch`.
-// Reads `patches: array<GpuPatch>` (declared by the kernel).
+// Reads `nets: texture_2d<f32>` (declared by the kernel): per patch 12 rgba32float
+// texels, the 48 words of `GpuPatch::cp` in order (`tessera_core::gpu_types::NetTexture`).
 
 struct Frame {
     pos: vec3f,
@@ -25,28 +26,45 @@ fn bernstein(t: f32) -> Basis {
     return Basis(b, d);
 }
 
-fn control_point(p: u32, k: u32) -> vec3f {
-    return vec3f(patches[p].cp[3u * k], patches[p].cp[3u * k + 1u], patches[p].cp[3u * k + 2u]);
+fn net_texel(p: u32, k: u32) -> vec4f {
+    let at = vec2u((p % NET_TEXTURE_PATCHES_PER_ROW) * 12u + k, p / NET_TEXTURE_PATCHES_PER_ROW);
+    return textureLoad(nets, at, 0);
+}
+
+// Row `row` of the net weighted by the basis `bu`: its four points, `x y z` each, are
+// texels 3·row .. 3·row + 2. Written out, without arrays (an array indexed by a loop
+// counter is a memory access per lane on a CPU device).
+struct RowSums {
+    q: vec3f,
+    qu: vec3f,
+}
+
+fn row_sums(p: u32, row: u32, bu: Basis) -> RowSums {
+    let x = net_texel(p, 3u * row);
+    let y = net_texel(p, 3u * row + 1u);
+    let z = net_texel(p, 3u * row + 2u);
+    let c0 = x.xyz;
+    let c1 = vec3f(x.w, y.xy);
+    let c2 = vec3f(y.zw, z.x);
+    let c3 = z.yzw;
+    let q = c0 * bu.b.x + c1 * bu.b.y + c2 * bu.b.z + c3 * bu.b.w;
+    let qu = c0 * bu.d.x + c1 * bu.d.y + c2 * bu.d.z + c3 * bu.d.w;
+    return RowSums(q, qu);
 }
 
 fn eval_frame(p: u32, u: f32, v: f32) -> Frame {
     let bu = bernstein(u);
     let bv = bernstein(v);
-    var f = Frame(vec3f(0.0), vec3f(0.0), vec3f(0.0), vec3f(0.0));
-    for (var row = 0u; row < 4u; row++) {
-        var q = vec3f(0.0);
-        var qu = vec3f(0.0);
-        for (var col = 0u; col < 4u; col++) {
-            let c = control_point(p, 4u * row + col);
-            q += c * bu.b[col];
-            qu += c * bu.d[col];
-        }
-        f.pos += q * bv.b[row];
-        f.du += qu * bv.b[row];
-        f.dv += q * bv.d[row];
-        f.duv += qu * bv.d[row];
-    }
-    return f;
+    let r0 = row_sums(p, 0u, bu);
+    let r1 = row_sums(p, 1u, bu);
+    let r2 = row_sums(p, 2u, bu);
+    let r3 = row_sums(p, 3u, bu);
+    return Frame(
+        r0.q * bv.b.x + r1.q * bv.b.y + r2.q * bv.b.z + r3.q * bv.b.w,
+        r0.qu * bv.b.x + r1.qu * bv.b.y + r2.qu * bv.b.z + r3.qu * bv.b.w,
+        r0.q * bv.d.x + r1.q * bv.d.y + r2.q * bv.d.z + r3.q * bv.d.w,
+        r0.qu * bv.d.x + r1.qu * bv.d.y + r2.qu * bv.d.z + r3.qu * bv.d.w,
+    );
 }
 
 // Unit normal; where a side collapses to a point (du or dv vanishes) the limit normal

@@ -65,7 +65,7 @@ struct DisplacementMap {
     d: array<f32, 256>,
 }
 
-@group(0) @binding(1) var<storage, read> patches: array<GpuPatch>;
+@group(0) @binding(1) var nets: texture_2d<f32>;
 @group(0) @binding(2) var maps: texture_2d<f32>;
 @group(0) @binding(3) var<storage, read_write> probe_out: array<f32>;
 @group(0) @binding(4) var atlas: texture_2d<f32>;

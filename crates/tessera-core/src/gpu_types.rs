@@ -117,6 +117,68 @@ impl MapAtlas {
     }
 }
 
+/// Patches per row of the control-net texture (a power of two, like
+/// [`MAP_ATLAS_TILES_PER_ROW`]).
+pub const NET_TEXTURE_PATCHES_PER_ROW: u32 = 256;
+
+/// The control points as the GPU kernels read them: an `rgba32float` texture, one row of
+/// [`NET_TEXTURE_PATCHES_PER_ROW`] patches per texel row, each patch 12 texels holding
+/// its [`GpuPatch::cp`] in order (a row of the net, four points `x y z`, is three
+/// texels). On a CPU device (lavapipe) a storage read at a per-lane address is a scalar
+/// loop over the lanes for each 32-bit word, and the 48 words of a net made the vertex
+/// kernel spend five sixths of its time reading them; a texel fetch is vectorised.
+/// Same bytes as the storage buffer it replaces (192 per patch).
+#[derive(Clone, Debug, PartialEq)]
+pub struct NetTexture {
+    pub width: u32,
+    pub height: u32,
+    /// Row-major, `width × height` texels.
+    pub texels: Vec<[f32; 4]>,
+}
+
+impl NetTexture {
+    /// Texels per patch.
+    pub const TEXELS_PER_PATCH: u32 = 12;
+
+    /// Texture size (width, height) in texels for `patches` nets; at least one texel row.
+    pub fn size(patches: usize) -> (u32, u32) {
+        let per_row = NET_TEXTURE_PATCHES_PER_ROW as usize;
+        let columns = patches.clamp(1, per_row) as u32;
+        let rows = patches.div_ceil(per_row).max(1) as u32;
+        (columns * Self::TEXELS_PER_PATCH, rows)
+    }
+
+    /// Texel coordinates of texel `k` of patch `p` (twin of the shader's `net_texel`).
+    pub fn texel_of(p: u32, k: u32) -> (u32, u32) {
+        (
+            (p % NET_TEXTURE_PATCHES_PER_ROW) * Self::TEXELS_PER_PATCH + k,
+            p / NET_TEXTURE_PATCHES_PER_ROW,
+        )
+    }
+
+    pub fn new(patches: &[GpuPatch]) -> Self {
+        let (width, height) = Self::size(patches.len());
+        let mut texels = vec![[0.0f32; 4]; width as usize * height as usize];
+        for (p, patch) in patches.iter().enumerate() {
+            for (k, texel) in patch.cp.chunks_exact(4).enumerate() {
+                let (x, y) = Self::texel_of(p as u32, k as u32);
+                texels[y as usize * width as usize + x as usize].copy_from_slice(texel);
+            }
+        }
+        NetTexture {
+            width,
+            height,
+            texels,
+        }
+    }
+
+    /// Bytes of the texture.
+    pub fn bytes(patches: usize) -> u64 {
+        let (w, h) = Self::size(patches);
+        w as u64 * h as u64 * std::mem::size_of::<[f32; 4]>() as u64
+    }
+}
+
 /// Connectivity of one patch.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq, Eq)]
@@ -265,10 +327,11 @@ pub struct BezierStatus {
     pub evaluations: u32,
 }
 
-/// Bytes uploaded per patch and once per model for the map-based tessellator: patches,
-/// the map atlas, topology, curves and coarse vertices.
+/// Bytes uploaded per patch and once per model for the map-based tessellator: the
+/// control-net texture, the map atlas, topology, curves and coarse vertices.
 pub fn bezier_upload_bytes(patches: usize, curves: usize, coarse_vertices: usize) -> usize {
-    patches * (std::mem::size_of::<GpuPatch>() + std::mem::size_of::<GpuPatchTopo>())
+    patches * std::mem::size_of::<GpuPatchTopo>()
+        + NetTexture::bytes(patches) as usize
         + MapAtlas::bytes(patches) as usize
         + curves * std::mem::size_of::<GpuCurve>()
         + coarse_vertices * std::mem::size_of::<VertexRecord>()
@@ -319,6 +382,31 @@ mod tests {
         assert_eq!(MapAtlas::texel_of(256, 0, 0), (0, 16));
         // SPEC §1: the map plus the coarse mesh under 2 KB per patch.
         assert_eq!(MapAtlas::bytes(256) / 256, 960);
+    }
+
+    #[test]
+    fn the_net_texture_holds_each_patch_in_twelve_texels() {
+        let patches: Vec<GpuPatch> = (0..300)
+            .map(|p| GpuPatch {
+                cp: std::array::from_fn(|k| (p * 48 + k) as f32),
+            })
+            .collect();
+        let nets = NetTexture::new(&patches);
+        assert_eq!((nets.width, nets.height), (256 * 12, 2));
+        assert_eq!(NetTexture::size(1), (12, 1));
+        for (p, patch) in patches.iter().enumerate() {
+            for k in 0..48 {
+                let (x, y) = NetTexture::texel_of(p as u32, k as u32 / 4);
+                let texel = nets.texels[(y * nets.width + x) as usize];
+                assert_eq!(texel[k % 4], patch.cp[k], "patch {p}, word {k}");
+            }
+        }
+        assert_eq!(NetTexture::texel_of(256, 0), (0, 1));
+        // As many bytes as the nets themselves.
+        assert_eq!(
+            NetTexture::bytes(256) as usize,
+            256 * std::mem::size_of::<GpuPatch>()
+        );
     }
 
     #[test]

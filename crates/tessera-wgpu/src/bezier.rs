@@ -5,7 +5,7 @@
 //!
 //! | # | kernel | per | writes |
 //! |---|---|---|---|
-//! | 0 | copy, first recording only | — | the displacement-map atlas texture (the constructor has no queue) |
+//! | 0 | copies, first recording only | — | the control-net texture and the displacement-map atlas (the constructor has no queue) |
 //! | 1 | `bezier_edge_decide` | coarse edge | edge bit sets, edge vertex counts |
 //! | 2 | `bezier_tri_mark` | coarse triangle | lattice points, inner vertex and triangle counts |
 //! | 3 | `scan` (multi-level) | — | offsets of all three counts in one exclusive scan |
@@ -45,7 +45,7 @@ use std::sync::{Arc, OnceLock};
 use tessera_core::bezier::lattice::{inv_lattice, Lattice};
 use tessera_core::bezier::{AdaptiveParams, EdgeTest, PreparedBezier};
 use tessera_core::gpu_types::{
-    BezierParams, BezierStatus, MapAtlas, OutVertex, VertexRecord, EDGE_BIT_WORDS,
+    BezierParams, BezierStatus, MapAtlas, NetTexture, OutVertex, VertexRecord, EDGE_BIT_WORDS,
 };
 use tessera_core::Mesh;
 use wgpu::util::DeviceExt;
@@ -72,7 +72,7 @@ const WORKGROUP: u32 = 64;
 /// Binding numbers shared by every Bézier kernel (see `shaders/shared/types.wgsl`).
 mod slot {
     pub const PARAMS: u32 = 0;
-    pub const PATCHES: u32 = 1;
+    pub const NETS: u32 = 1;
     pub const MAPS: u32 = 2;
     pub const TOPO: u32 = 3;
     pub const CURVES: u32 = 4;
@@ -200,7 +200,6 @@ impl BindGroups {
         use slot::*;
         let all = [
             (PARAMS, &b.uniform),
-            (PATCHES, &b.patches),
             (TOPO, &b.topo),
             (CURVES, &b.curves),
             (EDGE_BITS, &b.edge_bits),
@@ -213,7 +212,7 @@ impl BindGroups {
             (STATUS, &b.status),
             (EVALUATIONS, &b.evaluations),
         ];
-        let textures = [(MAPS, &b.map_atlas)];
+        let textures = [(NETS, &b.nets), (MAPS, &b.map_atlas)];
         let bind = |k: &Kernel| k.bind_with_textures(device, &all, &textures);
         BindGroups {
             edge_decide: bind(&t.edge_decide),
@@ -231,8 +230,8 @@ impl BindGroups {
 pub struct BezierStage {
     /// See [`BezierParams::map_scale`].
     map_scale: f32,
-    /// The map atlas's texels, until the first recording copies them into the texture.
-    atlas_upload: Option<AtlasUpload>,
+    /// The textures' texels (nets, maps), until the first recording copies them in.
+    texture_uploads: Vec<TextureUpload>,
     prepared_layout: tessera_core::bezier::prepare::CoarseLayout,
     params: AdaptiveParams,
     buffers: Buffers,
@@ -242,7 +241,7 @@ pub struct BezierStage {
     bind_groups: BindGroups,
 }
 
-struct AtlasUpload {
+struct TextureUpload {
     staging: wgpu::Buffer,
     texture: wgpu::Texture,
     extent: wgpu::Extent3d,
@@ -252,7 +251,8 @@ struct AtlasUpload {
 /// Every buffer of a stage: the upload, the working buffers, the output.
 struct Buffers {
     uniform: wgpu::Buffer,
-    patches: wgpu::Buffer,
+    /// The control points ([`NetTexture`]).
+    nets: wgpu::TextureView,
     /// The displacement maps as half-precision pairs ([`MapAtlas`]).
     map_atlas: wgpu::TextureView,
     topo: wgpu::Buffer,
@@ -289,38 +289,43 @@ fn scratch_buffer(
     Ok(storage(device, "tessera triangle scratch", bytes))
 }
 
-/// The atlas texture, empty, and a mapped-at-creation buffer holding its texels: the
+/// A texture, empty, and a buffer holding its texels (`texel_bytes` each, row-major): the
 /// constructor has no queue, so the first recording copies one into the other.
-fn map_atlas_upload(device: &wgpu::Device, atlas: &MapAtlas) -> AtlasUpload {
+fn texture_upload(
+    device: &wgpu::Device,
+    label: &str,
+    format: wgpu::TextureFormat,
+    (width, height): (u32, u32),
+    texels: &[u8],
+) -> TextureUpload {
     let extent = wgpu::Extent3d {
-        width: atlas.width,
-        height: atlas.height,
+        width,
+        height,
         depth_or_array_layers: 1,
     };
     let texture = device.create_texture(&wgpu::TextureDescriptor {
-        label: Some("tessera displacement-map atlas"),
+        label: Some(label),
         size: extent,
         mip_level_count: 1,
         sample_count: 1,
         dimension: wgpu::TextureDimension::D2,
-        format: wgpu::TextureFormat::Rg16Float,
+        format,
         usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
         view_formats: &[],
     });
+    let row = texels.len() / height as usize;
     // Buffer-to-texture copies take rows padded to 256 bytes.
-    let bytes_per_row = (atlas.width * std::mem::size_of::<[u16; 2]>() as u32)
-        .next_multiple_of(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT);
-    let mut contents = vec![0u8; bytes_per_row as usize * atlas.height as usize];
-    for (y, texels) in atlas.texels.chunks(atlas.width as usize).enumerate() {
-        let bytes: &[u8] = bytemuck::cast_slice(texels);
+    let bytes_per_row = (row as u32).next_multiple_of(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT);
+    let mut contents = vec![0u8; bytes_per_row as usize * height as usize];
+    for (y, bytes) in texels.chunks(row).enumerate() {
         contents[y * bytes_per_row as usize..][..bytes.len()].copy_from_slice(bytes);
     }
     let staging = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-        label: Some("tessera displacement-map atlas upload"),
+        label: Some(label),
         contents: &contents,
         usage: wgpu::BufferUsages::COPY_SRC,
     });
-    AtlasUpload {
+    TextureUpload {
         staging,
         texture,
         extent,
@@ -411,10 +416,6 @@ impl BezierStage {
         let coarse_records = prepared.coarse_vertex_records();
         for (what, bytes) in [
             (
-                "patches",
-                std::mem::size_of_val(prepared.patches.as_slice()),
-            ),
-            (
                 "patch topology",
                 std::mem::size_of_val(prepared.topo.as_slice()),
             ),
@@ -439,14 +440,25 @@ impl BezierStage {
                 limit: max_side,
             });
         }
-        let atlas_upload = map_atlas_upload(device, &atlas);
+        let atlas_upload = texture_upload(
+            device,
+            "tessera displacement-map atlas",
+            wgpu::TextureFormat::Rg16Float,
+            (atlas.width, atlas.height),
+            bytemuck::cast_slice(&atlas.texels),
+        );
+        // Smaller than the atlas both ways: its size check covers this one.
+        let nets = NetTexture::new(&prepared.patches);
+        let nets_upload = texture_upload(
+            device,
+            "tessera control-net texture",
+            wgpu::TextureFormat::Rgba32Float,
+            (nets.width, nets.height),
+            bytemuck::cast_slice(&nets.texels),
+        );
         let buffers = Buffers {
             uniform,
-            patches: upload(
-                device,
-                "tessera patches",
-                bytemuck::cast_slice(&prepared.patches),
-            ),
+            nets: nets_upload.texture.create_view(&Default::default()),
             map_atlas: atlas_upload.texture.create_view(&Default::default()),
             topo: upload(
                 device,
@@ -483,7 +495,7 @@ impl BezierStage {
         };
         Ok(BezierStage {
             map_scale: prepared.map_scale,
-            atlas_upload: Some(atlas_upload),
+            texture_uploads: vec![nets_upload, atlas_upload],
             prepared_layout: l,
             params: *params,
             bind_groups: BindGroups::new(device, &pipelines.0, &test_kernels, &buffers),
@@ -600,9 +612,9 @@ impl BezierStage {
     /// Copies the parameters into their uniform inside the encoder, not by
     /// `queue.write_buffer` (which lands before the whole submission): recordings that
     /// share a submission, with `set_params` between them, each run with their own.
-    /// The first recording also copies the map atlas into its texture.
+    /// The first recording also copies the nets and the map atlas into their textures.
     fn record_params(&mut self, device: &wgpu::Device, encoder: &mut wgpu::CommandEncoder) {
-        if let Some(up) = self.atlas_upload.take() {
+        for up in std::mem::take(&mut self.texture_uploads) {
             encoder.copy_buffer_to_texture(
                 wgpu::TexelCopyBufferInfo {
                     buffer: &up.staging,
