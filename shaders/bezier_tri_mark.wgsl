@@ -32,14 +32,20 @@ fn inner_rank(c: TriCtx, i: u32) -> u32 {
 }
 
 // Stage "mark": the bisection tree as the points it makes (twin of `tri_mark`).
-// The triangle's scratch words must be zero.
-fn tri_mark(c: TriCtx) {
+// The triangle's scratch words must be zero (the stage clears them). Returns the inner
+// points marked, each counted once as its bit turns on (no loop over the words after).
+fn tri_mark(c: TriCtx) -> u32 {
+    var inner = 0u;
     var w = walk_start(lattice_root(c.l));
     loop {
         if splits(c, w.t, w.level) {
             let pl = place(c.l, lattice_mid(w.t.a, w.t.b));
             if pl.kind == PLACE_INSIDE {
-                scratch[c.points_base + pl.f / 32u] |= 1u << (pl.f % 32u);
+                let word = c.points_base + pl.f / 32u;
+                let bit = 1u << (pl.f % 32u);
+                let old = scratch[word];
+                scratch[word] = old | bit;
+                inner += u32((old & bit) == 0u);
             } else if pl.kind == PLACE_SIDE && side_collapsed(c, pl.k) {
                 let i = pole_index(c.l, pl.k, pl.f);
                 scratch[c.pole_base + i / 32u] |= 1u << (i % 32u);
@@ -52,6 +58,7 @@ fn tri_mark(c: TriCtx) {
             }
         }
     }
+    return inner;
 }
 
 @compute @workgroup_size(64)
@@ -61,20 +68,17 @@ fn main(@builtin(global_invocation_id) gid: vec3u, @builtin(num_workgroups) grou
         return;
     }
     let c = tri_ctx(t);
-    for (var w = 0u; w < params.points_words + params.pole_words; w++) {
-        scratch[c.points_base + w] = 0u;
-    }
-    tri_mark(c);
+    let inner = tri_mark(c);
     if flat_evaluations > 0u {
         atomicAdd(&evaluations, flat_evaluations);
     }
-    var made = euler_count(c);
+    var made = euler_count(c, inner);
     if made == NO_COUNT {
         // A patch degenerate enough that the formula does not hold: replay.
         triangles = 0u;
         tri_triangles(c);
         made = triangles;
     }
-    counts[params.coarse_edges + t] = inner_count(c);
+    counts[params.coarse_edges + t] = inner;
     counts[params.coarse_edges + params.coarse_triangles + t] = made;
 }

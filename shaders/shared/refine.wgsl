@@ -154,21 +154,13 @@ fn splits(c: TriCtx, t: Tri, level: u32) -> bool {
     return interior_need(c.l, t);
 }
 
-fn inner_count(c: TriCtx) -> u32 {
-    var n = 0u;
-    for (var w = 0u; w < params.points_words; w++) {
-        n += countOneBits(scratch[c.points_base + w]);
-    }
-    return n;
-}
-
 const NO_COUNT: u32 = 0xffffffffu;
 
 // The triangle count from the vertex counts alone, NO_COUNT where the formula does not
 // apply (twin of `euler_count`, which proves it): 2·I + 1 + the points of the open
 // sides − the collapsed sides, while the only shared vertex is one collapsed side's.
-fn euler_count(c: TriCtx) -> u32 {
-    var count = 2u * inner_count(c) + 1u;
+fn euler_count(c: TriCtx, inner: u32) -> u32 {
+    var count = 2u * inner + 1u;
     // A second collapsed side shares a corner with the first: all three corners are then
     // one vertex, and `applies` turns false.
     var applies = true;

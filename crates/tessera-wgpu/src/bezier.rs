@@ -7,7 +7,7 @@
 //! |---|---|---|---|
 //! | 0 | copies, first recording only | — | the control-net texture and the displacement-map atlas (the constructor has no queue) |
 //! | 1 | `bezier_edge_decide` | coarse edge | edge bit sets, edge vertex counts |
-//! | 2 | `bezier_tri_mark` | coarse triangle | lattice points, inner vertex and triangle counts |
+//! | 2 | clear + `bezier_tri_mark` | coarse triangle | lattice points, inner vertex and triangle counts |
 //! | 3 | `scan` (multi-level) | — | offsets of all three counts in one exclusive scan |
 //! | 4 | `bezier_finish` | 1 | totals, overflow flags, draw arguments, vertex dispatch |
 //! | 5 | copy + `bezier_edge_emit` + `bezier_tri_emit` | edge / triangle | vertex records, indices |
@@ -656,6 +656,9 @@ impl BezierStage {
                 encoder.clear_buffer(&b.counts, 4 * (counts_len as u64 - 1), Some(4));
                 encoder.clear_buffer(&b.evaluations, 0, None);
             }
+            // The triangles' bit sets start empty: a memset here, where zeroing them in
+            // the kernel was a store per word and lane.
+            Step::TriMark => encoder.clear_buffer(&b.scratch, 0, None),
             Step::EdgeEmit => encoder.copy_buffer_to_buffer(
                 &b.coarse_records,
                 0,
