@@ -213,8 +213,13 @@ fn collinear(a: vec2u, b: vec2u, c: vec2u) -> bool {
 var<private> poly: array<u32, POLY_MAX>;
 var<private> poly_len: u32;
 
+// Point k mod poly_len for k < 3 · poly_len (every caller's range), by subtraction: an
+// integer division is a scalar loop over the lanes on a CPU device.
 fn poly_at(k: u32) -> vec2u {
-    return unpack_lp(poly[k % poly_len]);
+    let n = poly_len;
+    var i = select(k, k - n, k >= n);
+    i = select(i, i - n, i >= n);
+    return unpack_lp(poly[i]);
 }
 
 fn poly_push(p: vec2u) {
