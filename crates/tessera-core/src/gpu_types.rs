@@ -68,15 +68,22 @@ pub struct MapAtlas {
     pub texels: Vec<[u16; 2]>,
 }
 
+/// Columns and rows of `patches` tiles laid out `per_row` to a row; at least one tile.
+fn tile_grid(patches: usize, per_row: u32) -> (u32, u32) {
+    let per_row = per_row as usize;
+    (
+        patches.clamp(1, per_row) as u32,
+        patches.div_ceil(per_row).max(1) as u32,
+    )
+}
+
 impl MapAtlas {
     /// Texels per tile side: (width, height).
     pub const TILE: (u32, u32) = (MAP_CELLS as u32, MAP_RES as u32);
 
     /// Texture size (width, height) in texels for `patches` maps; at least one tile.
     pub fn size(patches: usize) -> (u32, u32) {
-        let per_row = MAP_ATLAS_TILES_PER_ROW as usize;
-        let columns = patches.clamp(1, per_row) as u32;
-        let rows = patches.div_ceil(per_row).max(1) as u32;
+        let (columns, rows) = tile_grid(patches, MAP_ATLAS_TILES_PER_ROW);
         (columns * Self::TILE.0, rows * Self::TILE.1)
     }
 
@@ -142,9 +149,7 @@ impl NetTexture {
 
     /// Texture size (width, height) in texels for `patches` nets; at least one texel row.
     pub fn size(patches: usize) -> (u32, u32) {
-        let per_row = NET_TEXTURE_PATCHES_PER_ROW as usize;
-        let columns = patches.clamp(1, per_row) as u32;
-        let rows = patches.div_ceil(per_row).max(1) as u32;
+        let (columns, rows) = tile_grid(patches, NET_TEXTURE_PATCHES_PER_ROW);
         (columns * Self::TEXELS_PER_PATCH, rows)
     }
 
