@@ -96,15 +96,9 @@ pub fn map_test(
     uv1: [f32; 2],
     uv2: [f32; 2],
 ) -> bool {
-    let read = |uv: [f32; 2]| Some(map_read(map, uv[0], uv[1]));
-    map_test_with(
-        test,
-        th,
-        [uv1, uv2],
-        [read(uv1), read(uv2)],
-        false,
-        |u, v| Some(map_read(map, u, v)),
-    )
+    let d = |u: f32, v: f32| Some(map_read(map, u, v));
+    let ends = [d(uv1[0], uv1[1]), d(uv2[0], uv2[1])];
+    map_test_with(test, th, [uv1, uv2], ends, false, d)
 }
 
 /// The map test (SPEC §1, paper Eq. 1–3) on the segment `uv[0] → uv[1]`, whose ends have

@@ -175,17 +175,19 @@ impl TrianglePlane {
     /// outside the triangle, where the plane is an extrapolation and says nothing about
     /// this triangle (a Map4p/Map8p point across an edge falls there).
     fn value(&self, p: [f32; 2], raw: f32) -> Option<f32> {
-        let (du, dv) = (p[0] - self.origin[0], p[1] - self.origin[1]);
-        self.inside(p)
-            .then(|| raw - (self.d0 + self.grad[0] * du + self.grad[1] * dv))
+        self.inside(p).then(|| raw - self.plane_at(p))
     }
 
     /// [`value`](Self::value) reading the map, only inside the triangle.
     fn displacement(&self, map: &crate::gpu_types::DisplacementMap, u: f32, v: f32) -> Option<f32> {
-        if !self.inside([u, v]) {
-            return None;
-        }
-        self.value([u, v], map_read(map, u, v))
+        self.inside([u, v])
+            .then(|| map_read(map, u, v) - self.plane_at([u, v]))
+    }
+
+    /// The plane's value at `p`.
+    fn plane_at(&self, p: [f32; 2]) -> f32 {
+        let (du, dv) = (p[0] - self.origin[0], p[1] - self.origin[1]);
+        self.d0 + self.grad[0] * du + self.grad[1] * dv
     }
 }
 
