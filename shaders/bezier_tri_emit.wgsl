@@ -71,18 +71,29 @@ fn main(@builtin(global_invocation_id) gid: vec3u, @builtin(num_workgroups) grou
     inner_base = params.coarse_vertices + counts[e + t];
     side_edges = c.side_edges;
     side_first = params.coarse_vertices + vec3u(counts[side_edges.x], counts[side_edges.y], counts[side_edges.z]);
+    // The records of the inner points in lattice order, reading only the groups of words
+    // that hold points (most of a triangle's 68 words at depth 6 are empty).
     var next = inner_base;
-    for (var w = 0u; w < params.points_words; w++) {
-        word_below[w] = next - inner_base;
-        var bits = scratch[c.points_base + w];
-        while bits != 0u {
-            let i = 32u * w + firstTrailingBit(bits);
-            bits &= bits - 1u;
-            let uv = lattice_uv(c.l, lattice_point(c.l, i));
-            if next < arrayLength(&records) {
-                records[next] = VertexRecord(c.l.patch_id, uv.x, uv.y);
+    var rows = LatticeRows(0u, 0u);
+    let shift = word_group_shift(params.points_words);
+    var held = scratch[c.groups_index];
+    while held != 0u {
+        let g = firstTrailingBit(held);
+        held &= held - 1u;
+        let end = min((g + 1u) << shift, params.points_words);
+        for (var w = g << shift; w < end; w++) {
+            word_below[w] = next - inner_base;
+            var bits = scratch[c.points_base + w];
+            while bits != 0u {
+                let i = 32u * w + firstTrailingBit(bits);
+                bits &= bits - 1u;
+                rows = rows_seek(c.l, rows, i);
+                let uv = lattice_uv(c.l, rows_point(rows, i));
+                if next < arrayLength(&records) {
+                    records[next] = VertexRecord(c.l.patch_id, uv.x, uv.y);
+                }
+                next += 1u;
             }
-            next += 1u;
         }
     }
     next_index = 3u * (counts[e + tris + t] - counts[e + tris]);

@@ -31,11 +31,14 @@ fn inner_rank(c: TriCtx, i: u32) -> u32 {
     return i;
 }
 
-// Stage "mark": the bisection tree as the points it makes (twin of `tri_mark`).
-// The triangle's scratch words must be zero (the stage clears them). Returns the inner
-// points marked, each counted once as its bit turns on (no loop over the words after).
+// Stage "mark": the bisection tree as the points it makes (twin of `tri_mark`), and
+// the groups of words that hold them. The triangle's point and pole words must be zero
+// (the stage clears them). Returns the inner points marked, each counted once as its
+// bit turns on (no loop over the words after).
 fn tri_mark(c: TriCtx) -> u32 {
     var inner = 0u;
+    var groups = 0u;
+    let shift = word_group_shift(params.points_words);
     var w = walk_start(lattice_root(c.l));
     loop {
         if splits(c, w.t, w.level) {
@@ -46,6 +49,7 @@ fn tri_mark(c: TriCtx) -> u32 {
                 let old = scratch[word];
                 scratch[word] = old | bit;
                 inner += u32((old & bit) == 0u);
+                groups |= 1u << ((pl.f / 32u) >> shift);
             } else if pl.kind == PLACE_SIDE && side_collapsed(c, pl.k) {
                 let i = pole_index(c.l, pl.k, pl.f);
                 scratch[c.pole_base + i / 32u] |= 1u << (i % 32u);
@@ -58,6 +62,7 @@ fn tri_mark(c: TriCtx) -> u32 {
             }
         }
     }
+    scratch[c.groups_index] = groups;
     return inner;
 }
 

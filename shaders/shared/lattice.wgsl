@@ -59,14 +59,25 @@ fn lattice_index(l: Lattice, p: vec2u) -> u32 {
     return j * (2u * l.n + 3u - j) / 2u + p.x;
 }
 
-fn lattice_point(l: Lattice, index: u32) -> vec2u {
-    var j = 0u;
-    var row = 0u;
-    while row + (l.n + 1u - j) <= index {
-        row += l.n + 1u - j;
-        j += 1u;
+// A cursor over the rows (j) for bit indices taken in increasing order, each row passed
+// once (twin of `LatticeRows`): `start` is the index of point (0, j).
+struct LatticeRows {
+    j: u32,
+    start: u32,
+}
+
+// The row holding bit `index`, searching forward from `r`.
+fn rows_seek(l: Lattice, r0: LatticeRows, index: u32) -> LatticeRows {
+    var r = r0;
+    while r.start + (l.n + 1u - r.j) <= index {
+        r.start += l.n + 1u - r.j;
+        r.j += 1u;
     }
-    return vec2u(index - row, j);
+    return r;
+}
+
+fn rows_point(r: LatticeRows, index: u32) -> vec2u {
+    return vec2u(index - r.start, r.j);
 }
 
 fn place(l: Lattice, p: vec2u) -> Place {
@@ -217,6 +228,13 @@ fn walk_advance(w0: TreeWalk) -> TreeWalk {
     w.t = sibling_of_first(w.t);
     w.path |= 1u << (w.level - 1u);
     return w;
+}
+
+// Groups of 1 << word_group_shift words of the point set, at most 32, one bit each in
+// the triangle's group word (twin of `Lattice::word_group_shift`).
+fn word_group_shift(points_words: u32) -> u32 {
+    let groups = (points_words + 31u) / 32u;
+    return select(0u, 32u - countLeadingZeros(groups - 1u), groups > 1u);
 }
 
 fn points_words(depth: u32) -> u32 {

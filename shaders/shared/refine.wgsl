@@ -25,9 +25,10 @@ struct TriCtx {
     set1: EdgeSet,
     set2: EdgeSet,
     flipped: bool,
-    // Offsets of this triangle's lattice points and pole points in `scratch`.
+    // Offsets of this triangle's lattice points, pole points and group word in `scratch`.
     points_base: u32,
     pole_base: u32,
+    groups_index: u32,
 }
 
 fn tri_ctx(t: u32) -> TriCtx {
@@ -46,8 +47,9 @@ fn tri_ctx(t: u32) -> TriCtx {
     c.set1 = edge_set(r1.edge);
     c.set2 = edge_set(r2.edge);
     c.flipped = patch_flipped(p);
-    c.points_base = t * (params.points_words + params.pole_words);
+    c.points_base = t * (params.points_words + params.pole_words + 1u);
     c.pole_base = c.points_base + params.points_words;
+    c.groups_index = c.pole_base + params.pole_words;
     return c;
 }
 

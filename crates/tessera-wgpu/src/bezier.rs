@@ -271,11 +271,18 @@ struct Buffers {
 }
 
 /// Words per coarse triangle in the scratch buffer at `depth`: lattice points, then
-/// collapsed-side points.
+/// collapsed-side points; one word of the points' nonzero groups follows them
+/// (`TriScratch::words`).
 fn triangle_words(depth: u32) -> (u32, u32) {
     let points = Lattice::points_words(depth) as u32;
     let pole = (3 * ((1u32 << depth) + 1)).div_ceil(32);
     (points, pole)
+}
+
+/// A coarse triangle's words in the scratch buffer, its group word included.
+fn triangle_stride(depth: u32) -> u32 {
+    let (points, pole) = triangle_words(depth);
+    points + pole + 1
 }
 
 fn scratch_buffer(
@@ -283,8 +290,7 @@ fn scratch_buffer(
     depth: u32,
     coarse_triangles: u32,
 ) -> Result<wgpu::Buffer> {
-    let (points, pole) = triangle_words(depth);
-    let bytes = 4 * (points + pole) as u64 * coarse_triangles as u64;
+    let bytes = 4 * triangle_stride(depth) as u64 * coarse_triangles as u64;
     check_size(device, "triangle scratch", bytes)?;
     Ok(storage(device, "tessera triangle scratch", bytes))
 }
@@ -802,6 +808,7 @@ impl BezierStage {
             scratch: words(&self.buffers.scratch)?,
             points_words,
             pole_words,
+            stride: triangle_stride(self.params.max_depth),
         })
     }
 }
@@ -831,8 +838,10 @@ pub struct Intermediates {
     pub edge_bits: Vec<u32>,
     /// The exclusive scan of `[edge vertices | inner vertices | triangles | 0]`.
     pub counts: Vec<u32>,
-    /// Per coarse triangle: `points_words` words of lattice points, then `pole_words`.
+    /// Per coarse triangle (`stride` words): `points_words` words of lattice points, then
+    /// `pole_words`, then the points' nonzero groups (as `TriScratch::words`).
     pub scratch: Vec<u32>,
     pub points_words: u32,
     pub pole_words: u32,
+    pub stride: u32,
 }

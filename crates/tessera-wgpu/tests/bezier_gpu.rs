@@ -75,14 +75,14 @@ fn compare_decisions(
         }
     }
     // Triangles, from the GPU's own edge decisions, so that each stage is compared alone.
-    let stride = (inter.points_words + inter.pole_words) as usize;
+    let stride = inter.stride as usize;
     for t in 0..l.coarse_triangles {
         let gpu_words = &inter.scratch[t as usize * stride..(t as usize + 1) * stride];
         let cpu_words = |p: &AdaptiveParams| {
             let ctx = tri_context(prep, &cps, &gpu_bits, p, t);
             let mut s = TriScratch::new(p.max_depth);
             tri_mark(&ctx, &mut s);
-            [s.points, s.pole].concat()
+            s.words()
         };
         if cpu_words(params) != gpu_words {
             let tie = cpu_words(&lo) == gpu_words || cpu_words(&hi) == gpu_words;

@@ -105,19 +105,23 @@ impl Lattice {
 
     /// The lattice point of a bit index (inverse of [`Lattice::index`]).
     pub fn point(&self, index: usize) -> Lp {
-        let n = self.n as usize;
-        let (mut j, mut row) = (0usize, 0usize);
-        while row + (n + 1 - j) <= index {
-            row += n + 1 - j;
-            j += 1;
-        }
-        [(index - row) as u32, j as u32]
+        LatticeRows::default().seek(self, index).point(index)
     }
 
     /// Words of the bit set of lattice points.
     pub fn points_words(depth: u32) -> usize {
         let n = 1usize << depth;
         ((n + 1) * (n + 2) / 2).div_ceil(32)
+    }
+
+    /// The words of the point set go in groups of `1 << word_group_shift` words, at most
+    /// 32 groups, so that one word ([`TriScratch::groups`]) says which groups hold points
+    /// and the emit stage reads only those (a coarse triangle makes a few points at most
+    /// thresholds, in a set of 68 words at depth 6).
+    ///
+    /// [`TriScratch::groups`]: super::refine::TriScratch::groups
+    pub fn word_group_shift(points_words: u32) -> u32 {
+        points_words.div_ceil(32).next_power_of_two().trailing_zeros()
     }
 
     /// Lattice point of patch coordinates `c` (inverse of [`Lattice::patch_coords`];
@@ -173,6 +177,34 @@ impl Lattice {
             (pa[1] as i64 + h[1] + h[0]) as u32,
         ];
         [self.from_patch_coords(r), a, b]
+    }
+}
+
+/// A cursor over the lattice's rows (`j`), for bit indices taken in increasing order:
+/// each row is passed once, where [`Lattice::point`] searches from row 0 every time.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct LatticeRows {
+    /// The current row.
+    pub j: u32,
+    /// The bit index of its first point, (0, j).
+    pub start: usize,
+}
+
+impl LatticeRows {
+    /// The row holding bit `index`, searching forward from this one.
+    pub fn seek(self, l: &Lattice, index: usize) -> LatticeRows {
+        let mut r = self;
+        let n = l.n as usize;
+        while r.start + (n + 1 - r.j as usize) <= index {
+            r.start += n + 1 - r.j as usize;
+            r.j += 1;
+        }
+        r
+    }
+
+    /// The point of bit `index`, which lies in this row.
+    pub fn point(self, index: usize) -> Lp {
+        [(index - self.start) as u32, self.j]
     }
 }
 
@@ -307,15 +339,33 @@ mod tests {
     fn index_and_point_are_inverse() {
         let l = Lattice::new(5, 3);
         let mut seen = 0;
+        // A cursor carried forward, skipping rows (every third index) as the emit stage does.
+        let mut rows = LatticeRows::default();
         for j in 0..=l.n {
             for i in 0..=l.n - j {
                 let k = l.index([i, j]);
                 assert_eq!(k, seen);
                 assert_eq!(l.point(k), [i, j]);
+                if k % 3 == 0 {
+                    rows = rows.seek(&l, k);
+                    assert_eq!(rows.point(k), [i, j]);
+                }
                 seen += 1;
             }
         }
         assert!(seen <= 32 * Lattice::points_words(3));
+    }
+
+    #[test]
+    fn word_groups_cover_the_point_set_in_at_most_32_groups() {
+        for depth in 1..=crate::gpu_types::MAX_DEPTH_LIMIT {
+            let words = Lattice::points_words(depth) as u32;
+            let shift = Lattice::word_group_shift(words);
+            assert!(words <= 32 << shift, "depth {depth}: {words} words, shift {shift}");
+            // The smallest such groups: half as large would not cover the set.
+            assert!(shift == 0 || words > 16 << shift, "depth {depth}: groups too large");
+        }
+        assert_eq!(Lattice::word_group_shift(68), 2);
     }
 
     #[test]

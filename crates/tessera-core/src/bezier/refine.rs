@@ -315,14 +315,25 @@ pub struct TriScratch {
     /// Points marked on sides collapsed to a point (all one vertex, but they steer the
     /// replay of the bisection).
     pub pole: Vec<u32>,
+    /// Bit g: group g of `points` (words `g << group_shift ..`, see
+    /// [`Lattice::word_group_shift`]) holds a point.
+    pub groups: u32,
+    pub group_shift: u32,
 }
 
 impl TriScratch {
     pub fn new(depth: u32) -> Self {
+        let points_words = Lattice::points_words(depth);
         TriScratch {
-            points: vec![0; Lattice::points_words(depth)],
+            points: vec![0; points_words],
             pole: vec![0; (3 * ((1usize << depth) + 1)).div_ceil(32)],
+            groups: 0,
+            group_shift: Lattice::word_group_shift(points_words as u32),
         }
+    }
+    /// The words as the GPU stores them: points, pole points, groups.
+    pub fn words(&self) -> Vec<u32> {
+        [&self.points[..], &self.pole[..], &[self.groups]].concat()
     }
     pub fn inner_count(&self) -> u32 {
         self.points.iter().map(|w| w.count_ones()).sum()
@@ -344,7 +355,10 @@ pub fn tri_mark(ctx: &TriContext, scratch: &mut TriScratch) -> u32 {
             continue;
         }
         match ctx.lattice.place(lattice_mid(w.t[1], w.t[2])) {
-            LatticePlace::Inside(i) => bit_set(&mut scratch.points, i),
+            LatticePlace::Inside(i) => {
+                bit_set(&mut scratch.points, i);
+                scratch.groups |= 1 << ((i / 32) >> scratch.group_shift);
+            }
             LatticePlace::Side(k, f) if ctx.sides[k].2 => {
                 bit_set(&mut scratch.pole, pole_index(&ctx.lattice, k, f))
             }
@@ -509,20 +523,7 @@ pub fn tri_triangles(
     });
 }
 
-/// Rank of each set bit among the inner points (prefix popcounts per word).
-pub fn word_prefix(points: &[u32]) -> Vec<u32> {
-    let mut sum = 0;
-    points
-        .iter()
-        .map(|w| {
-            let s = sum;
-            sum += w.count_ones();
-            s
-        })
-        .collect()
-}
-
-/// Rank of inner point `i` given [`word_prefix`].
+/// Rank of inner point `i` given the inner points before each word (`prefix`).
 pub fn inner_rank(points: &[u32], prefix: &[u32], i: usize) -> u32 {
     let below = points[i / 32] & ((1u32 << (i % 32)) - 1);
     prefix[i / 32] + below.count_ones()

@@ -19,11 +19,11 @@ use super::edge_tests::{
     bit_count, bit_positions, lerp_uv, subdivide_segment_with, EdgeBits, EdgeTest, TestInputs,
     DYADIC_SCALE,
 };
-use super::lattice::Lattice;
+use super::lattice::{Lattice, LatticeRows};
 use super::patch::{eval_frame_f32, frame_normal_f32};
 use super::prepare::PreparedBezier;
 use super::refine::{
-    inner_rank, interior_need, tri_mark, tri_triangles, word_prefix, TriContext, TriScratch,
+    inner_rank, interior_need, tri_mark, tri_triangles, TriContext, TriScratch,
     TriangleSink, VertexRef,
 };
 use crate::error::{Error, Result};
@@ -260,21 +260,33 @@ pub fn tri_emit(
 ) {
     let points = &scratch.points;
     let mut next = inner_base as usize;
-    for (w, &word) in points.iter().enumerate() {
-        let mut bits = word;
-        while bits != 0 {
-            let i = 32 * w + bits.trailing_zeros() as usize;
-            bits &= bits - 1;
-            let [u, v] = ctx.lattice.uv(ctx.lattice.point(i));
-            records[next] = VertexRecord {
-                patch: ctx.lattice.patch,
-                u,
-                v,
-            };
-            next += 1;
+    // Inner points before each word, set for the words of groups that hold points (the
+    // only ones a rank is asked of).
+    let mut prefix = vec![0; points.len()];
+    let mut rows = LatticeRows::default();
+    let mut groups = scratch.groups;
+    while groups != 0 {
+        let g = groups.trailing_zeros();
+        groups &= groups - 1;
+        let first = (g << scratch.group_shift) as usize;
+        let end = (((g + 1) << scratch.group_shift) as usize).min(points.len());
+        for w in first..end {
+            prefix[w] = next as u32 - inner_base;
+            let mut bits = points[w];
+            while bits != 0 {
+                let i = 32 * w + bits.trailing_zeros() as usize;
+                bits &= bits - 1;
+                rows = rows.seek(&ctx.lattice, i);
+                let [u, v] = ctx.lattice.uv(rows.point(i));
+                records[next] = VertexRecord {
+                    patch: ctx.lattice.patch,
+                    u,
+                    v,
+                };
+                next += 1;
+            }
         }
     }
-    let prefix = word_prefix(points);
     let mut sink = EmitSink {
         indices,
         edge_vertex_base,
