@@ -193,17 +193,6 @@ fn unpack_lp(x: u32) -> vec2u {
     return vec2u(x & 0xffffu, x >> 16u);
 }
 
-fn gcd(a0: u32, b0: u32) -> u32 {
-    var a = a0;
-    var b = b0;
-    while b != 0u {
-        let r = a % b;
-        a = b;
-        b = r;
-    }
-    return a;
-}
-
 fn collinear(a: vec2u, b: vec2u, c: vec2u) -> bool {
     let ax = i32(b.x) - i32(a.x);
     let ay = i32(b.y) - i32(a.y);
@@ -237,11 +226,16 @@ struct SideSteps {
     unit: vec2i,
 }
 
+// The gcd is a power of two, found by trailing zeros and divided by a shift (an integer
+// division is a scalar loop over the lanes on a CPU device).
 fn side_steps(a: vec2u, b: vec2u) -> SideSteps {
     let d = vec2i(i32(b.x) - i32(a.x), i32(b.y) - i32(a.y));
-    // At least 1: a degenerate side (a = b) has no inner points.
-    let steps = max(gcd(u32(abs(d.x)), u32(abs(d.y))), 1u);
-    return SideSteps(steps, d / i32(steps));
+    let z = countTrailingZeros(bitcast<u32>(d.x | d.y));
+    // A degenerate side (a = b) has no inner points.
+    if z >= 32u {
+        return SideSteps(1u, d);
+    }
+    return SideSteps(1u << z, d >> vec2u(z));
 }
 
 fn step_point(a: vec2u, unit: vec2i, s: u32) -> vec2u {

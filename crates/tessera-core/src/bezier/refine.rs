@@ -395,12 +395,23 @@ fn leaf_polygon(ctx: &TriContext, scratch: &TriScratch, t: [Lp; 3], out: &mut Ve
 
 /// The lattice points strictly inside segment a → b: `a + s · unit` for `0 < s < steps`.
 /// Lattice points on a side: a (1, 0), (0, 1), (1, −1) or (2, −1) direction (axes and
-/// diagonals of (u, v) under the lattice's shear) times the gcd.
+/// diagonals of (u, v) under the lattice's shear) times the gcd. A bisection side is
+/// a power of two times such a unit, which has an odd component, so the gcd is the
+/// largest power of two dividing both components: found by their trailing zeros, where
+/// Euclid's modulo was a scalar loop over the lanes on a CPU device.
 fn side_steps(a: Lp, b: Lp) -> (u32, [i64; 2]) {
     let d = [b[0] as i64 - a[0] as i64, b[1] as i64 - a[1] as i64];
-    // At least 1, so that a degenerate side (a = b) has no inner points, not a panic.
-    let steps = gcd(d[0].unsigned_abs(), d[1].unsigned_abs()).max(1) as i64;
-    (steps as u32, [d[0] / steps, d[1] / steps])
+    // A degenerate side (a = b) has no inner points, not a panic.
+    if d == [0, 0] {
+        return (1, d);
+    }
+    let z = (d[0] | d[1]).trailing_zeros();
+    debug_assert_eq!(
+        1u64 << z,
+        gcd(d[0].unsigned_abs(), d[1].unsigned_abs()),
+        "{a:?} → {b:?}: not a bisection side"
+    );
+    (1 << z, [d[0] >> z, d[1] >> z])
 }
 
 fn step_point(a: Lp, unit: [i64; 2], s: u32) -> Lp {
