@@ -1,10 +1,15 @@
 // Exclusive prefix sum of u32, in place, one level of a multi-level scan (the host
 // records the levels). `scan_blocks`: each workgroup scans its block of
-// 2 × WORKGROUP values and writes the block's total to `sums`; `add_offsets` adds the
+// BLOCK values and writes the block's total to `sums`; `add_offsets` adds the
 // scanned block totals back. Twin of `tessera_core::scan::{scan_blocks, add_offsets}`.
 
-const WORKGROUP: u32 = 256u;
-const BLOCK: u32 = 2u * WORKGROUP;
+// A workgroup scans a block of WORKGROUP × PER_LANE values, each lane PER_LANE
+// consecutive ones serially. Few lanes and few barriers: a CPU device runs a workgroup
+// as fibers of a few lanes and switches every fiber at every barrier, which made the
+// 17 barriers of a 256-lane Hillis–Steele scan most of the scan's time on lavapipe.
+const WORKGROUP: u32 = 64u;
+const PER_LANE: u32 = 8u;
+const BLOCK: u32 = WORKGROUP * PER_LANE;
 
 struct ScanParams {
     n: u32,
@@ -30,13 +35,13 @@ fn scan_len() -> u32 {
     return min(scan.n, live[scan.live_slot] + 1u);
 }
 
-var<workgroup> partial: array<u32, WORKGROUP>;
+var<workgroup> lane_totals: array<u32, WORKGROUP>;
 
 fn block_index(wg: vec3u, groups: vec3u) -> u32 {
     return wg.x + wg.y * groups.x;
 }
 
-@compute @workgroup_size(256)
+@compute @workgroup_size(64)
 fn scan_blocks(
     @builtin(workgroup_id) wg: vec3u,
     @builtin(num_workgroups) groups: vec3u,
@@ -48,41 +53,41 @@ fn scan_blocks(
     if block * BLOCK >= n && block > 0u {
         return;
     }
-    let i0 = block * BLOCK + 2u * lid;
-    var a = 0u;
-    var b = 0u;
-    if i0 < n {
-        a = data[i0];
-    }
-    if i0 + 1u < n {
-        b = data[i0 + 1u];
-    }
-    // Inclusive Hillis–Steele scan of the pair sums across the workgroup.
-    partial[lid] = a + b;
-    workgroupBarrier();
-    for (var offset = 1u; offset < WORKGROUP; offset *= 2u) {
-        var x = 0u;
-        if lid >= offset {
-            x = partial[lid - offset];
+    let i0 = block * BLOCK + PER_LANE * lid;
+    var values: array<u32, PER_LANE>;
+    var total = 0u;
+    for (var k = 0u; k < PER_LANE; k++) {
+        if i0 + k < n {
+            values[k] = data[i0 + k];
         }
-        workgroupBarrier();
-        partial[lid] += x;
-        workgroupBarrier();
+        total += values[k];
     }
-    let before = partial[lid] - (a + b);
-    if i0 < n {
-        data[i0] = before;
+    lane_totals[lid] = total;
+    workgroupBarrier();
+    // One lane scans the lane totals (64 additions), where a tree took a barrier a round.
+    if lid == 0u {
+        var run = 0u;
+        for (var l = 0u; l < WORKGROUP; l++) {
+            let x = lane_totals[l];
+            lane_totals[l] = run;
+            run += x;
+        }
+        // Dispatches folded into two dimensions may carry whole groups past the last block.
+        if block < arrayLength(&sums) {
+            sums[block] = run;
+        }
     }
-    if i0 + 1u < n {
-        data[i0 + 1u] = before + a;
-    }
-    // Dispatches folded into two dimensions may carry whole groups past the last block.
-    if lid == WORKGROUP - 1u && block < arrayLength(&sums) {
-        sums[block] = partial[lid];
+    workgroupBarrier();
+    var before = lane_totals[lid];
+    for (var k = 0u; k < PER_LANE; k++) {
+        if i0 + k < n {
+            data[i0 + k] = before;
+        }
+        before += values[k];
     }
 }
 
-@compute @workgroup_size(256)
+@compute @workgroup_size(64)
 fn add_offsets(
     @builtin(workgroup_id) wg: vec3u,
     @builtin(num_workgroups) groups: vec3u,
@@ -92,14 +97,13 @@ fn add_offsets(
     if block >= arrayLength(&sums) {
         return;
     }
-    let i0 = block * BLOCK + 2u * lid;
+    let i0 = block * BLOCK + PER_LANE * lid;
     let n = scan_len();
     let add = sums[block];
-    if i0 < n {
-        data[i0] += add;
-    }
-    if i0 + 1u < n {
-        data[i0 + 1u] += add;
+    for (var k = 0u; k < PER_LANE; k++) {
+        if i0 + k < n {
+            data[i0 + k] += add;
+        }
     }
 }
 
