@@ -181,9 +181,15 @@ fn euler_count(c: TriCtx, inner: u32) -> u32 {
     return select(NO_COUNT, count, applies);
 }
 
+// The deepest lattice the private arrays hold. The host sets it to the depth the
+// kernel runs at (`TestKernels` in tessera-wgpu): every invocation zeroes its private
+// arrays, and sized for MAX_DEPTH_LIMIT they were a sixth of tri_emit at depth 6.
+const ARRAY_DEPTH: u32 = MAX_DEPTH_LIMIT;
+const_assert ARRAY_DEPTH <= MAX_DEPTH_LIMIT;
+
 // A leaf polygon: lattice points packed as i | j << 16. At most the corners plus every
 // lattice point on the sides of the coarse triangle.
-const POLY_MAX: u32 = 3u * (1u << MAX_DEPTH_LIMIT) + 3u;
+const POLY_MAX: u32 = 3u * (1u << ARRAY_DEPTH) + 3u;
 
 fn pack_lp(p: vec2u) -> u32 {
     return p.x | (p.y << 16u);

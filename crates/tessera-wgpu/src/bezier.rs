@@ -46,6 +46,7 @@ use tessera_core::bezier::lattice::{inv_lattice, Lattice};
 use tessera_core::bezier::{AdaptiveParams, EdgeTest, PreparedBezier};
 use tessera_core::gpu_types::{
     BezierParams, BezierStatus, MapAtlas, NetTexture, OutVertex, VertexRecord, EDGE_BIT_WORDS,
+    MAX_DEPTH_LIMIT,
 };
 use tessera_core::Mesh;
 use wgpu::util::DeviceExt;
@@ -99,16 +100,27 @@ impl BezierKernels {
         BezierKernels(Arc::new(Pipelines::new(device)))
     }
 
-    /// The kernels specialised for `test`, compiled on first use.
-    fn for_test(&self, device: &wgpu::Device, test: EdgeTest) -> Arc<TestKernels> {
-        self.0.by_test[test.index() as usize]
-            .get_or_init(|| Arc::new(TestKernels::new(device, test)))
+    /// The kernels specialised for `params` (test and depth), compiled on first use.
+    fn for_params(&self, device: &wgpu::Device, params: &AdaptiveParams) -> Arc<TestKernels> {
+        let array_depth = array_depth(params.max_depth);
+        let class = (array_depth - ARRAY_DEPTH_CLASSES[0]) as usize;
+        self.0.by_test[params.test.index() as usize][class]
+            .get_or_init(|| Arc::new(TestKernels::new(device, params.test, array_depth)))
             .clone()
     }
 }
 
+/// The lattice depths the triangle kernels' private arrays are sized for
+/// (`ARRAY_DEPTH` in `shaders/shared/refine.wgsl`): a depth runs on the kernels of the
+/// first class at or above it.
+const ARRAY_DEPTH_CLASSES: [u32; 3] = [AdaptiveParams::DEFAULT_MAX_DEPTH, 7, MAX_DEPTH_LIMIT];
+
+fn array_depth(max_depth: u32) -> u32 {
+    max_depth.max(ARRAY_DEPTH_CLASSES[0])
+}
+
 struct Pipelines {
-    by_test: [OnceLock<Arc<TestKernels>>; EdgeTest::ALL.len()],
+    by_test: [[OnceLock<Arc<TestKernels>>; ARRAY_DEPTH_CLASSES.len()]; EdgeTest::ALL.len()],
     scan: ScanKernels,
     finish: Kernel,
     edge_emit: Kernel,
@@ -133,6 +145,10 @@ impl Pipelines {
 /// each decision pay for all four; fixed, the compiler drops the other three
 /// (`edge_decide` 2.3× faster on lavapipe). `tri_emit` runs no test but includes the
 /// file, so it needs the constant too.
+///
+/// The triangle kernels' private arrays are sized for `array_depth`: every invocation
+/// zeroes them, and sized for `MAX_DEPTH_LIMIT` they cost `tri_emit` about a sixth of
+/// its time at depth 6 on lavapipe.
 struct TestKernels {
     edge_decide: Kernel,
     tri_mark: Kernel,
@@ -140,11 +156,17 @@ struct TestKernels {
 }
 
 impl TestKernels {
-    fn new(device: &wgpu::Device, test: EdgeTest) -> Self {
+    fn new(device: &wgpu::Device, test: EdgeTest, array_depth: u32) -> Self {
         let constants = [("EDGE_TEST", test.index() as f64)];
-        let make = |file: &str| Kernel::with_constants(device, file, "main", &constants);
+        let sized = [("ARRAY_DEPTH", array_depth)];
+        let make = |file: &str| Kernel::specialised(device, file, "main", &constants, &sized);
         TestKernels {
-            edge_decide: make("bezier_edge_decide.wgsl"),
+            edge_decide: Kernel::with_constants(
+                device,
+                "bezier_edge_decide.wgsl",
+                "main",
+                &constants,
+            ),
             tri_mark: make("bezier_tri_mark.wgsl"),
             tri_emit: make("bezier_tri_emit.wgsl"),
         }
@@ -388,7 +410,7 @@ impl BezierStage {
         let l = prepared.layout;
         let counts_len = l.coarse_edges + 2 * l.coarse_triangles + 1;
         let pipelines = kernels.clone();
-        let test_kernels = pipelines.for_test(device, params.test);
+        let test_kernels = pipelines.for_params(device, params);
         check_size(device, "count", 4 * counts_len as u64)?;
         check_size(
             device,
@@ -523,8 +545,10 @@ impl BezierStage {
             self.buffers.scratch = scratch_buffer(device, params.max_depth, l.coarse_triangles)?;
             rebind = true;
         }
-        if params.test != self.params.test {
-            self.test_kernels = self.pipelines.for_test(device, params.test);
+        if params.test != self.params.test
+            || array_depth(params.max_depth) != array_depth(self.params.max_depth)
+        {
+            self.test_kernels = self.pipelines.for_params(device, params);
             rebind = true;
         }
         self.params = *params;

@@ -26,7 +26,19 @@ impl Kernel {
         entry: &str,
         constants: &[(&str, f64)],
     ) -> Self {
-        let module = shaders::module(device, file);
+        Self::specialised(device, file, entry, constants, &[])
+    }
+
+    /// As [`Kernel::with_constants`], with `const` values replaced in the source too
+    /// ([`shaders::source_with_consts`]).
+    pub fn specialised(
+        device: &wgpu::Device,
+        file: &str,
+        entry: &str,
+        constants: &[(&str, f64)],
+        consts: &[(&str, u32)],
+    ) -> Self {
+        let module = shaders::module(device, file, consts);
         Kernel {
             pipeline: device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
                 label: Some(file),

@@ -205,7 +205,7 @@ impl MeshRenderer {
         depth_format: Option<wgpu::TextureFormat>,
         sample_count: u32,
     ) -> Self {
-        let module = crate::shaders::module(device, "render_mesh.wgsl");
+        let module = crate::shaders::module(device, "render_mesh.wgsl", &[]);
         let bind_group_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("tessera render uniforms"),
             entries: &[wgpu::BindGroupLayoutEntry {

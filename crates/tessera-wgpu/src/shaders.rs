@@ -183,11 +183,30 @@ fn expand(name: &str, out: &mut String, seen: &mut Vec<String>) {
     }
 }
 
-/// A shader module for `name`.
-pub fn module(device: &wgpu::Device, name: &str) -> wgpu::ShaderModule {
+/// The source of `name` with the value of each `const NAME: u32 = ...;` in `consts`
+/// replaced: for sizes WGSL cannot take from an `override` (private arrays).
+///
+/// # Panics
+/// If the source declares no such constant: a build-time inconsistency, caught by the
+/// shader validation test.
+pub fn source_with_consts(name: &str, consts: &[(&str, u32)]) -> String {
+    let mut src = source(name);
+    for (constant, value) in consts {
+        let decl = format!("const {constant}: u32 = ");
+        let start = src
+            .find(&decl)
+            .unwrap_or_else(|| panic!("{name} declares no `{decl}...;`"));
+        let end = start + src[start..].find(';').expect("a declaration ends");
+        src.replace_range(start..end, &format!("{decl}{value}u"));
+    }
+    src
+}
+
+/// A shader module for `name`, with `consts` as in [`source_with_consts`].
+pub fn module(device: &wgpu::Device, name: &str, consts: &[(&str, u32)]) -> wgpu::ShaderModule {
     device.create_shader_module(wgpu::ShaderModuleDescriptor {
         label: Some(name),
-        source: wgpu::ShaderSource::Wgsl(source(name).into()),
+        source: wgpu::ShaderSource::Wgsl(source_with_consts(name, consts).into()),
     })
 }
 

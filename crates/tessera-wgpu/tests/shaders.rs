@@ -35,6 +35,26 @@ fn every_shader_parses_and_validates() {
 }
 
 #[test]
+fn the_triangle_kernels_validate_at_every_array_depth() {
+    for file in ["bezier_tri_mark.wgsl", "bezier_tri_emit.wgsl"] {
+        for depth in 0..=tessera_core::gpu_types::MAX_DEPTH_LIMIT {
+            let src = shaders::source_with_consts(file, &[("ARRAY_DEPTH", depth)]);
+            assert!(src.contains(&format!("const ARRAY_DEPTH: u32 = {depth}u;")));
+            check(&src).unwrap_or_else(|e| panic!("{file} at array depth {depth}: {e}"));
+        }
+        // Deeper than the lattice's limit is refused by the shader's own const_assert.
+        let src = shaders::source_with_consts(file, &[("ARRAY_DEPTH", 9)]);
+        assert!(check(&src).is_err(), "{file} accepted array depth 9");
+    }
+}
+
+#[test]
+#[should_panic(expected = "declares no `const NO_SUCH_CONST: u32 = ...;`")]
+fn replacing_an_undeclared_const_is_refused() {
+    shaders::source_with_consts("bezier_tri_emit.wgsl", &[("NO_SUCH_CONST", 1)]);
+}
+
+#[test]
 fn an_invalid_shader_is_rejected() {
     // The check is not a formality: a type error fails the parser, and a module that
     // parses but breaks a rule only the validator knows (a store through a read-only

@@ -121,7 +121,10 @@ impl Lattice {
     ///
     /// [`TriScratch::groups`]: super::refine::TriScratch::groups
     pub fn word_group_shift(points_words: u32) -> u32 {
-        points_words.div_ceil(32).next_power_of_two().trailing_zeros()
+        points_words
+            .div_ceil(32)
+            .next_power_of_two()
+            .trailing_zeros()
     }
 
     /// Lattice point of patch coordinates `c` (inverse of [`Lattice::patch_coords`];
@@ -361,9 +364,15 @@ mod tests {
         for depth in 1..=crate::gpu_types::MAX_DEPTH_LIMIT {
             let words = Lattice::points_words(depth) as u32;
             let shift = Lattice::word_group_shift(words);
-            assert!(words <= 32 << shift, "depth {depth}: {words} words, shift {shift}");
+            assert!(
+                words <= 32 << shift,
+                "depth {depth}: {words} words, shift {shift}"
+            );
             // The smallest such groups: half as large would not cover the set.
-            assert!(shift == 0 || words > 16 << shift, "depth {depth}: groups too large");
+            assert!(
+                shift == 0 || words > 16 << shift,
+                "depth {depth}: groups too large"
+            );
         }
         assert_eq!(Lattice::word_group_shift(68), 2);
     }

@@ -23,8 +23,8 @@ use super::lattice::{Lattice, LatticeRows};
 use super::patch::{eval_frame_f32, frame_normal_f32};
 use super::prepare::PreparedBezier;
 use super::refine::{
-    inner_rank, interior_need, tri_mark, tri_triangles, TriContext, TriScratch,
-    TriangleSink, VertexRef,
+    inner_rank, interior_need, tri_mark, tri_triangles, TriContext, TriScratch, TriangleSink,
+    VertexRef,
 };
 use crate::error::{Error, Result};
 use crate::gpu_types::{OutVertex, VertexRecord, EDGE_BIT_WORDS, MAX_DEPTH_LIMIT};
