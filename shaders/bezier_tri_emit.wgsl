@@ -24,7 +24,7 @@
 var<private> next_index: u32;
 var<private> inner_base: u32;
 
-// Inner points before each word of the triangle's bit set (twin of `word_prefix`):
+// Inner points before each word of the triangle's bit set (twin of `prefix` in `tri_emit`):
 // one lookup per rank instead of a loop over the words before it.
 const MAX_POINTS_WORDS: u32 = (((1u << ARRAY_DEPTH) + 1u) * ((1u << ARRAY_DEPTH) + 2u) / 2u + 31u) / 32u;
 var<private> word_below: array<u32, MAX_POINTS_WORDS>;

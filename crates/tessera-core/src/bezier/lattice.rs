@@ -349,7 +349,7 @@ mod tests {
                 let k = l.index([i, j]);
                 assert_eq!(k, seen);
                 assert_eq!(l.point(k), [i, j]);
-                if k % 3 == 0 {
+                if k.is_multiple_of(3) {
                     rows = rows.seek(&l, k);
                     assert_eq!(rows.point(k), [i, j]);
                 }
