@@ -139,19 +139,39 @@ fn grid_on_side(side: u32, t: u32) -> vec2u {
     }
 }
 
+// The sides of patch q's coarse triangles that join grid points a and b, appended to
+// `out` (at most two in all). The search only notes where they are, and the side's
+// direction is looked up after it: a CPU device runs every iteration's body under a
+// mask, and the lookup (storage reads) inside made that 54 lookups per call.
 fn add_sides_in_patch(out: ptr<function, EdgeSides>, q: u32, a: vec2u, b: vec2u) {
+    var found = 0u;
+    var first = vec2u(0u);
+    var second = vec2u(0u);
     for (var local = 0u; local < COARSE_TRIANGLES_PER_PATCH; local++) {
         let grid = coarse_triangle_grid(local);
         for (var k = 0u; k < 3u; k++) {
             let x = grid[k];
             let y = grid[(k + 1u) % 3u];
             if (all(x == a) && all(y == b)) || (all(x == b) && all(y == a)) {
-                if (*out).count < 2u {
-                    let r = coarse_edge_of(q, x, y);
-                    (*out).s[(*out).count] = EdgeSide(q * COARSE_TRIANGLES_PER_PATCH + local, k, r.forward);
-                    (*out).count += 1u;
-                }
+                second = select(second, vec2u(local, k), found == 1u);
+                first = select(first, vec2u(local, k), found == 0u);
+                found += 1u;
             }
+        }
+    }
+    for (var f = 0u; f < min(found, 2u); f++) {
+        let at = select(second, first, f == 0u);
+        if (*out).count < 2u {
+            let grid = coarse_triangle_grid(at.x);
+            let x = grid[at.y];
+            let y = grid[(at.y + 1u) % 3u];
+            let side = EdgeSide(q * COARSE_TRIANGLES_PER_PATCH + at.x, at.y, coarse_edge_of(q, x, y).forward);
+            if (*out).count == 0u {
+                (*out).s[0] = side;
+            } else {
+                (*out).s[1] = side;
+            }
+            (*out).count += 1u;
         }
     }
 }
