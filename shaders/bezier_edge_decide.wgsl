@@ -15,7 +15,7 @@
 @group(0) @binding(4) var<storage, read> curves: array<GpuCurve>;
 @group(0) @binding(6) var<storage, read_write> edge_bits: array<vec4u>;
 @group(0) @binding(7) var<storage, read_write> counts: array<u32>;
-@group(0) @binding(14) var<storage, read_write> evaluations: atomic<u32>;
+@group(0) @binding(14) var<storage, read_write> tally: array<atomic<u32>>;
 
 // Whether a triangle beside the edge asks for piece [lo, hi] to be split.
 fn side_need(side: EdgeSide, lo: u32, hi: u32) -> bool {
@@ -96,6 +96,6 @@ fn main(@builtin(global_invocation_id) gid: vec3u, @builtin(num_workgroups) grou
     edge_bits[2u * e + 1u] = bits.hi;
     counts[e] = set_count(bits);
     if flat_evaluations > 0u {
-        atomicAdd(&evaluations, flat_evaluations);
+        atomicAdd(&tally[TALLY_EVALUATIONS], flat_evaluations);
     }
 }

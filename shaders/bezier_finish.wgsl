@@ -1,5 +1,5 @@
 // After the scan, one invocation: totals, the capacity check, the indirect draw
-// arguments and the vertex kernel's indirect dispatch. Nothing is read back to draw.
+// arguments, the vertex kernel's indirect dispatch and the emit order's bucket slots. Nothing is read back to draw.
 // Twin of the totals in `tessera_core::bezier::tessellate_adaptive`.
 
 #include "shared/types.wgsl"
@@ -7,7 +7,7 @@
 @group(0) @binding(7) var<storage, read> counts: array<u32>;
 @group(0) @binding(12) var<storage, read_write> draw_args: DrawIndexedIndirectArgs;
 @group(0) @binding(13) var<storage, read_write> status: BezierStatus;
-@group(0) @binding(14) var<storage, read> evaluations: u32;
+@group(0) @binding(14) var<storage, read_write> tally: array<u32>;
 
 const VERTEX_WORKGROUP: u32 = 64u;
 const MAX_GROUPS_X: u32 = 32768u;
@@ -33,7 +33,7 @@ fn main() {
     status.indices = indices;
     status.overflow = overflow;
     status.edge_vertices = edge_vertices;
-    status.evaluations = evaluations + vertices;
+    status.evaluations = tally[TALLY_EVALUATIONS] + vertices;
     let groups = select((vertices + VERTEX_WORKGROUP - 1u) / VERTEX_WORKGROUP, 0u, overflow != 0u);
     status.dispatch_x = min(groups, MAX_GROUPS_X);
     status.dispatch_y = (groups + MAX_GROUPS_X - 1u) / MAX_GROUPS_X;
@@ -43,4 +43,11 @@ fn main() {
     draw_args.first_index = 0u;
     draw_args.base_vertex = 0;
     draw_args.first_instance = 0u;
+    // Each emit-order bucket's first slot: the exclusive scan of its triangle counts.
+    var slot = 0u;
+    for (var b = 0u; b < ORDER_BUCKETS; b++) {
+        let n = tally[TALLY_ORDER + b];
+        tally[TALLY_ORDER + b] = slot;
+        slot += n;
+    }
 }

@@ -61,10 +61,12 @@ fn sink_triangle(a: VRef, b: VRef, c: VRef) {
 
 @compute @workgroup_size(64)
 fn main(@builtin(global_invocation_id) gid: vec3u, @builtin(num_workgroups) groups: vec3u) {
-    let t = gid.x + gid.y * groups.x * 64u;
-    if t >= params.coarse_triangles || status.overflow != 0u {
+    let slot = gid.x + gid.y * groups.x * 64u;
+    if slot >= params.coarse_triangles || status.overflow != 0u {
         return;
     }
+    // The coarse triangles in `tri_order`'s order: lanes side by side do alike work.
+    let t = counts[order_base() + slot];
     let c = tri_ctx(t);
     let e = params.coarse_edges;
     let tris = params.coarse_triangles;

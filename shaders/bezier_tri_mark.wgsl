@@ -17,7 +17,7 @@
 @group(0) @binding(4) var<storage, read> curves: array<GpuCurve>;
 @group(0) @binding(6) var<storage, read> edge_bits: array<vec4u>;
 @group(0) @binding(7) var<storage, read_write> counts: array<u32>;
-@group(0) @binding(14) var<storage, read_write> evaluations: atomic<u32>;
+@group(0) @binding(14) var<storage, read_write> tally: array<atomic<u32>>;
 @group(0) @binding(8) var<storage, read_write> scratch: array<u32>;
 
 // The counting sink: any injective numbering of inner points will do.
@@ -75,7 +75,7 @@ fn main(@builtin(global_invocation_id) gid: vec3u, @builtin(num_workgroups) grou
     let c = tri_ctx(t);
     let inner = tri_mark(c);
     if flat_evaluations > 0u {
-        atomicAdd(&evaluations, flat_evaluations);
+        atomicAdd(&tally[TALLY_EVALUATIONS], flat_evaluations);
     }
     var made = euler_count(c, inner);
     if made == NO_COUNT {
@@ -86,4 +86,6 @@ fn main(@builtin(global_invocation_id) gid: vec3u, @builtin(num_workgroups) grou
     }
     counts[params.coarse_edges + t] = inner;
     counts[params.coarse_edges + params.coarse_triangles + t] = made;
+    // The emit order's buckets (`bezier_tri_order.wgsl`).
+    atomicAdd(&tally[TALLY_ORDER + order_bucket(made)], 1u);
 }

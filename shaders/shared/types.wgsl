@@ -98,6 +98,25 @@ struct BezierStatus {
 
 @group(0) @binding(0) var<uniform> params: BezierParams;
 
+// The tally buffer (binding 14; twin of `tessera_core::gpu_types::tally`): the flat
+// test's evaluations, then how many coarse triangles fall in each emit-order bucket
+// (turned into each bucket's first slot by the finish kernel).
+const TALLY_EVALUATIONS: u32 = 0u;
+const TALLY_ORDER: u32 = 1u;
+const ORDER_BUCKETS: u32 = 256u;
+
+// The emit-order bucket of a coarse triangle that makes `made` triangles: the most
+// first, every count from ORDER_BUCKETS - 1 up in bucket 0 (twin of `order_bucket`).
+fn order_bucket(made: u32) -> u32 {
+    return ORDER_BUCKETS - 1u - min(made, ORDER_BUCKETS - 1u);
+}
+
+// Where the emit order starts in `counts`, after the scan's
+// [edge vertices | inner vertices | triangles | total].
+fn order_base() -> u32 {
+    return params.coarse_edges + 2u * params.coarse_triangles + 1u;
+}
+
 // Catmull-Clark (`tessera_core::gpu_types`, `tessera_core::catmull_clark::gpu_model`).
 const CC_NODE_BEZIER: u32 = 0u;
 const CC_NODE_SPLIT: u32 = 1u;

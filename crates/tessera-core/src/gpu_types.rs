@@ -23,6 +23,20 @@ pub const MAX_DEPTH_LIMIT: u32 = 8;
 /// Words of the per-edge bit set of inserted dyadic points at `MAX_DEPTH_LIMIT`.
 pub const EDGE_BIT_WORDS: usize = (1 << MAX_DEPTH_LIMIT) / 32;
 
+/// The Bézier stage's tally buffer: atomic counters the kernels add to, as `u32` words
+/// (twin of the `TALLY_*` constants in `shaders/shared/types.wgsl`).
+pub mod tally {
+    /// The flat test's surface evaluations.
+    pub const EVALUATIONS: usize = 0;
+    /// Coarse triangles per emit-order bucket, from here on
+    /// (`tessera_core::bezier::tessellate::order_bucket`).
+    pub const ORDER: usize = 1;
+    /// Emit-order buckets: triangles made 0..=254 one bucket each, 255 and more one.
+    pub const ORDER_BUCKETS: u32 = 256;
+    /// Words in the buffer.
+    pub const WORDS: usize = ORDER + ORDER_BUCKETS as usize;
+}
+
 /// Control points of one bicubic patch, row-major, `x y z` per point.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]

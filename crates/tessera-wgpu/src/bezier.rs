@@ -9,8 +9,9 @@
 //! | 1 | `bezier_edge_decide` | coarse edge | edge bit sets, edge vertex counts |
 //! | 2 | clear + `bezier_tri_mark` | coarse triangle | lattice points, inner vertex and triangle counts |
 //! | 3 | `scan` (multi-level) | — | offsets of all three counts in one exclusive scan |
-//! | 4 | `bezier_finish` | 1 | totals, overflow flags, draw arguments, vertex dispatch |
-//! | 5 | copy + `bezier_edge_emit` + `bezier_tri_emit` | edge / triangle | vertex records, indices |
+//! | 4 | `bezier_finish` | 1 | totals, overflow flags, draw arguments, vertex dispatch, the emit order's bucket slots |
+//! | 4b | `bezier_tri_order` | coarse triangle | the emit order: those that make the most triangles first |
+//! | 5 | copy + `bezier_edge_emit` + `bezier_tri_emit` (in the emit order) | edge / triangle | vertex records, indices |
 //! | 6 | `bezier_vertex_eval` (indirect) | output vertex | vertices |
 //!
 //! Output sizes are not known in advance, and change with the threshold and depth. The
@@ -45,8 +46,8 @@ use std::sync::{Arc, OnceLock};
 use tessera_core::bezier::lattice::{inv_lattice, Lattice};
 use tessera_core::bezier::{AdaptiveParams, EdgeTest, PreparedBezier};
 use tessera_core::gpu_types::{
-    BezierParams, BezierStatus, MapAtlas, NetTexture, OutVertex, VertexRecord, EDGE_BIT_WORDS,
-    MAX_DEPTH_LIMIT,
+    tally, BezierParams, BezierStatus, MapAtlas, NetTexture, OutVertex, VertexRecord,
+    EDGE_BIT_WORDS, MAX_DEPTH_LIMIT,
 };
 use tessera_core::Mesh;
 use wgpu::util::DeviceExt;
@@ -85,7 +86,7 @@ mod slot {
     pub const INDICES: u32 = 11;
     pub const DRAW_ARGS: u32 = 12;
     pub const STATUS: u32 = 13;
-    pub const EVALUATIONS: u32 = 14;
+    pub const TALLY: u32 = 14;
 }
 
 /// The compiled Bézier kernels of one device. Compiling them is the slow part of
@@ -123,6 +124,7 @@ struct Pipelines {
     by_test: [[OnceLock<Arc<TestKernels>>; ARRAY_DEPTH_CLASSES.len()]; EdgeTest::ALL.len()],
     scan: ScanKernels,
     finish: Kernel,
+    tri_order: Kernel,
     edge_emit: Kernel,
     vertex_eval: Kernel,
 }
@@ -134,6 +136,7 @@ impl Pipelines {
             by_test: Default::default(),
             scan: ScanKernels::new(device),
             finish: make("bezier_finish.wgsl"),
+            tri_order: make("bezier_tri_order.wgsl"),
             edge_emit: make("bezier_edge_emit.wgsl"),
             vertex_eval: make("bezier_vertex_eval.wgsl"),
         }
@@ -179,16 +182,18 @@ enum Step {
     EdgeDecide,
     TriMark,
     ScanFinish,
+    TriOrder,
     EdgeEmit,
     TriEmit,
     VertexEval,
 }
 
 impl Step {
-    const ALL: [Step; 6] = [
+    const ALL: [Step; 7] = [
         Step::EdgeDecide,
         Step::TriMark,
         Step::ScanFinish,
+        Step::TriOrder,
         Step::EdgeEmit,
         Step::TriEmit,
         Step::VertexEval,
@@ -199,6 +204,7 @@ impl Step {
             Step::EdgeDecide => "edge_decide",
             Step::TriMark => "tri_mark",
             Step::ScanFinish => "scan+finish",
+            Step::TriOrder => "tri_order",
             Step::EdgeEmit => "edge_emit",
             Step::TriEmit => "tri_emit",
             Step::VertexEval => "vertex_eval",
@@ -210,6 +216,7 @@ struct BindGroups {
     edge_decide: wgpu::BindGroup,
     tri_mark: wgpu::BindGroup,
     finish: wgpu::BindGroup,
+    tri_order: wgpu::BindGroup,
     edge_emit: wgpu::BindGroup,
     tri_emit: wgpu::BindGroup,
     vertex_eval: wgpu::BindGroup,
@@ -232,7 +239,7 @@ impl BindGroups {
             (INDICES, &b.output.indices),
             (DRAW_ARGS, &b.output.indirect),
             (STATUS, &b.status),
-            (EVALUATIONS, &b.evaluations),
+            (TALLY, &b.tally),
         ];
         let textures = [(NETS, &b.nets), (MAPS, &b.map_atlas)];
         let bind = |k: &Kernel| k.bind_with_textures(device, &all, &textures);
@@ -240,6 +247,7 @@ impl BindGroups {
             edge_decide: bind(&t.edge_decide),
             tri_mark: bind(&t.tri_mark),
             finish: bind(&p.finish),
+            tri_order: bind(&p.tri_order),
             edge_emit: bind(&p.edge_emit),
             tri_emit: bind(&t.tri_emit),
             vertex_eval: bind(&p.vertex_eval),
@@ -287,8 +295,9 @@ struct Buffers {
     records: wgpu::Buffer,
     status: wgpu::Buffer,
     status_readback: wgpu::Buffer,
-    /// The flat test's evaluations (an atomic counter, zeroed each run).
-    evaluations: wgpu::Buffer,
+    /// Atomic counters, zeroed each run: the flat test's evaluations and the emit
+    /// order's buckets ([`tally`]).
+    tally: wgpu::Buffer,
     output: MeshBuffers,
 }
 
@@ -411,13 +420,15 @@ impl BezierStage {
         let counts_len = l.coarse_edges + 2 * l.coarse_triangles + 1;
         let pipelines = kernels.clone();
         let test_kernels = pipelines.for_params(device, params);
-        check_size(device, "count", 4 * counts_len as u64)?;
+        // The scan's values, then the emit order (one slot per coarse triangle).
+        let counts_bytes = 4 * (counts_len as u64 + l.coarse_triangles as u64);
+        check_size(device, "count", counts_bytes)?;
         check_size(
             device,
             "edge bits",
             4 * (EDGE_BIT_WORDS as u64) * l.coarse_edges as u64,
         )?;
-        let counts = storage(device, "tessera counts", 4 * counts_len as u64);
+        let counts = storage(device, "tessera counts", counts_bytes);
         let scan = PrefixSum::new(device, &pipelines.0.scan, &counts, counts_len);
         let uniform = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("tessera bezier params"),
@@ -518,7 +529,7 @@ impl BezierStage {
             ),
             status,
             status_readback,
-            evaluations: storage(device, "tessera evaluation counter", 4),
+            tally: storage(device, "tessera tally", 4 * tally::WORDS as u64),
             output,
         };
         Ok(BezierStage {
@@ -684,7 +695,7 @@ impl BezierStage {
             Step::EdgeDecide => {
                 // The scan's trailing slot collects the grand total: zero it each run.
                 encoder.clear_buffer(&b.counts, 4 * (counts_len as u64 - 1), Some(4));
-                encoder.clear_buffer(&b.evaluations, 0, None);
+                encoder.clear_buffer(&b.tally, 0, None);
             }
             // The triangles' bit sets start empty: a memset here, where zeroing them in
             // the kernel was a store per word and lane.
@@ -715,6 +726,10 @@ impl BezierStage {
                 Step::ScanFinish => {
                     b.scan.record(&mut pass, &p.scan);
                     p.finish.dispatch(&mut pass, &bg.finish, 1, 1);
+                }
+                Step::TriOrder => {
+                    p.tri_order
+                        .dispatch(&mut pass, &bg.tri_order, l.coarse_triangles, WORKGROUP)
                 }
                 Step::EdgeEmit => {
                     p.edge_emit
@@ -826,9 +841,13 @@ impl BezierStage {
             )?))
         };
         let (points_words, pole_words) = self.words_per_triangle();
+        let mut counts = words(&self.buffers.counts)?;
+        let l = self.prepared_layout;
+        let order = counts.split_off((l.coarse_edges + 2 * l.coarse_triangles + 1) as usize);
         Ok(Intermediates {
             edge_bits: words(&self.buffers.edge_bits)?,
-            counts: words(&self.buffers.counts)?,
+            counts,
+            order,
             scratch: words(&self.buffers.scratch)?,
             points_words,
             pole_words,
@@ -862,6 +881,9 @@ pub struct Intermediates {
     pub edge_bits: Vec<u32>,
     /// The exclusive scan of `[edge vertices | inner vertices | triangles | 0]`.
     pub counts: Vec<u32>,
+    /// The coarse triangles in the order `tri_emit` takes them (`emit_order`; within a
+    /// bucket the order is the atomics' and may change from run to run).
+    pub order: Vec<u32>,
     /// Per coarse triangle (`stride` words): `points_words` words of lattice points, then
     /// `pole_words`, then the points' nonzero groups (as `TriScratch::words`).
     pub scratch: Vec<u32>,

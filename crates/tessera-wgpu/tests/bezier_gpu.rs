@@ -9,7 +9,7 @@
 
 use glam::Vec3;
 use tessera_core::bezier::refine::{tri_mark, TriScratch};
-use tessera_core::bezier::tessellate::{edge_decide, tri_context};
+use tessera_core::bezier::tessellate::{edge_decide, emit_order, order_bucket, tri_context};
 use tessera_core::bezier::{
     tessellate_adaptive, AdaptiveParams, BezierModel, EdgeTest, PreparedBezier,
 };
@@ -93,10 +93,38 @@ fn compare_decisions(
             ties += 1;
         }
     }
+    compare_order(
+        &inter.counts,
+        &inter.order,
+        l.coarse_edges,
+        l.coarse_triangles,
+    );
     Comparison {
         decisions: (l.coarse_edges + l.coarse_triangles) as usize,
         ties,
     }
+}
+
+/// The GPU's emit order against its twin, from the GPU's own counts: the same buckets
+/// in the same order, and the same triangles in each (the atomics take a bucket's
+/// slots in any order).
+fn compare_order(counts: &[u32], gpu_order: &[u32], edges: u32, triangles: u32) {
+    let first = (edges + triangles) as usize;
+    let made: Vec<u32> = (0..triangles as usize)
+        .map(|t| counts[first + t + 1] - counts[first + t])
+        .collect();
+    let bucket = |t: &u32| order_bucket(made[*t as usize]);
+    let mut gpu = gpu_order.to_vec();
+    assert!(
+        gpu.iter().all(|&t| t < triangles) && gpu.is_sorted_by_key(bucket),
+        "the GPU's emit order leaves the buckets' order"
+    );
+    gpu.sort_by_key(|t| (bucket(t), *t));
+    assert_eq!(
+        gpu,
+        emit_order(&made),
+        "the GPU's emit order is not a bucketing of the triangles"
+    );
 }
 
 fn bbox_diagonal(prep: &PreparedBezier) -> f32 {

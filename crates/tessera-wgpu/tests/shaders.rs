@@ -414,6 +414,9 @@ fn bezier_constants_match_their_rust_twins() {
         ("MAX_DEPTH_LIMIT", MAX_DEPTH_LIMIT),
         ("EDGE_BIT_WORDS", EDGE_BIT_WORDS as u32),
         ("DYADIC_SCALE", 1 << MAX_DEPTH_LIMIT),
+        ("TALLY_EVALUATIONS", tally::EVALUATIONS as u32),
+        ("TALLY_ORDER", tally::ORDER as u32),
+        ("ORDER_BUCKETS", tally::ORDER_BUCKETS),
     ] {
         assert_eq!(wgsl_u32(&module, name), rust, "{name}");
     }

@@ -27,7 +27,7 @@ use super::refine::{
     VertexRef,
 };
 use crate::error::{Error, Result};
-use crate::gpu_types::{OutVertex, VertexRecord, EDGE_BIT_WORDS, MAX_DEPTH_LIMIT};
+use crate::gpu_types::{tally, OutVertex, VertexRecord, EDGE_BIT_WORDS, MAX_DEPTH_LIMIT};
 use crate::mesh::Mesh;
 pub use crate::scan::exclusive_scan;
 
@@ -245,6 +245,36 @@ pub fn edge_emit(
     }
 }
 
+/// The emit-order bucket of a coarse triangle that makes `made` triangles: those that
+/// make the most first, every count from `ORDER_BUCKETS - 1` up sharing bucket 0.
+pub fn order_bucket(made: u32) -> u32 {
+    let last = tally::ORDER_BUCKETS - 1;
+    last - made.min(last)
+}
+
+/// Stage 4b: the order stage 5c takes the coarse triangles in, from what each makes
+/// (`made[t]`), by bucket ([`order_bucket`]) and by index within one. Twin of
+/// `bezier_tri_order.wgsl`, whose slots within a bucket are taken by atomics in any
+/// order. The mesh does not depend on it: each triangle writes where the scan says. A
+/// SIMD device runs lanes side by side in lockstep, each loop as long as its longest
+/// lane, so lanes with alike work waste less (see the kernel).
+pub fn emit_order(made: &[u32]) -> Vec<u32> {
+    // The finish kernel's half: each bucket's first slot.
+    let mut first = vec![0u32; tally::ORDER_BUCKETS as usize];
+    for &m in made {
+        first[order_bucket(m) as usize] += 1;
+    }
+    exclusive_scan(&mut first);
+    // The order kernel's half: one slot per triangle.
+    let mut order = vec![0u32; made.len()];
+    for (t, &m) in made.iter().enumerate() {
+        let slot = &mut first[order_bucket(m) as usize];
+        order[*slot as usize] = t as u32;
+        *slot += 1;
+    }
+    order
+}
+
 /// Stage 5c, one work item per coarse triangle: records of its inner points (in
 /// lattice order) and its indices.
 #[allow(clippy::too_many_arguments)]
@@ -369,6 +399,7 @@ pub fn tessellate_adaptive_timed(
         scratch.push(s);
     }
     let inner_vertices = exclusive_scan(&mut inner_offsets);
+    let order = emit_order(&tri_offsets);
     let triangles = exclusive_scan(&mut tri_offsets);
     let edge_vertex_base = l.coarse_vertices;
     let inner_vertex_base = edge_vertex_base + edge_vertices;
@@ -389,7 +420,7 @@ pub fn tessellate_adaptive_timed(
         );
     }
     let mut indices = vec![0u32; 3 * triangles as usize];
-    for t in 0..l.coarse_triangles {
+    for t in order {
         let ctx = tri_context(prep, &cps, &bits, params, t);
         tri_emit(
             &ctx,
@@ -413,4 +444,21 @@ pub fn tessellate_adaptive_timed(
         evaluations,
     };
     Ok((out, times))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn emit_order_puts_the_heaviest_first_and_keeps_index_order_within_a_bucket() {
+        let made = [3, 0, 7, 3, 900, 255, 7, 1];
+        let order = emit_order(&made);
+        // 255 and 900 share the first bucket; ties keep index order.
+        assert_eq!(order, vec![4, 5, 2, 6, 0, 3, 7, 1]);
+        let mut sorted = order.clone();
+        sorted.sort_unstable();
+        assert_eq!(sorted, (0..made.len() as u32).collect::<Vec<_>>());
+        assert!(emit_order(&[]).is_empty());
+    }
 }
