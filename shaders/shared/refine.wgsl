@@ -264,14 +264,17 @@ fn side_points(c: TriCtx, a: vec2u, b: vec2u) {
     }
 }
 
-// Corners of leaf t and every existing point on its sides, counter-clockwise.
+// Corners of leaf t and every existing point on its sides, counter-clockwise (twin of
+// `leaf_polygon`). Only the legs are walked: the hypotenuse a – b holds no point (see the
+// twin), and the two walks are written out, where a loop over three sides ran the third
+// walk too (masked) and indexed the corners per lane.
 fn leaf_polygon(c: TriCtx, t: Tri) {
     poly_len = 0u;
-    let corners = array<vec2u, 3>(t.r, t.a, t.b);
-    for (var k = 0u; k < 3u; k++) {
-        poly_push(corners[k]);
-        side_points(c, corners[k], corners[(k + 1u) % 3u]);
-    }
+    poly_push(t.r);
+    side_points(c, t.r, t.a);
+    poly_push(t.a);
+    poly_push(t.b);
+    side_points(c, t.b, t.r);
 }
 
 fn is_corner(k: u32) -> bool {
