@@ -2,8 +2,8 @@
 //! read, the operation the Bézier decision kernels are built from. The CPU twin
 //! (`tessera_core::bezier::prepare::map_read`, one thread) against the same arithmetic run
 //! by the adapter with every lane busy and no branches, three ways: the kernels' own
-//! `map_read` (`shaders/shared/map.wgsl`: two fetches from the `rg16float` atlas of
-//! pairs, `MapAtlas`), four reads from a storage buffer (how the kernels read the maps
+//! `map_read` (`shaders/shared/map.wgsl`: one fetch from the `rgba16float` atlas of
+//! cells, `MapAtlas`), four reads from a storage buffer (how the kernels read the maps
 //! before the atlas), and four fetches from an `r32float` texture.
 //!
 //! It bounds what the kernels can gain over their CPU twins while they read the maps
@@ -233,27 +233,27 @@ pub fn run(assets: &std::path::Path, out_dir: &std::path::Path, quick: bool) {
         bytemuck::cast_slice(&texels),
     );
     let atlas_view = atlas.create_view(&Default::default());
-    // The kernels' atlas of pairs (`MapAtlas`), uploaded directly (the bench has a queue).
-    let pairs = MapAtlas::new(&maps, prep.map_scale);
-    let pairs_view = device
+    // The kernels' atlas of cells (`MapAtlas`), uploaded directly (the bench has a queue).
+    let cells = MapAtlas::new(&maps, prep.map_scale);
+    let cells_view = device
         .create_texture_with_data(
             &gpu.queue,
             &wgpu::TextureDescriptor {
                 label: Some("probe map atlas"),
                 size: wgpu::Extent3d {
-                    width: pairs.width,
-                    height: pairs.height,
+                    width: cells.width,
+                    height: cells.height,
                     depth_or_array_layers: 1,
                 },
                 mip_level_count: 1,
                 sample_count: 1,
                 dimension: wgpu::TextureDimension::D2,
-                format: wgpu::TextureFormat::Rg16Float,
+                format: wgpu::TextureFormat::Rgba16Float,
                 usage: wgpu::TextureUsages::TEXTURE_BINDING,
                 view_formats: &[],
             },
             wgpu::util::TextureDataOrder::LayerMajor,
-            bytemuck::cast_slice(&pairs.texels),
+            bytemuck::cast_slice(&cells.texels),
         )
         .create_view(&Default::default());
     // The kernels' `map_read` scales the atlas's values by `params.map_scale`.
@@ -275,7 +275,7 @@ pub fn run(assets: &std::path::Path, out_dir: &std::path::Path, quick: bool) {
     for (entry, label) in [
         (
             "probe_atlas",
-            "GPU, the kernels' `map_read` (two fetches from the `rg16float` atlas of pairs)",
+            "GPU, the kernels' `map_read` (one fetch from the `rgba16float` atlas of cells)",
         ),
         (
             "probe_buffer",
@@ -309,7 +309,7 @@ pub fn run(assets: &std::path::Path, out_dir: &std::path::Path, quick: bool) {
             },
             _ => wgpu::BindGroupEntry {
                 binding: 2,
-                resource: wgpu::BindingResource::TextureView(&pairs_view),
+                resource: wgpu::BindingResource::TextureView(&cells_view),
             },
         };
         let mut entries = vec![

@@ -60,26 +60,27 @@ pub const MAP_CELLS: usize = MAP_RES - 1;
 /// a CPU device).
 pub const MAP_ATLAS_TILES_PER_ROW: u32 = 256;
 
-/// The displacement maps as the GPU kernels read them: an `rg16float` texture whose
-/// texel `(i, j)` of a patch's tile holds the pair `(d[i, j], d[i+1, j]) / map_scale`,
-/// for `i < MAP_CELLS`, `j < MAP_RES`. Patch `p`'s tile, `MAP_CELLS` × `MAP_RES` texels,
-/// is at column `p % MAP_ATLAS_TILES_PER_ROW`, row `p / MAP_ATLAS_TILES_PER_ROW`.
+/// The displacement maps as the GPU kernels read them: an `rgba16float` texture whose
+/// texel `(i, j)` of a patch's tile holds the four corners of map cell `(i, j)`,
+/// `(d[i, j], d[i+1, j], d[i, j+1], d[i+1, j+1]) / map_scale`, for `i, j < MAP_CELLS`.
+/// Patch `p`'s tile, `MAP_CELLS` × `MAP_CELLS` texels, is at column
+/// `p % MAP_ATLAS_TILES_PER_ROW`, row `p / MAP_ATLAS_TILES_PER_ROW`.
 ///
-/// A bilinear read is then two texel fetches (rows `j` and `j + 1`) where a storage
-/// buffer took four reads: on a CPU device (lavapipe) a read at a per-lane address is a
-/// scalar loop over the lanes whatever its width, and the decision kernels spent most of
-/// their time in those reads. Pairs in half precision take 960 bytes per patch, within
-/// SPEC's budget of 2 KB; pairs in single precision would take 1920, and a texel per
-/// cell with all four corners (one fetch) 3600. The maps are rounded to half precision
-/// when prepared ([`crate::bezier::prepare::quantize_maps`]), so the texels hold their
-/// values exactly and the reads stay bit-identical to the CPU twin
-/// ([`crate::bezier::prepare::map_read`]).
+/// A bilinear read is then one texel fetch, where a storage buffer took four reads: on a
+/// CPU device (lavapipe) a read at a per-lane address is a scalar loop over the lanes
+/// whatever its width, and the decision kernels spend most of their time in map reads.
+/// An atlas of pairs (`d[i, j], d[i+1, j]`, two fetches per read) took the decision
+/// kernels 25-30% longer. Cells in half precision take 1800 bytes per patch, within
+/// SPEC's budget of 2 KB (in single precision they would take 3600). The maps are
+/// rounded to half precision when prepared ([`crate::bezier::prepare::quantize_maps`]),
+/// so the texels hold their values exactly and the reads stay bit-identical to the CPU
+/// twin ([`crate::bezier::prepare::map_read`]).
 #[derive(Clone, Debug, PartialEq)]
 pub struct MapAtlas {
     pub width: u32,
     pub height: u32,
-    /// Row-major, `width × height` texels, each two `f16` bit patterns.
-    pub texels: Vec<[u16; 2]>,
+    /// Row-major, `width × height` texels, each four `f16` bit patterns.
+    pub texels: Vec<[u16; 4]>,
 }
 
 /// Columns and rows of `patches` tiles laid out `per_row` to a row; at least one tile.
@@ -93,7 +94,7 @@ fn tile_grid(patches: usize, per_row: u32) -> (u32, u32) {
 
 impl MapAtlas {
     /// Texels per tile side: (width, height).
-    pub const TILE: (u32, u32) = (MAP_CELLS as u32, MAP_RES as u32);
+    pub const TILE: (u32, u32) = (MAP_CELLS as u32, MAP_CELLS as u32);
 
     /// Texture size (width, height) in texels for `patches` maps; at least one tile.
     pub fn size(patches: usize) -> (u32, u32) {
@@ -101,7 +102,7 @@ impl MapAtlas {
         (columns * Self::TILE.0, rows * Self::TILE.1)
     }
 
-    /// Texel coordinates of pair `(i, j)` of patch `p` (twin of the shader's `map_read`).
+    /// Texel coordinates of cell `(i, j)` of patch `p` (twin of the shader's `map_read`).
     pub fn texel_of(p: u32, i: u32, j: u32) -> (u32, u32) {
         (
             (p % MAP_ATLAS_TILES_PER_ROW) * Self::TILE.0 + i,
@@ -112,15 +113,20 @@ impl MapAtlas {
     /// The atlas of `maps`, whose values are half-precision multiples of `map_scale`.
     pub fn new(maps: &[DisplacementMap], map_scale: f32) -> Self {
         let (width, height) = Self::size(maps.len());
-        let mut texels = vec![[0u16; 2]; width as usize * height as usize];
+        let mut texels = vec![[0u16; 4]; width as usize * height as usize];
         let half = |d: f32| half::f16::from_f32(d / map_scale).to_bits();
         for (p, map) in maps.iter().enumerate() {
-            for j in 0..MAP_RES {
+            for j in 0..MAP_CELLS {
                 for i in 0..MAP_CELLS {
                     let (x, y) = Self::texel_of(p as u32, i as u32, j as u32);
                     let k = MAP_RES * j + i;
-                    texels[y as usize * width as usize + x as usize] =
-                        [half(map.d[k]), half(map.d[k + 1])];
+                    let below = k + MAP_RES;
+                    texels[y as usize * width as usize + x as usize] = [
+                        half(map.d[k]),
+                        half(map.d[k + 1]),
+                        half(map.d[below]),
+                        half(map.d[below + 1]),
+                    ];
                 }
             }
         }
@@ -134,7 +140,7 @@ impl MapAtlas {
     /// Bytes of the texture.
     pub fn bytes(patches: usize) -> u64 {
         let (w, h) = Self::size(patches);
-        w as u64 * h as u64 * std::mem::size_of::<[u16; 2]>() as u64
+        w as u64 * h as u64 * std::mem::size_of::<[u16; 4]>() as u64
     }
 }
 
@@ -372,7 +378,7 @@ mod tests {
     }
 
     #[test]
-    fn the_atlas_holds_each_map_row_as_pairs_in_its_patch_tile() {
+    fn the_atlas_holds_each_map_cell_in_its_patch_tile() {
         // 300 maps of values that half precision holds exactly (integers under 2048,
         // scale 1/4): two rows of tiles, the second partly filled.
         let maps: Vec<DisplacementMap> = (0..300)
@@ -381,26 +387,26 @@ mod tests {
             })
             .collect();
         let atlas = MapAtlas::new(&maps, 0.25);
-        assert_eq!((atlas.width, atlas.height), (256 * 15, 2 * 16));
+        assert_eq!((atlas.width, atlas.height), (256 * 15, 2 * 15));
         assert_eq!(atlas.texels.len(), (atlas.width * atlas.height) as usize);
-        assert_eq!(MapAtlas::size(1), (15, 16));
-        assert_eq!(MapAtlas::size(0), (15, 16));
+        assert_eq!(MapAtlas::size(1), (15, 15));
+        assert_eq!(MapAtlas::size(0), (15, 15));
         let value = |bits: u16| half::f16::from_bits(bits).to_f32() * 0.25;
         for p in 0..300u32 {
-            for (i, j) in [(0, 0), (14, 2), (7, 15), (14, 15)] {
+            for (i, j) in [(0, 0), (14, 2), (7, 14), (14, 14)] {
                 let (x, y) = MapAtlas::texel_of(p, i, j);
-                let [a, b] = atlas.texels[(y * atlas.width + x) as usize];
+                let texel = atlas.texels[(y * atlas.width + x) as usize];
                 let d = |i: u32, j: u32| maps[p as usize].d[(16 * j + i) as usize];
                 assert_eq!(
-                    [value(a), value(b)],
-                    [d(i, j), d(i + 1, j)],
-                    "patch {p} pair ({i}, {j})"
+                    texel.map(value),
+                    [d(i, j), d(i + 1, j), d(i, j + 1), d(i + 1, j + 1)],
+                    "patch {p} cell ({i}, {j})"
                 );
             }
         }
-        assert_eq!(MapAtlas::texel_of(256, 0, 0), (0, 16));
+        assert_eq!(MapAtlas::texel_of(256, 0, 0), (0, 15));
         // SPEC §1: the map plus the coarse mesh under 2 KB per patch.
-        assert_eq!(MapAtlas::bytes(256) / 256, 960);
+        assert_eq!(MapAtlas::bytes(256) / 256, 1800);
     }
 
     #[test]

@@ -482,7 +482,7 @@ impl BezierStage {
         let atlas_upload = texture_upload(
             device,
             "tessera displacement-map atlas",
-            wgpu::TextureFormat::Rg16Float,
+            wgpu::TextureFormat::Rgba16Float,
             (atlas.width, atlas.height),
             bytemuck::cast_slice(&atlas.texels),
         );

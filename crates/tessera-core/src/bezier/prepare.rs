@@ -210,7 +210,7 @@ impl PreparedBezier {
 
 /// Rounds every map value to half precision relative to a power-of-two scale, and
 /// returns the scale: each value becomes `f16(d / scale) · scale`, so the GPU's
-/// `rg16float` atlas holds it exactly and its reads equal the CPU's bit for bit. The
+/// `rgba16float` atlas holds it exactly and its reads equal the CPU's bit for bit. The
 /// scale puts the largest magnitude in [2^13, 2^14), far from the half range's ends
 /// whatever the model's units; a value keeps 11 significant bits, a relative error of at
 /// most 2^-12 of the largest (about 1e-5 of the model size on the teaset, far under
