@@ -393,7 +393,8 @@ fn tessellate(args: TessellateArgs) -> Result<(), Error> {
         Some(_) => prep.upload_bytes(),
         // The uniform peer uploads control points and topology only.
         None => {
-            prep.upload_bytes() - tessera_core::gpu_types::MapAtlas::bytes(prep.maps.len()) as usize
+            prep.upload_bytes()
+                - tessera_core::gpu_types::MapHalves::bytes(prep.maps.len()) as usize
         }
     };
     let stats = Stats {

@@ -60,6 +60,43 @@ pub const MAP_CELLS: usize = MAP_RES - 1;
 /// a CPU device).
 pub const MAP_ATLAS_TILES_PER_ROW: u32 = 256;
 
+/// The displacement maps as they go up: each map's `MAP_RES × MAP_RES` values divided by
+/// `map_scale`, in half precision, two to a word (value `2k` in the low half): 512 bytes
+/// per patch. The kernels read the maps from a [`MapAtlas`], which a one-time kernel
+/// (`shaders/bezier_map_cells.wgsl`) builds from these words on the device, so the
+/// atlas's fourfold copies never cross the bus.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MapHalves {
+    /// `WORDS_PER_PATCH` words per patch, in patch order.
+    pub words: Vec<u32>,
+}
+
+impl MapHalves {
+    pub const WORDS_PER_PATCH: usize = MAP_RES * MAP_RES / 2;
+
+    /// The words of `maps`, whose values are half-precision multiples of `map_scale`
+    /// ([`crate::bezier::prepare::quantize_maps`]).
+    pub fn new(maps: &[DisplacementMap], map_scale: f32) -> Self {
+        let half = |d: f32| half::f16::from_f32(d / map_scale).to_bits() as u32;
+        let words = maps
+            .iter()
+            .flat_map(|m| m.d.chunks_exact(2).map(|d| half(d[0]) | half(d[1]) << 16))
+            .collect();
+        MapHalves { words }
+    }
+
+    /// The half-precision bits of value `k` (`MAP_RES * j + i`) of patch `p`.
+    pub fn value_bits(&self, p: usize, k: usize) -> u16 {
+        let word = self.words[p * Self::WORDS_PER_PATCH + k / 2];
+        (word >> (16 * (k % 2))) as u16
+    }
+
+    /// Bytes uploaded for `patches` maps.
+    pub fn bytes(patches: usize) -> u64 {
+        (patches * Self::WORDS_PER_PATCH * 4) as u64
+    }
+}
+
 /// The displacement maps as the GPU kernels read them: an `rgba16float` texture whose
 /// texel `(i, j)` of a patch's tile holds the four corners of map cell `(i, j)`,
 /// `(d[i, j], d[i+1, j], d[i, j+1], d[i+1, j+1]) / map_scale`, for `i, j < MAP_CELLS`.
@@ -70,11 +107,12 @@ pub const MAP_ATLAS_TILES_PER_ROW: u32 = 256;
 /// CPU device (lavapipe) a read at a per-lane address is a scalar loop over the lanes
 /// whatever its width, and the decision kernels spend most of their time in map reads.
 /// An atlas of pairs (`d[i, j], d[i+1, j]`, two fetches per read) took the decision
-/// kernels 25-30% longer. Cells in half precision take 1800 bytes per patch, within
-/// SPEC's budget of 2 KB (in single precision they would take 3600). The maps are
-/// rounded to half precision when prepared ([`crate::bezier::prepare::quantize_maps`]),
-/// so the texels hold their values exactly and the reads stay bit-identical to the CPU
-/// twin ([`crate::bezier::prepare::map_read`]).
+/// kernels 25-30% longer. Cells in half precision take 1800 bytes per patch of device
+/// memory; what is uploaded is the maps themselves ([`MapHalves`], 512 bytes per patch),
+/// and the atlas is built from them on the device ([`MapAtlas::from_halves`] is the
+/// kernel's twin). The maps are rounded to half precision when prepared
+/// ([`crate::bezier::prepare::quantize_maps`]), so the texels hold their values exactly
+/// and the reads stay bit-identical to the CPU twin ([`crate::bezier::prepare::map_read`]).
 #[derive(Clone, Debug, PartialEq)]
 pub struct MapAtlas {
     pub width: u32,
@@ -112,23 +150,24 @@ impl MapAtlas {
 
     /// The atlas of `maps`, whose values are half-precision multiples of `map_scale`.
     pub fn new(maps: &[DisplacementMap], map_scale: f32) -> Self {
-        let (width, height) = Self::size(maps.len());
+        Self::from_halves(&MapHalves::new(maps, map_scale))
+    }
+
+    /// The atlas of the uploaded maps: twin of `shaders/bezier_map_cells.wgsl`, one
+    /// texel per work item.
+    pub fn from_halves(halves: &MapHalves) -> Self {
+        let patches = halves.words.len() / MapHalves::WORDS_PER_PATCH;
+        let (width, height) = Self::size(patches);
         let mut texels = vec![[0u16; 4]; width as usize * height as usize];
-        let half = |d: f32| half::f16::from_f32(d / map_scale).to_bits();
-        for (p, map) in maps.iter().enumerate() {
-            for j in 0..MAP_CELLS {
-                for i in 0..MAP_CELLS {
-                    let (x, y) = Self::texel_of(p as u32, i as u32, j as u32);
-                    let k = MAP_RES * j + i;
-                    let below = k + MAP_RES;
-                    texels[y as usize * width as usize + x as usize] = [
-                        half(map.d[k]),
-                        half(map.d[k + 1]),
-                        half(map.d[below]),
-                        half(map.d[below + 1]),
-                    ];
-                }
-            }
+        let cells = MAP_CELLS * MAP_CELLS;
+        for item in 0..patches * cells {
+            let (p, cell) = (item / cells, item % cells);
+            let (i, j) = (cell % MAP_CELLS, cell / MAP_CELLS);
+            let k = MAP_RES * j + i;
+            let below = k + MAP_RES;
+            let (x, y) = Self::texel_of(p as u32, i as u32, j as u32);
+            texels[y as usize * width as usize + x as usize] =
+                [k, k + 1, below, below + 1].map(|k| halves.value_bits(p, k));
         }
         MapAtlas {
             width,
@@ -357,7 +396,7 @@ pub struct BezierStatus {
 pub fn bezier_upload_bytes(patches: usize, curves: usize, coarse_vertices: usize) -> usize {
     patches * std::mem::size_of::<GpuPatchTopo>()
         + NetTexture::bytes(patches) as usize
-        + MapAtlas::bytes(patches) as usize
+        + MapHalves::bytes(patches) as usize
         + curves * std::mem::size_of::<GpuCurve>()
         + coarse_vertices * std::mem::size_of::<VertexRecord>()
 }
@@ -405,8 +444,16 @@ mod tests {
             }
         }
         assert_eq!(MapAtlas::texel_of(256, 0, 0), (0, 15));
-        // SPEC §1: the map plus the coarse mesh under 2 KB per patch.
+        // On the device; the upload is the maps themselves, in half precision.
         assert_eq!(MapAtlas::bytes(256) / 256, 1800);
+        assert_eq!(MapHalves::bytes(256) / 256, 512);
+        let halves = MapHalves::new(&maps, 0.25);
+        for p in [0, 299] {
+            for k in [0, 1, 17, 255] {
+                let bits = halves.value_bits(p, k);
+                assert_eq!(value(bits), maps[p].d[k], "patch {p} value {k}");
+            }
+        }
     }
 
     #[test]

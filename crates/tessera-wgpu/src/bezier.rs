@@ -46,8 +46,8 @@ use std::sync::{Arc, OnceLock};
 use tessera_core::bezier::lattice::{inv_lattice, Lattice};
 use tessera_core::bezier::{AdaptiveParams, EdgeTest, PreparedBezier};
 use tessera_core::gpu_types::{
-    tally, BezierParams, BezierStatus, MapAtlas, NetTexture, OutVertex, VertexRecord,
-    EDGE_BIT_WORDS, MAX_DEPTH_LIMIT,
+    tally, BezierParams, BezierStatus, MapAtlas, MapHalves, NetTexture, OutVertex, VertexRecord,
+    EDGE_BIT_WORDS, MAP_CELLS, MAX_DEPTH_LIMIT,
 };
 use tessera_core::Mesh;
 use wgpu::util::DeviceExt;
@@ -87,6 +87,8 @@ mod slot {
     pub const DRAW_ARGS: u32 = 12;
     pub const STATUS: u32 = 13;
     pub const TALLY: u32 = 14;
+    pub const MAP_HALVES: u32 = 16;
+    pub const MAP_CELLS: u32 = 17;
 }
 
 /// The compiled Bézier kernels of one device. Compiling them is the slow part of
@@ -124,6 +126,7 @@ struct Pipelines {
     by_test: [[OnceLock<Arc<TestKernels>>; ARRAY_DEPTH_CLASSES.len()]; EdgeTest::ALL.len()],
     scan: ScanKernels,
     finish: Kernel,
+    map_cells: Kernel,
     tri_order: Kernel,
     edge_emit: Kernel,
     vertex_eval: Kernel,
@@ -136,6 +139,7 @@ impl Pipelines {
             by_test: Default::default(),
             scan: ScanKernels::new(device),
             finish: make("bezier_finish.wgsl"),
+            map_cells: make("bezier_map_cells.wgsl"),
             tri_order: make("bezier_tri_order.wgsl"),
             edge_emit: make("bezier_edge_emit.wgsl"),
             vertex_eval: make("bezier_vertex_eval.wgsl"),
@@ -260,8 +264,11 @@ impl BindGroups {
 pub struct BezierStage {
     /// See [`BezierParams::map_scale`].
     map_scale: f32,
-    /// The textures' texels (nets, maps), until the first recording copies them in.
+    /// The control nets' texels, until the first recording copies them in.
     texture_uploads: Vec<TextureUpload>,
+    /// The maps as uploaded ([`MapHalves`]), bound to the kernel that builds the map
+    /// atlas from them, until the first recording dispatches it.
+    map_cells_pending: Option<wgpu::BindGroup>,
     prepared_layout: tessera_core::bezier::prepare::CoarseLayout,
     params: AdaptiveParams,
     buffers: Buffers,
@@ -283,8 +290,9 @@ struct Buffers {
     uniform: wgpu::Buffer,
     /// The control points ([`NetTexture`]).
     nets: wgpu::TextureView,
-    /// The displacement maps as half-precision pairs ([`MapAtlas`]).
+    /// The displacement maps as half-precision cells ([`MapAtlas`]).
     map_atlas: wgpu::TextureView,
+    map_atlas_texture: wgpu::Texture,
     topo: wgpu::Buffer,
     curves: wgpu::Buffer,
     coarse_records: wgpu::Buffer,
@@ -469,7 +477,12 @@ impl BezierStage {
         ] {
             check_upload(device, what, bytes as u64)?;
         }
-        let atlas = MapAtlas::new(&prepared.maps, prepared.map_scale);
+        let atlas = MapAtlas::size(prepared.maps.len());
+        let atlas = wgpu::Extent3d {
+            width: atlas.0,
+            height: atlas.1,
+            depth_or_array_layers: 1,
+        };
         let max_side = device.limits().max_texture_dimension_2d;
         if atlas.width > max_side || atlas.height > max_side {
             return Err(Error::MapAtlasTooLarge {
@@ -479,12 +492,35 @@ impl BezierStage {
                 limit: max_side,
             });
         }
-        let atlas_upload = texture_upload(
+        // The atlas is built on the device from the maps as uploaded (`MapHalves`, a
+        // quarter of its size), by `bezier_map_cells` in the first recording.
+        let map_atlas = device.create_texture(&wgpu::TextureDescriptor {
+            label: Some("tessera displacement-map atlas"),
+            size: wgpu::Extent3d {
+                width: atlas.width,
+                height: atlas.height,
+                depth_or_array_layers: 1,
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: wgpu::TextureFormat::Rgba16Float,
+            usage: wgpu::TextureUsages::TEXTURE_BINDING
+                | wgpu::TextureUsages::STORAGE_BINDING
+                | wgpu::TextureUsages::COPY_SRC,
+            view_formats: &[],
+        });
+        let map_atlas_view = map_atlas.create_view(&Default::default());
+        let halves = MapHalves::new(&prepared.maps, prepared.map_scale);
+        let map_halves = upload(
             device,
-            "tessera displacement-map atlas",
-            wgpu::TextureFormat::Rgba16Float,
-            (atlas.width, atlas.height),
-            bytemuck::cast_slice(&atlas.texels),
+            "tessera displacement maps",
+            bytemuck::cast_slice(&halves.words),
+        );
+        let map_cells_pending = pipelines.0.map_cells.bind_with_textures(
+            device,
+            &[(slot::PARAMS, &uniform), (slot::MAP_HALVES, &map_halves)],
+            &[(slot::MAP_CELLS, &map_atlas_view)],
         );
         // Smaller than the atlas both ways: its size check covers this one.
         let nets = NetTexture::new(&prepared.patches);
@@ -498,7 +534,8 @@ impl BezierStage {
         let buffers = Buffers {
             uniform,
             nets: nets_upload.texture.create_view(&Default::default()),
-            map_atlas: atlas_upload.texture.create_view(&Default::default()),
+            map_atlas: map_atlas_view,
+            map_atlas_texture: map_atlas,
             topo: upload(
                 device,
                 "tessera topology",
@@ -534,7 +571,8 @@ impl BezierStage {
         };
         Ok(BezierStage {
             map_scale: prepared.map_scale,
-            texture_uploads: vec![nets_upload, atlas_upload],
+            texture_uploads: vec![nets_upload],
+            map_cells_pending: Some(map_cells_pending),
             prepared_layout: l,
             params: *params,
             bind_groups: BindGroups::new(device, &pipelines.0, &test_kernels, &buffers),
@@ -653,7 +691,8 @@ impl BezierStage {
     /// Copies the parameters into their uniform inside the encoder, not by
     /// `queue.write_buffer` (which lands before the whole submission): recordings that
     /// share a submission, with `set_params` between them, each run with their own.
-    /// The first recording also copies the nets and the map atlas into their textures.
+    /// The first recording also copies the nets into their texture and builds the map
+    /// atlas from the uploaded maps.
     fn record_params(&mut self, device: &wgpu::Device, encoder: &mut wgpu::CommandEncoder) {
         for up in std::mem::take(&mut self.texture_uploads) {
             encoder.copy_buffer_to_texture(
@@ -681,6 +720,20 @@ impl BezierStage {
             0,
             std::mem::size_of::<BezierParams>() as u64,
         );
+        // After the parameters: the kernel reads the patch count from them.
+        if let Some(bind_group) = self.map_cells_pending.take() {
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("map_cells"),
+                timestamp_writes: None,
+            });
+            let cells = (MAP_CELLS * MAP_CELLS) as u32;
+            self.pipelines.0.map_cells.dispatch(
+                &mut pass,
+                &bind_group,
+                self.prepared_layout.patches * cells,
+                WORKGROUP,
+            );
+        }
     }
 
     /// Records one step of the script (each in its own compute pass).
@@ -824,8 +877,41 @@ impl BezierStage {
             .read_mesh(device, queue, status.vertices, status.indices)
     }
 
-    /// The intermediate buffers, for comparison with the CPU twins in tests: edge bit
-    /// sets, the scanned counts, and each coarse triangle's scratch words.
+    /// The map atlas's texels as built on the device, row-major (see [`MapAtlas`]).
+    fn read_map_atlas(&self, device: &wgpu::Device, queue: &wgpu::Queue) -> Result<Vec<[u16; 4]>> {
+        let texture = &self.buffers.map_atlas_texture;
+        let (width, height) = (texture.width(), texture.height());
+        let row = 8 * width;
+        let padded = row.next_multiple_of(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT);
+        let staging = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("tessera map atlas readback"),
+            size: padded as u64 * height as u64,
+            usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+            mapped_at_creation: false,
+        });
+        let mut encoder = device.create_command_encoder(&Default::default());
+        encoder.copy_texture_to_buffer(
+            texture.as_image_copy(),
+            wgpu::TexelCopyBufferInfo {
+                buffer: &staging,
+                layout: wgpu::TexelCopyBufferLayout {
+                    offset: 0,
+                    bytes_per_row: Some(padded),
+                    rows_per_image: None,
+                },
+            },
+            texture.size(),
+        );
+        queue.submit([encoder.finish()]);
+        let bytes = map_read(device, &staging)?;
+        Ok(bytes
+            .chunks(padded as usize)
+            .flat_map(|r| bytemuck::pod_collect_to_vec::<u8, [u16; 4]>(&r[..row as usize]))
+            .collect())
+    }
+
+    /// The intermediate buffers, for comparison with the CPU twins in tests: the map
+    /// atlas, edge bit sets, the scanned counts, and each coarse triangle's scratch words.
     pub fn read_intermediates(
         &self,
         device: &wgpu::Device,
@@ -845,6 +931,7 @@ impl BezierStage {
         let l = self.prepared_layout;
         let order = counts.split_off((l.coarse_edges + 2 * l.coarse_triangles + 1) as usize);
         Ok(Intermediates {
+            map_atlas: self.read_map_atlas(device, queue)?,
             edge_bits: words(&self.buffers.edge_bits)?,
             counts,
             order,
@@ -877,6 +964,8 @@ impl GrowingStage for BezierStage {
 
 /// What the decision kernels wrote (see [`BezierStage::read_intermediates`]).
 pub struct Intermediates {
+    /// The map atlas's texels, row-major, as `bezier_map_cells` built them.
+    pub map_atlas: Vec<[u16; 4]>,
     /// `EDGE_BIT_WORDS` words per coarse edge.
     pub edge_bits: Vec<u32>,
     /// The exclusive scan of `[edge vertices | inner vertices | triangles | 0]`.

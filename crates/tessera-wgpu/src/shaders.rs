@@ -125,6 +125,10 @@ pub const SOURCES: &[(&str, &str)] = &[
         include_str!("../../../shaders/bezier_tri_emit.wgsl"),
     ),
     (
+        "bezier_map_cells.wgsl",
+        include_str!("../../../shaders/bezier_map_cells.wgsl"),
+    ),
+    (
         "bezier_tri_order.wgsl",
         include_str!("../../../shaders/bezier_tri_order.wgsl"),
     ),

@@ -13,7 +13,7 @@ use tessera_core::bezier::tessellate::{edge_decide, emit_order, order_bucket, tr
 use tessera_core::bezier::{
     tessellate_adaptive, AdaptiveParams, BezierModel, EdgeTest, PreparedBezier,
 };
-use tessera_core::gpu_types::EDGE_BIT_WORDS;
+use tessera_core::gpu_types::{MapAtlas, EDGE_BIT_WORDS};
 use tessera_wgpu::bezier::BezierStage;
 use tessera_wgpu::headless::Gpu;
 
@@ -55,6 +55,11 @@ fn compare_decisions(
         .read_intermediates(&gpu.device, &gpu.queue)
         .expect("readback");
     let l = prep.layout;
+    // The atlas the device built from the uploaded maps, texel for texel.
+    assert!(
+        inter.map_atlas == MapAtlas::new(&prep.maps, prep.map_scale).texels,
+        "the map atlas built on the device differs from its twin"
+    );
     let cps: Vec<[Vec3; 16]> = (0..l.patches).map(|p| prep.control_points(p)).collect();
     let lo = with_threshold(params, params.threshold * (1.0 - TIE_REL));
     let hi = with_threshold(params, params.threshold * (1.0 + TIE_REL));
