@@ -5,7 +5,7 @@
 //!
 //! | # | kernel | per | writes |
 //! |---|---|---|---|
-//! | 0 | copies, first recording only | — | the control-net texture and the displacement-map atlas (the constructor has no queue) |
+//! | 0 | copy + `bezier_map_cells`, first recording only | — / map cell | the control-net texture (the constructor has no queue); the displacement-map atlas, built from the maps as uploaded |
 //! | 1 | `bezier_edge_decide` | coarse edge | edge bit sets, edge vertex counts |
 //! | 2 | clear + `bezier_tri_mark` | coarse triangle | lattice points, inner vertex and triangle counts |
 //! | 3 | `scan` (multi-level) | — | offsets of all three counts in one exclusive scan |
