@@ -9,6 +9,7 @@
 @group(0) @binding(13) var<storage, read_write> status: BezierStatus;
 @group(0) @binding(14) var<storage, read_write> tally: array<u32>;
 
+// The workgroup size of the kernels it dispatches (vertex_eval, tri_emit, tri_emit_plain).
 const VERTEX_WORKGROUP: u32 = 64u;
 const MAX_GROUPS_X: u32 = 32768u;
 
@@ -50,4 +51,16 @@ fn main() {
         tally[TALLY_ORDER + b] = slot;
         slot += n;
     }
+    // The plain triangles, last, go to their own kernel; no emit kernel runs on overflow.
+    let general = tally[TALLY_ORDER + PLAIN_BUCKET];
+    status.general_triangles = general;
+    let emit_groups = select((general + VERTEX_WORKGROUP - 1u) / VERTEX_WORKGROUP, 0u, overflow != 0u);
+    status.emit_dispatch_x = min(emit_groups, MAX_GROUPS_X);
+    status.emit_dispatch_y = (emit_groups + MAX_GROUPS_X - 1u) / MAX_GROUPS_X;
+    status.emit_dispatch_z = 1u;
+    let plain = t - general;
+    let plain_groups = select((plain + VERTEX_WORKGROUP - 1u) / VERTEX_WORKGROUP, 0u, overflow != 0u);
+    status.plain_dispatch_x = min(plain_groups, MAX_GROUPS_X);
+    status.plain_dispatch_y = (plain_groups + MAX_GROUPS_X - 1u) / MAX_GROUPS_X;
+    status.plain_dispatch_z = 1u;
 }

@@ -61,8 +61,10 @@ fn sink_triangle(a: VRef, b: VRef, c: VRef) {
 
 @compute @workgroup_size(64)
 fn main(@builtin(global_invocation_id) gid: vec3u, @builtin(num_workgroups) groups: vec3u) {
+    // Dispatched indirectly for the first `general_triangles` slots of the emit order;
+    // the plain triangles after them are `tri_emit_plain`'s.
     let slot = gid.x + gid.y * groups.x * 64u;
-    if slot >= params.coarse_triangles || status.overflow != 0u {
+    if slot >= status.general_triangles || slot >= params.coarse_triangles || status.overflow != 0u {
         return;
     }
     // The coarse triangles in `tri_order`'s order: lanes side by side do alike work.

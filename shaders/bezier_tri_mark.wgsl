@@ -87,5 +87,7 @@ fn main(@builtin(global_invocation_id) gid: vec3u, @builtin(num_workgroups) grou
     counts[params.coarse_edges + t] = inner;
     counts[params.coarse_edges + params.coarse_triangles + t] = made;
     // The emit order's buckets (`bezier_tri_order.wgsl`).
-    atomicAdd(&tally[TALLY_ORDER + order_bucket(made)], 1u);
+    let bucket = order_bucket(made, is_plain(c, inner, made));
+    counts[order_keys_base() + t] = bucket;
+    atomicAdd(&tally[TALLY_ORDER + bucket], 1u);
 }

@@ -1,5 +1,6 @@
 // Stage 4b, one invocation per coarse triangle: its place in the order `tri_emit` takes
-// them in, those that make the most triangles first. Twin of `emit_order` in
+// them in, those that make the most triangles first and the plain ones last (for
+// `tri_emit_plain`), from the bucket `tri_mark` chose. Twin of `emit_order` in
 // `tessera_core::bezier::tessellate`.
 //
 // A CPU device runs a workgroup's lanes in lockstep, each loop as long as its longest
@@ -20,8 +21,6 @@ fn main(@builtin(global_invocation_id) gid: vec3u, @builtin(num_workgroups) grou
     if t >= params.coarse_triangles {
         return;
     }
-    let made_at = params.coarse_edges + params.coarse_triangles + t;
-    let made = counts[made_at + 1u] - counts[made_at];
-    let slot = atomicAdd(&tally[TALLY_ORDER + order_bucket(made)], 1u);
+    let slot = atomicAdd(&tally[TALLY_ORDER + counts[order_keys_base() + t]], 1u);
     counts[order_base() + slot] = t;
 }

@@ -154,6 +154,13 @@ fn splits(c: TriCtx, t: Tri, level: u32) -> bool {
     return interior_need(c.l, t);
 }
 
+// No point inside, none on the sides, no side collapsed, one triangle made: the mesh is
+// the corners, and `tri_emit_plain` writes it (twin of `is_plain`).
+fn is_plain(c: TriCtx, inner: u32, made: u32) -> bool {
+    let side_points = set_count(c.set0) + set_count(c.set1) + set_count(c.set2);
+    return inner == 0u && made == 1u && side_points == 0u && !any(c.sides_collapsed);
+}
+
 const NO_COUNT: u32 = 0xffffffffu;
 
 // The triangle count from the vertex counts alone, NO_COUNT where the formula does not

@@ -94,6 +94,15 @@ struct BezierStatus {
     dispatch_z: u32,
     // The flat test's evaluations plus one per vertex (twin of `Tessellation::evaluations`).
     evaluations: u32,
+    // Coarse triangles `tri_emit` takes (the emit order's first slots); the plain ones
+    // after them go to `tri_emit_plain`. Each kernel's indirect dispatch.
+    general_triangles: u32,
+    emit_dispatch_x: u32,
+    emit_dispatch_y: u32,
+    emit_dispatch_z: u32,
+    plain_dispatch_x: u32,
+    plain_dispatch_y: u32,
+    plain_dispatch_z: u32,
 }
 
 @group(0) @binding(0) var<uniform> params: BezierParams;
@@ -105,16 +114,23 @@ const TALLY_EVALUATIONS: u32 = 0u;
 const TALLY_ORDER: u32 = 1u;
 const ORDER_BUCKETS: u32 = 256u;
 
-// The emit-order bucket of a coarse triangle that makes `made` triangles: the most
-// first, every count from ORDER_BUCKETS - 1 up in bucket 0 (twin of `order_bucket`).
-fn order_bucket(made: u32) -> u32 {
-    return ORDER_BUCKETS - 1u - min(made, ORDER_BUCKETS - 1u);
+const PLAIN_BUCKET: u32 = ORDER_BUCKETS - 1u;
+
+// The emit-order bucket of a coarse triangle that makes `made` triangles: plain ones
+// last, in a bucket of their own; the others the most first, every count from
+// ORDER_BUCKETS - 2 up in bucket 0 (twin of `order_bucket`).
+fn order_bucket(made: u32, plain: bool) -> u32 {
+    return select(PLAIN_BUCKET - 1u - min(made, PLAIN_BUCKET - 1u), PLAIN_BUCKET, plain);
 }
 
 // Where the emit order starts in `counts`, after the scan's
-// [edge vertices | inner vertices | triangles | total].
+// [edge vertices | inner vertices | triangles | total]; each triangle's bucket follows.
 fn order_base() -> u32 {
     return params.coarse_edges + 2u * params.coarse_triangles + 1u;
+}
+
+fn order_keys_base() -> u32 {
+    return order_base() + params.coarse_triangles;
 }
 
 // Catmull-Clark (`tessera_core::gpu_types`, `tessera_core::catmull_clark::gpu_model`).

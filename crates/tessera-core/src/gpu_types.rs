@@ -374,8 +374,8 @@ impl BezierParams {
     ];
 }
 
-/// What a GPU run needed and whether it fit (`BezierStatus` in WGSL), followed by the
-/// vertex kernel's indirect dispatch.
+/// What a GPU run needed and whether it fit (`BezierStatus` in WGSL), and the indirect
+/// dispatches of the kernels whose sizes the run decides.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq, Eq, Default)]
 pub struct BezierStatus {
@@ -389,6 +389,13 @@ pub struct BezierStatus {
     pub dispatch: [u32; 3],
     /// Surface evaluations: the flat test's (3 per tested chord) plus one per vertex.
     pub evaluations: u32,
+    /// Coarse triangles the general emit kernel takes (the first slots of the emit
+    /// order); the plain ones after them go to the plain kernel.
+    pub general_triangles: u32,
+    /// The general emit kernel's indirect dispatch.
+    pub emit_dispatch: [u32; 3],
+    /// The plain emit kernel's indirect dispatch.
+    pub plain_dispatch: [u32; 3],
 }
 
 /// Bytes uploaded per patch and once per model for the map-based tessellator: the

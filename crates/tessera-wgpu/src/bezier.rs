@@ -10,8 +10,8 @@
 //! | 2 | clear + `bezier_tri_mark` | coarse triangle | lattice points, inner vertex and triangle counts |
 //! | 3 | `scan` (multi-level) | — | offsets of all three counts in one exclusive scan |
 //! | 4 | `bezier_finish` | 1 | totals, overflow flags, draw arguments, vertex dispatch, the emit order's bucket slots |
-//! | 4b | `bezier_tri_order` | coarse triangle | the emit order: those that make the most triangles first |
-//! | 5 | copy + `bezier_edge_emit` + `bezier_tri_emit` (in the emit order) | edge / triangle | vertex records, indices |
+//! | 4b | `bezier_tri_order` | coarse triangle | the emit order: those that make the most triangles first, the plain ones (no points; one triangle) last |
+//! | 5 | copy + `bezier_edge_emit` + `bezier_tri_emit` + `bezier_tri_emit_plain` (in the emit order, both indirect) | edge / triangle | vertex records, indices |
 //! | 6 | `bezier_vertex_eval` (indirect) | output vertex | vertices |
 //!
 //! Output sizes are not known in advance, and change with the threshold and depth. The
@@ -128,6 +128,7 @@ struct Pipelines {
     finish: Kernel,
     map_cells: Kernel,
     tri_order: Kernel,
+    tri_emit_plain: Kernel,
     edge_emit: Kernel,
     vertex_eval: Kernel,
 }
@@ -141,6 +142,7 @@ impl Pipelines {
             finish: make("bezier_finish.wgsl"),
             map_cells: make("bezier_map_cells.wgsl"),
             tri_order: make("bezier_tri_order.wgsl"),
+            tri_emit_plain: make("bezier_tri_emit_plain.wgsl"),
             edge_emit: make("bezier_edge_emit.wgsl"),
             vertex_eval: make("bezier_vertex_eval.wgsl"),
         }
@@ -223,6 +225,7 @@ struct BindGroups {
     tri_order: wgpu::BindGroup,
     edge_emit: wgpu::BindGroup,
     tri_emit: wgpu::BindGroup,
+    tri_emit_plain: wgpu::BindGroup,
     vertex_eval: wgpu::BindGroup,
 }
 
@@ -254,6 +257,7 @@ impl BindGroups {
             tri_order: bind(&p.tri_order),
             edge_emit: bind(&p.edge_emit),
             tri_emit: bind(&t.tri_emit),
+            tri_emit_plain: bind(&p.tri_emit_plain),
             vertex_eval: bind(&p.vertex_eval),
         }
     }
@@ -428,8 +432,8 @@ impl BezierStage {
         let counts_len = l.coarse_edges + 2 * l.coarse_triangles + 1;
         let pipelines = kernels.clone();
         let test_kernels = pipelines.for_params(device, params);
-        // The scan's values, then the emit order (one slot per coarse triangle).
-        let counts_bytes = 4 * (counts_len as u64 + l.coarse_triangles as u64);
+        // The scan's values, then the emit order and each triangle's bucket in it.
+        let counts_bytes = 4 * (counts_len as u64 + 2 * l.coarse_triangles as u64);
         check_size(device, "count", counts_bytes)?;
         check_size(
             device,
@@ -789,13 +793,25 @@ impl BezierStage {
                         .dispatch(&mut pass, &bg.edge_emit, l.coarse_edges, WORKGROUP)
                 }
                 Step::TriEmit => {
-                    t.tri_emit
-                        .dispatch(&mut pass, &bg.tri_emit, l.coarse_triangles, WORKGROUP)
+                    // Sized by the finish kernel: the general triangles, then the plain.
+                    t.tri_emit.dispatch_indirect(
+                        &mut pass,
+                        &bg.tri_emit,
+                        &b.status,
+                        std::mem::offset_of!(BezierStatus, emit_dispatch) as u64,
+                    );
+                    p.tri_emit_plain.dispatch_indirect(
+                        &mut pass,
+                        &bg.tri_emit_plain,
+                        &b.status,
+                        std::mem::offset_of!(BezierStatus, plain_dispatch) as u64,
+                    );
                 }
                 Step::VertexEval => {
                     pass.set_pipeline(&p.vertex_eval.pipeline);
                     pass.set_bind_group(0, &bg.vertex_eval, &[]);
-                    pass.dispatch_workgroups_indirect(&b.status, 16);
+                    let dispatch = std::mem::offset_of!(BezierStatus, dispatch) as u64;
+                    pass.dispatch_workgroups_indirect(&b.status, dispatch);
                 }
             }
         }
@@ -929,12 +945,14 @@ impl BezierStage {
         let (points_words, pole_words) = self.words_per_triangle();
         let mut counts = words(&self.buffers.counts)?;
         let l = self.prepared_layout;
-        let order = counts.split_off((l.coarse_edges + 2 * l.coarse_triangles + 1) as usize);
+        let mut order = counts.split_off((l.coarse_edges + 2 * l.coarse_triangles + 1) as usize);
+        let order_buckets = order.split_off(l.coarse_triangles as usize);
         Ok(Intermediates {
             map_atlas: self.read_map_atlas(device, queue)?,
             edge_bits: words(&self.buffers.edge_bits)?,
             counts,
             order,
+            order_buckets,
             scratch: words(&self.buffers.scratch)?,
             points_words,
             pole_words,
@@ -970,9 +988,11 @@ pub struct Intermediates {
     pub edge_bits: Vec<u32>,
     /// The exclusive scan of `[edge vertices | inner vertices | triangles | 0]`.
     pub counts: Vec<u32>,
-    /// The coarse triangles in the order `tri_emit` takes them (`emit_order`; within a
-    /// bucket the order is the atomics' and may change from run to run).
+    /// The coarse triangles in the order the emit kernels take them (`emit_order`;
+    /// within a bucket the order is the atomics' and may change from run to run).
     pub order: Vec<u32>,
+    /// Each coarse triangle's bucket in that order (`order_bucket`).
+    pub order_buckets: Vec<u32>,
     /// Per coarse triangle (`stride` words): `points_words` words of lattice points, then
     /// `pole_words`, then the points' nonzero groups (as `TriScratch::words`).
     pub scratch: Vec<u32>,

@@ -129,6 +129,10 @@ pub const SOURCES: &[(&str, &str)] = &[
         include_str!("../../../shaders/bezier_map_cells.wgsl"),
     ),
     (
+        "bezier_tri_emit_plain.wgsl",
+        include_str!("../../../shaders/bezier_tri_emit_plain.wgsl"),
+    ),
+    (
         "bezier_tri_order.wgsl",
         include_str!("../../../shaders/bezier_tri_order.wgsl"),
     ),

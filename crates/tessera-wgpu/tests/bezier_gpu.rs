@@ -9,12 +9,14 @@
 
 use glam::Vec3;
 use tessera_core::bezier::refine::{tri_mark, TriScratch};
-use tessera_core::bezier::tessellate::{edge_decide, emit_order, order_bucket, tri_context};
+use tessera_core::bezier::tessellate::{
+    edge_decide, emit_order, is_plain, order_bucket, tri_context,
+};
 use tessera_core::bezier::{
     tessellate_adaptive, AdaptiveParams, BezierModel, EdgeTest, PreparedBezier,
 };
 use tessera_core::gpu_types::{MapAtlas, EDGE_BIT_WORDS};
-use tessera_wgpu::bezier::BezierStage;
+use tessera_wgpu::bezier::{BezierStage, Intermediates};
 use tessera_wgpu::headless::Gpu;
 
 const TIE_REL: f32 = 1e-3;
@@ -98,36 +100,47 @@ fn compare_decisions(
             ties += 1;
         }
     }
-    compare_order(
-        &inter.counts,
-        &inter.order,
-        l.coarse_edges,
-        l.coarse_triangles,
-    );
+    compare_order(&inter, prep, &cps, &gpu_bits, params);
     Comparison {
         decisions: (l.coarse_edges + l.coarse_triangles) as usize,
         ties,
     }
 }
 
-/// The GPU's emit order against its twin, from the GPU's own counts: the same buckets
-/// in the same order, and the same triangles in each (the atomics take a bucket's
-/// slots in any order).
-fn compare_order(counts: &[u32], gpu_order: &[u32], edges: u32, triangles: u32) {
-    let first = (edges + triangles) as usize;
-    let made: Vec<u32> = (0..triangles as usize)
-        .map(|t| counts[first + t + 1] - counts[first + t])
+/// The GPU's emit order against its twin, from the GPU's own counts and edge
+/// decisions: each triangle's bucket as the twin chooses it, the buckets in order, and
+/// the same triangles in each (the atomics take a bucket's slots in any order).
+fn compare_order(
+    inter: &Intermediates,
+    prep: &PreparedBezier,
+    cps: &[[Vec3; 16]],
+    gpu_bits: &[[u32; EDGE_BIT_WORDS]],
+    params: &AdaptiveParams,
+) {
+    let l = prep.layout;
+    let (edges, triangles) = (l.coarse_edges as usize, l.coarse_triangles as usize);
+    let count = |first: usize, t: usize| inter.counts[first + t + 1] - inter.counts[first + t];
+    let buckets: Vec<u32> = (0..triangles)
+        .map(|t| {
+            let ctx = tri_context(prep, cps, gpu_bits, params, t as u32);
+            let (inner, made) = (count(edges, t), count(edges + triangles, t));
+            order_bucket(made, is_plain(&ctx, inner, made))
+        })
         .collect();
-    let bucket = |t: &u32| order_bucket(made[*t as usize]);
-    let mut gpu = gpu_order.to_vec();
+    assert_eq!(
+        inter.order_buckets, buckets,
+        "the GPU's emit-order buckets differ from the twin's"
+    );
+    let bucket = |t: &u32| buckets[*t as usize];
+    let mut gpu = inter.order.clone();
     assert!(
-        gpu.iter().all(|&t| t < triangles) && gpu.is_sorted_by_key(bucket),
+        gpu.iter().all(|&t| (t as usize) < triangles) && gpu.is_sorted_by_key(bucket),
         "the GPU's emit order leaves the buckets' order"
     );
     gpu.sort_by_key(|t| (bucket(t), *t));
     assert_eq!(
         gpu,
-        emit_order(&made),
+        emit_order(&buckets),
         "the GPU's emit order is not a bucketing of the triangles"
     );
 }

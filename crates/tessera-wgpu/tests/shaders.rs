@@ -282,6 +282,17 @@ fn shared_structs_match_their_rust_twins() {
         .find(|(n, _)| n == "dispatch_x")
         .expect("dispatch_x");
     assert_eq!(dispatch.1 as usize, offset_of!(BezierStatus, dispatch));
+    for (name, offset) in [
+        (
+            "general_triangles",
+            offset_of!(BezierStatus, general_triangles),
+        ),
+        ("emit_dispatch_x", offset_of!(BezierStatus, emit_dispatch)),
+        ("plain_dispatch_x", offset_of!(BezierStatus, plain_dispatch)),
+    ] {
+        let member = members.iter().find(|(n, _)| n == name).expect(name);
+        assert_eq!(member.1 as usize, offset, "{name}");
+    }
     let overflow = members
         .iter()
         .find(|(n, _)| n == "overflow")

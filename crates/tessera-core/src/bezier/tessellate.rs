@@ -245,34 +245,67 @@ pub fn edge_emit(
     }
 }
 
-/// The emit-order bucket of a coarse triangle that makes `made` triangles: those that
-/// make the most first, every count from `ORDER_BUCKETS - 1` up sharing bucket 0.
-pub fn order_bucket(made: u32) -> u32 {
-    let last = tally::ORDER_BUCKETS - 1;
+/// Whether a coarse triangle is plain: no point inside, none on its sides, no side
+/// collapsed, one triangle made. Its mesh is then its corners, which
+/// [`tri_emit_plain`] writes without the bisection walk.
+pub fn is_plain(ctx: &TriContext, inner: u32, made: u32) -> bool {
+    inner == 0
+        && made == 1
+        && ctx
+            .sides
+            .iter()
+            .all(|&(e, _, collapsed)| !collapsed && bit_count(&ctx.edge_bits[e as usize]) == 0)
+}
+
+/// The emit-order bucket of a coarse triangle that makes `made` triangles: plain ones
+/// ([`is_plain`]) last, in a bucket of their own; the others those that make the most
+/// first, every count from `ORDER_BUCKETS - 2` up sharing bucket 0.
+pub fn order_bucket(made: u32, plain: bool) -> u32 {
+    let plain_bucket = tally::ORDER_BUCKETS - 1;
+    if plain {
+        return plain_bucket;
+    }
+    let last = plain_bucket - 1;
     last - made.min(last)
 }
 
-/// Stage 4b: the order stage 5c takes the coarse triangles in, from what each makes
-/// (`made[t]`), by bucket ([`order_bucket`]) and by index within one. Twin of
-/// `bezier_tri_order.wgsl`, whose slots within a bucket are taken by atomics in any
-/// order. The mesh does not depend on it: each triangle writes where the scan says. A
-/// SIMD device runs lanes side by side in lockstep, each loop as long as its longest
-/// lane, so lanes with alike work waste less (see the kernel).
-pub fn emit_order(made: &[u32]) -> Vec<u32> {
+/// Stage 4b: the order stage 5c takes the coarse triangles in, from each one's bucket
+/// ([`order_bucket`]), by bucket and by index within one. Twin of the bucket slots in
+/// `bezier_finish.wgsl` and of `bezier_tri_order.wgsl`, whose slots within a bucket are
+/// taken by atomics in any order. The mesh does not depend on it: each triangle writes
+/// where the scan says. A SIMD device runs lanes side by side in lockstep, each loop as
+/// long as its longest lane, so lanes with alike work waste less; and the plain
+/// triangles, last, go to a kernel of their own.
+pub fn emit_order(buckets: &[u32]) -> Vec<u32> {
     // The finish kernel's half: each bucket's first slot.
     let mut first = vec![0u32; tally::ORDER_BUCKETS as usize];
-    for &m in made {
-        first[order_bucket(m) as usize] += 1;
+    for &b in buckets {
+        first[b as usize] += 1;
     }
     exclusive_scan(&mut first);
     // The order kernel's half: one slot per triangle.
-    let mut order = vec![0u32; made.len()];
-    for (t, &m) in made.iter().enumerate() {
-        let slot = &mut first[order_bucket(m) as usize];
+    let mut order = vec![0u32; buckets.len()];
+    for (t, &b) in buckets.iter().enumerate() {
+        let slot = &mut first[b as usize];
         order[*slot as usize] = t as u32;
         *slot += 1;
     }
     order
+}
+
+/// Stage 5c for a plain coarse triangle ([`is_plain`]): its one triangle, the corners of
+/// its root as the walk would emit them. Twin of `bezier_tri_emit_plain.wgsl`.
+pub fn tri_emit_plain(ctx: &TriContext, first_index: u32, indices: &mut [u32]) {
+    let corners = ctx.lattice.root().map(|p| ctx.vertex(p, &|_| 0));
+    let mut sink = EmitSink {
+        indices,
+        edge_vertex_base: 0,
+        edge_offsets: &[],
+        inner_base: 0,
+        next_index: first_index as usize,
+    };
+    let [a, b, c] = corners;
+    sink.triangle(if ctx.flipped { [a, c, b] } else { [a, b, c] });
 }
 
 /// Stage 5c, one work item per coarse triangle: records of its inner points (in
@@ -390,16 +423,21 @@ pub fn tessellate_adaptive_timed(
     let mut scratch = Vec::with_capacity(l.coarse_triangles as usize);
     let mut inner_offsets = Vec::with_capacity(l.coarse_triangles as usize);
     let mut tri_offsets = Vec::with_capacity(l.coarse_triangles as usize);
+    let mut buckets = Vec::with_capacity(l.coarse_triangles as usize);
+    let mut plain = Vec::with_capacity(l.coarse_triangles as usize);
     for t in 0..l.coarse_triangles {
         let ctx = tri_context(prep, &cps, &bits, params, t);
         let mut s = TriScratch::new(params.max_depth);
         evaluations += tri_mark(&ctx, &mut s) as u64;
-        inner_offsets.push(s.inner_count());
-        tri_offsets.push(tri_count(&ctx, &s));
+        let (inner, made) = (s.inner_count(), tri_count(&ctx, &s));
+        plain.push(is_plain(&ctx, inner, made));
+        buckets.push(order_bucket(made, plain[t as usize]));
+        inner_offsets.push(inner);
+        tri_offsets.push(made);
         scratch.push(s);
     }
     let inner_vertices = exclusive_scan(&mut inner_offsets);
-    let order = emit_order(&tri_offsets);
+    let order = emit_order(&buckets);
     let triangles = exclusive_scan(&mut tri_offsets);
     let edge_vertex_base = l.coarse_vertices;
     let inner_vertex_base = edge_vertex_base + edge_vertices;
@@ -422,6 +460,10 @@ pub fn tessellate_adaptive_timed(
     let mut indices = vec![0u32; 3 * triangles as usize];
     for t in order {
         let ctx = tri_context(prep, &cps, &bits, params, t);
+        if plain[t as usize] {
+            tri_emit_plain(&ctx, 3 * tri_offsets[t as usize], &mut indices);
+            continue;
+        }
         tri_emit(
             &ctx,
             &scratch[t as usize],
@@ -451,14 +493,62 @@ mod tests {
     use super::*;
 
     #[test]
-    fn emit_order_puts_the_heaviest_first_and_keeps_index_order_within_a_bucket() {
-        let made = [3, 0, 7, 3, 900, 255, 7, 1];
-        let order = emit_order(&made);
-        // 255 and 900 share the first bucket; ties keep index order.
-        assert_eq!(order, vec![4, 5, 2, 6, 0, 3, 7, 1]);
+    fn emit_order_puts_the_heaviest_first_the_plain_last_and_keeps_index_order_within_a_bucket() {
+        let made = [3, 0, 7, 1, 3, 900, 254, 7, 1];
+        let plain = [false, false, false, true, false, false, false, false, false];
+        let buckets: Vec<u32> = made
+            .iter()
+            .zip(plain)
+            .map(|(&m, p)| order_bucket(m, p))
+            .collect();
+        let order = emit_order(&buckets);
+        // 254 and 900 share the first bucket; ties keep index order; the plain one last.
+        assert_eq!(order, vec![5, 6, 2, 7, 0, 4, 8, 1, 3]);
         let mut sorted = order.clone();
         sorted.sort_unstable();
         assert_eq!(sorted, (0..made.len() as u32).collect::<Vec<_>>());
         assert!(emit_order(&[]).is_empty());
+    }
+
+    /// The plain path writes what the bisection walk writes, on every plain coarse
+    /// triangle of the teaset at two thresholds (and there are many).
+    #[test]
+    fn plain_triangles_emit_what_the_walk_emits() {
+        use crate::bezier::refine::{tri_mark, TriScratch};
+        use crate::bezier::{BezierModel, EdgeTest, PreparedBezier};
+        let mut plain_seen = 0;
+        for name in ["teapot", "teacup", "teaspoon"] {
+            let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+                .join("../../assets/teaset")
+                .join(name);
+            let prep = PreparedBezier::new(&BezierModel::load(&dir).expect("model"));
+            let l = prep.layout;
+            let cps: Vec<_> = (0..l.patches).map(|p| prep.control_points(p)).collect();
+            for threshold in [0.05, 0.01] {
+                let params = AdaptiveParams {
+                    test: EdgeTest::Map4p,
+                    threshold,
+                    max_depth: AdaptiveParams::DEFAULT_MAX_DEPTH,
+                };
+                let bits: Vec<_> = (0..l.coarse_edges)
+                    .map(|e| edge_decide(&prep, &cps, &params, e).0)
+                    .collect();
+                for t in 0..l.coarse_triangles {
+                    let ctx = tri_context(&prep, &cps, &bits, &params, t);
+                    let mut s = TriScratch::new(params.max_depth);
+                    tri_mark(&ctx, &mut s);
+                    if !is_plain(&ctx, s.inner_count(), tri_count(&ctx, &s)) {
+                        continue;
+                    }
+                    plain_seen += 1;
+                    let (mut walked, mut plain) = ([0u32; 3], [0u32; 3]);
+                    let mut records = [];
+                    tri_emit(&ctx, &s, 0, &[], 0, 0, &mut records, &mut walked);
+                    tri_emit_plain(&ctx, 0, &mut plain);
+                    assert_eq!(plain, walked, "{name} {threshold}, coarse triangle {t}");
+                }
+            }
+        }
+        assert!(plain_seen > 500, "only {plain_seen} plain coarse triangles");
     }
 }
