@@ -1,7 +1,8 @@
-// Stages 3a and 3b, one invocation per coarse triangle: mark the bisection tree as the
-// lattice points it makes, then count the inner vertices and the triangles the replay
-// will make (by Euler's formula, without the replay). Twin of `tri_mark`,
-// `TriScratch::inner_count` and `tri_count` in `tessera_core::bezier`.
+// Stages 3a and 3b for the coarse triangles whose root may split, one invocation each:
+// mark the bisection tree as the lattice points it makes, then count the inner vertices
+// and the triangles the replay will make (by Euler's formula, without the replay). Twin
+// of `tri_mark`, `TriScratch::inner_count` and `tri_count` in `tessera_core::bezier`;
+// `bezier_tri_roots.wgsl` takes the others.
 
 #include "shared/types.wgsl"
 #include "shared/patch.wgsl"
@@ -66,12 +67,15 @@ fn tri_mark(c: TriCtx) -> u32 {
     return inner;
 }
 
+// Dispatched indirectly over the coarse triangles `tri_roots` listed (their root may
+// split), in the emit order's slots, which `tri_order` fills later.
 @compute @workgroup_size(64)
 fn main(@builtin(global_invocation_id) gid: vec3u, @builtin(num_workgroups) groups: vec3u) {
-    let t = gid.x + gid.y * groups.x * 64u;
-    if t >= params.coarse_triangles {
+    let slot = gid.x + gid.y * groups.x * 64u;
+    if slot >= atomicLoad(&tally[TALLY_MARKED]) || slot >= params.coarse_triangles {
         return;
     }
+    let t = counts[order_base() + slot];
     let c = tri_ctx(t);
     let inner = tri_mark(c);
     if flat_evaluations > 0u {

@@ -154,6 +154,21 @@ fn splits(c: TriCtx, t: Tri, level: u32) -> bool {
     return interior_need(c.l, t);
 }
 
+// Whether the root of the bisection is known to be a leaf without the interior test:
+// its hypotenuse is a coarse side (the cell's diagonal), whose own decision says (twin
+// of `root_known_leaf`). False where that does not decide (a collapsed side).
+fn root_known_leaf(c: TriCtx) -> bool {
+    let root = lattice_root(c.l);
+    let side = common_side(c.l, root.a, root.b);
+    if c.l.depth == 0u {
+        return true;
+    }
+    if side >= 3u || side_collapsed(c, side) {
+        return false;
+    }
+    return !side_point(c, side, place(c.l, lattice_mid(root.a, root.b)).f);
+}
+
 // No point inside, none on the sides, no side collapsed, one triangle made: the mesh is
 // the corners, and `tri_emit_plain` writes it (twin of `is_plain`).
 fn is_plain(c: TriCtx, inner: u32, made: u32) -> bool {

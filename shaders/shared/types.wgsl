@@ -103,16 +103,26 @@ struct BezierStatus {
     plain_dispatch_x: u32,
     plain_dispatch_y: u32,
     plain_dispatch_z: u32,
+    // The mark kernel's indirect dispatch, raised by the root kernel with atomics
+    // (through a word view of the buffer: STATUS_MARK_DISPATCH is its first word).
+    mark_dispatch_x: u32,
+    mark_dispatch_y: u32,
+    mark_dispatch_z: u32,
 }
+
+const STATUS_MARK_DISPATCH: u32 = 15u;
 
 @group(0) @binding(0) var<uniform> params: BezierParams;
 
 // The tally buffer (binding 14; twin of `tessera_core::gpu_types::tally`): the flat
 // test's evaluations, then how many coarse triangles fall in each emit-order bucket
-// (turned into each bucket's first slot by the finish kernel).
+// (turned into each bucket's first slot by the finish kernel), then how many the mark
+// kernel walks.
 const TALLY_EVALUATIONS: u32 = 0u;
 const TALLY_ORDER: u32 = 1u;
 const ORDER_BUCKETS: u32 = 256u;
+// Coarse triangles the mark kernel walks, listed by the root kernel.
+const TALLY_MARKED: u32 = TALLY_ORDER + ORDER_BUCKETS;
 
 const PLAIN_BUCKET: u32 = ORDER_BUCKETS - 1u;
 

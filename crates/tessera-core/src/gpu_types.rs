@@ -31,10 +31,14 @@ pub mod tally {
     /// Coarse triangles per emit-order bucket, from here on
     /// (`tessera_core::bezier::tessellate::order_bucket`).
     pub const ORDER: usize = 1;
-    /// Emit-order buckets: triangles made 0..=254 one bucket each, 255 and more one.
+    /// Emit-order buckets: the plain coarse triangles one, the others by triangles
+    /// made, 0..=253 one bucket each and 254 and more one.
     pub const ORDER_BUCKETS: u32 = 256;
+    /// Coarse triangles whose bisection the mark kernel walks (the root kernel decides
+    /// the others).
+    pub const MARKED: usize = ORDER + ORDER_BUCKETS as usize;
     /// Words in the buffer.
-    pub const WORDS: usize = ORDER + ORDER_BUCKETS as usize;
+    pub const WORDS: usize = MARKED + 1;
 }
 
 /// Control points of one bicubic patch, row-major, `x y z` per point.
@@ -396,6 +400,9 @@ pub struct BezierStatus {
     pub emit_dispatch: [u32; 3],
     /// The plain emit kernel's indirect dispatch.
     pub plain_dispatch: [u32; 3],
+    /// The mark kernel's indirect dispatch, over the coarse triangles whose root the
+    /// root kernel could not decide alone (zeroed before each run).
+    pub mark_dispatch: [u32; 3],
 }
 
 /// Bytes uploaded per patch and once per model for the map-based tessellator: the

@@ -7,7 +7,7 @@
 //! |---|---|---|---|
 //! | 0 | copy + `bezier_map_cells`, first recording only | — / map cell | the control-net texture (the constructor has no queue); the displacement-map atlas, built from the maps as uploaded |
 //! | 1 | `bezier_edge_decide` | coarse edge | edge bit sets, edge vertex counts |
-//! | 2 | clear + `bezier_tri_mark` | coarse triangle | lattice points, inner vertex and triangle counts |
+//! | 2 | clear + `bezier_tri_roots` + `bezier_tri_mark` (indirect, over the triangles whose root may split) | coarse triangle | lattice points, inner vertex and triangle counts, emit-order buckets |
 //! | 3 | `scan` (multi-level) | — | offsets of all three counts in one exclusive scan |
 //! | 4 | `bezier_finish` | 1 | totals, overflow flags, draw arguments, vertex dispatch, the emit order's bucket slots |
 //! | 4b | `bezier_tri_order` | coarse triangle | the emit order: those that make the most triangles first, the plain ones (no points; one triangle) last |
@@ -160,6 +160,7 @@ impl Pipelines {
 /// its time at depth 6 on lavapipe.
 struct TestKernels {
     edge_decide: Kernel,
+    tri_roots: Kernel,
     tri_mark: Kernel,
     tri_emit: Kernel,
 }
@@ -176,6 +177,7 @@ impl TestKernels {
                 "main",
                 &constants,
             ),
+            tri_roots: make("bezier_tri_roots.wgsl"),
             tri_mark: make("bezier_tri_mark.wgsl"),
             tri_emit: make("bezier_tri_emit.wgsl"),
         }
@@ -220,6 +222,7 @@ impl Step {
 
 struct BindGroups {
     edge_decide: wgpu::BindGroup,
+    tri_roots: wgpu::BindGroup,
     tri_mark: wgpu::BindGroup,
     finish: wgpu::BindGroup,
     tri_order: wgpu::BindGroup,
@@ -252,6 +255,7 @@ impl BindGroups {
         let bind = |k: &Kernel| k.bind_with_textures(device, &all, &textures);
         BindGroups {
             edge_decide: bind(&t.edge_decide),
+            tri_roots: bind(&t.tri_roots),
             tri_mark: bind(&t.tri_mark),
             finish: bind(&p.finish),
             tri_order: bind(&p.tri_order),
@@ -455,7 +459,8 @@ impl BezierStage {
             size: std::mem::size_of::<BezierStatus>() as u64,
             usage: wgpu::BufferUsages::STORAGE
                 | wgpu::BufferUsages::INDIRECT
-                | wgpu::BufferUsages::COPY_SRC,
+                | wgpu::BufferUsages::COPY_SRC
+                | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
         let status_readback = device.create_buffer(&wgpu::BufferDescriptor {
@@ -756,7 +761,12 @@ impl BezierStage {
             }
             // The triangles' bit sets start empty: a memset here, where zeroing them in
             // the kernel was a store per word and lane.
-            Step::TriMark => encoder.clear_buffer(&b.scratch, 0, None),
+            Step::TriMark => {
+                encoder.clear_buffer(&b.scratch, 0, None);
+                // The root kernel raises the mark kernel's dispatch from zero.
+                let dispatch = std::mem::offset_of!(BezierStatus, mark_dispatch) as u64;
+                encoder.clear_buffer(&b.status, dispatch, Some(12));
+            }
             Step::EdgeEmit => encoder.copy_buffer_to_buffer(
                 &b.coarse_records,
                 0,
@@ -777,8 +787,14 @@ impl BezierStage {
                         .dispatch(&mut pass, &bg.edge_decide, l.coarse_edges, WORKGROUP)
                 }
                 Step::TriMark => {
-                    t.tri_mark
-                        .dispatch(&mut pass, &bg.tri_mark, l.coarse_triangles, WORKGROUP)
+                    t.tri_roots
+                        .dispatch(&mut pass, &bg.tri_roots, l.coarse_triangles, WORKGROUP);
+                    t.tri_mark.dispatch_indirect(
+                        &mut pass,
+                        &bg.tri_mark,
+                        &b.status,
+                        std::mem::offset_of!(BezierStatus, mark_dispatch) as u64,
+                    );
                 }
                 Step::ScanFinish => {
                     b.scan.record(&mut pass, &p.scan);

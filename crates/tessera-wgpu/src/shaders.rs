@@ -117,6 +117,10 @@ pub const SOURCES: &[(&str, &str)] = &[
         include_str!("../../../shaders/bezier_edge_decide.wgsl"),
     ),
     (
+        "bezier_tri_roots.wgsl",
+        include_str!("../../../shaders/bezier_tri_roots.wgsl"),
+    ),
+    (
         "bezier_tri_mark.wgsl",
         include_str!("../../../shaders/bezier_tri_mark.wgsl"),
     ),

@@ -289,6 +289,7 @@ fn shared_structs_match_their_rust_twins() {
         ),
         ("emit_dispatch_x", offset_of!(BezierStatus, emit_dispatch)),
         ("plain_dispatch_x", offset_of!(BezierStatus, plain_dispatch)),
+        ("mark_dispatch_x", offset_of!(BezierStatus, mark_dispatch)),
     ] {
         let member = members.iter().find(|(n, _)| n == name).expect(name);
         assert_eq!(member.1 as usize, offset, "{name}");
@@ -428,6 +429,11 @@ fn bezier_constants_match_their_rust_twins() {
         ("TALLY_EVALUATIONS", tally::EVALUATIONS as u32),
         ("TALLY_ORDER", tally::ORDER as u32),
         ("ORDER_BUCKETS", tally::ORDER_BUCKETS),
+        ("TALLY_MARKED", tally::MARKED as u32),
+        (
+            "STATUS_MARK_DISPATCH",
+            (offset_of!(BezierStatus, mark_dispatch) / 4) as u32,
+        ),
     ] {
         assert_eq!(wgsl_u32(&module, name), rust, "{name}");
     }

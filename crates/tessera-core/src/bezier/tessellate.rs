@@ -23,8 +23,8 @@ use super::lattice::{Lattice, LatticeRows};
 use super::patch::{eval_frame_f32, frame_normal_f32};
 use super::prepare::PreparedBezier;
 use super::refine::{
-    inner_rank, interior_need, tri_mark, tri_triangles, TriContext, TriScratch, TriangleSink,
-    VertexRef,
+    inner_rank, interior_need, splits, tri_mark, tri_triangles, TriContext, TriScratch,
+    TriangleSink, VertexRef,
 };
 use crate::error::{Error, Result};
 use crate::gpu_types::{tally, OutVertex, VertexRecord, EDGE_BIT_WORDS, MAX_DEPTH_LIMIT};
@@ -245,6 +245,20 @@ pub fn edge_emit(
     }
 }
 
+/// Whether the root of a coarse triangle's bisection is known to be a leaf without the
+/// interior test: its hypotenuse is a coarse side (the cell's diagonal), whose own
+/// decision says whether its midpoint is a point. `false` where that does not decide (a
+/// collapsed side). Twin of `root_known_leaf` in `shaders/shared/refine.wgsl`, which
+/// the root kernel (`bezier_tri_roots.wgsl`) asks so that the mark kernel walks only
+/// the triangles that split.
+pub fn root_known_leaf(ctx: &TriContext) -> bool {
+    let root = ctx.lattice.root();
+    match ctx.lattice.common_side(root[1], root[2]) {
+        Some(side) if !ctx.sides[side].2 => !splits(ctx, root, 0).0,
+        _ => false,
+    }
+}
+
 /// Whether a coarse triangle is plain: no point inside, none on its sides, no side
 /// collapsed, one triangle made. Its mesh is then its corners, which
 /// [`tri_emit_plain`] writes without the bisection walk.
@@ -428,8 +442,14 @@ pub fn tessellate_adaptive_timed(
     for t in 0..l.coarse_triangles {
         let ctx = tri_context(prep, &cps, &bits, params, t);
         let mut s = TriScratch::new(params.max_depth);
-        evaluations += tri_mark(&ctx, &mut s) as u64;
-        let (inner, made) = (s.inner_count(), tri_count(&ctx, &s));
+        // The root kernel's triangles, then the mark kernel's.
+        let (inner, made) = match euler_count(&ctx, &s).filter(|_| root_known_leaf(&ctx)) {
+            Some(made) => (0, made),
+            None => {
+                evaluations += tri_mark(&ctx, &mut s) as u64;
+                (s.inner_count(), tri_count(&ctx, &s))
+            }
+        };
         plain.push(is_plain(&ctx, inner, made));
         buckets.push(order_bucket(made, plain[t as usize]));
         inner_offsets.push(inner);
@@ -508,6 +528,48 @@ mod tests {
         sorted.sort_unstable();
         assert_eq!(sorted, (0..made.len() as u32).collect::<Vec<_>>());
         assert!(emit_order(&[]).is_empty());
+    }
+
+    /// A root known to be a leaf marks nothing, on every coarse triangle of the teaset at
+    /// two thresholds (and many are).
+    #[test]
+    fn a_root_known_to_be_a_leaf_marks_nothing() {
+        use crate::bezier::refine::{tri_mark, TriScratch};
+        use crate::bezier::{BezierModel, EdgeTest, PreparedBezier};
+        let (mut known, mut walked) = (0, 0);
+        for name in ["teapot", "teacup", "teaspoon"] {
+            let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+                .join("../../assets/teaset")
+                .join(name);
+            let prep = PreparedBezier::new(&BezierModel::load(&dir).expect("model"));
+            let l = prep.layout;
+            let cps: Vec<_> = (0..l.patches).map(|p| prep.control_points(p)).collect();
+            for threshold in [0.05, 0.01] {
+                let params = AdaptiveParams {
+                    test: EdgeTest::Map4p,
+                    threshold,
+                    max_depth: AdaptiveParams::DEFAULT_MAX_DEPTH,
+                };
+                let bits: Vec<_> = (0..l.coarse_edges)
+                    .map(|e| edge_decide(&prep, &cps, &params, e).0)
+                    .collect();
+                for t in 0..l.coarse_triangles {
+                    let ctx = tri_context(&prep, &cps, &bits, &params, t);
+                    let mut s = TriScratch::new(params.max_depth);
+                    tri_mark(&ctx, &mut s);
+                    if root_known_leaf(&ctx) {
+                        known += 1;
+                        assert_eq!(s.words(), TriScratch::new(params.max_depth).words());
+                    } else {
+                        walked += 1;
+                    }
+                }
+            }
+        }
+        assert!(
+            known > 500 && walked > 500,
+            "{known} known leaves, {walked} walked"
+        );
     }
 
     /// The plain path writes what the bisection walk writes, on every plain coarse
