@@ -24,3 +24,44 @@ pub use patch::BezierPatch;
 pub use prepare::PreparedBezier;
 pub use tessellate::{tessellate_adaptive, AdaptiveParams, Tessellation};
 pub use uniform::tessellate_uniform;
+
+#[cfg(test)]
+pub(crate) mod test_support {
+    use super::refine::{tri_mark, TriContext, TriScratch};
+    use super::tessellate::{edge_decide, tri_context};
+    use super::{AdaptiveParams, BezierModel, EdgeTest, PreparedBezier};
+
+    /// Every coarse triangle of the named teaset models, marked, at each (test,
+    /// threshold): `visit` gets a label, its context and its scratch.
+    pub(crate) fn for_each_marked_triangle(
+        models: &[&str],
+        settings: &[(EdgeTest, f32)],
+        mut visit: impl FnMut(&str, &TriContext, &TriScratch),
+    ) {
+        for name in models {
+            let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+                .join("../../assets/teaset")
+                .join(name);
+            let prep = PreparedBezier::new(&BezierModel::load(&dir).expect("model"));
+            let l = prep.layout;
+            let cps: Vec<_> = (0..l.patches).map(|p| prep.control_points(p)).collect();
+            for &(test, threshold) in settings {
+                let params = AdaptiveParams {
+                    test,
+                    threshold,
+                    max_depth: AdaptiveParams::DEFAULT_MAX_DEPTH,
+                };
+                let bits: Vec<_> = (0..l.coarse_edges)
+                    .map(|e| edge_decide(&prep, &cps, &params, e).0)
+                    .collect();
+                for t in 0..l.coarse_triangles {
+                    let ctx = tri_context(&prep, &cps, &bits, &params, t);
+                    let mut s = TriScratch::new(params.max_depth);
+                    tri_mark(&ctx, &mut s);
+                    let what = format!("{name} {test:?} {threshold}, coarse triangle {t}");
+                    visit(&what, &ctx, &s);
+                }
+            }
+        }
+    }
+}

@@ -571,16 +571,8 @@ mod tests {
     /// leaf's hypotenuse holds a point (`leaf_polygon` walks only the legs).
     #[test]
     fn dyadic_side_walk_finds_every_point_a_scan_finds() {
-        use super::super::tessellate::{edge_decide, tri_context, AdaptiveParams};
-        use super::super::{BezierModel, PreparedBezier};
-        let dir =
-            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/teaset/teapot");
-        let model = BezierModel::load(&dir).expect("teapot");
-        let prep = PreparedBezier::new(&model);
-        let l = prep.layout;
-        let cps: Vec<_> = (0..l.patches).map(|p| prep.control_points(p)).collect();
         let (mut sides, mut points, mut several) = (0, 0, 0);
-        for (test, threshold) in [
+        let settings = [
             (EdgeTest::Map4p, 0.02),
             (EdgeTest::Map4p, 0.002),
             (EdgeTest::Map2p, 0.005),
@@ -588,41 +580,30 @@ mod tests {
             (EdgeTest::Flat, 0.005),
             (EdgeTest::Flat, 0.0005),
             (EdgeTest::Map4p, 0.0002),
-        ] {
-            let params = AdaptiveParams {
-                test,
-                threshold,
-                max_depth: AdaptiveParams::DEFAULT_MAX_DEPTH,
-            };
-            let bits: Vec<_> = (0..l.coarse_edges)
-                .map(|e| edge_decide(&prep, &cps, &params, e).0)
-                .collect();
-            for t in 0..l.coarse_triangles {
-                let ctx = tri_context(&prep, &cps, &bits, &params, t);
-                let mut scratch = TriScratch::new(params.max_depth);
-                tri_mark(&ctx, &mut scratch);
-                for_each_leaf(&ctx, &scratch, |leaf| {
+        ];
+        crate::bezier::test_support::for_each_marked_triangle(
+            &["teapot"],
+            &settings,
+            |what, ctx, scratch| {
+                for_each_leaf(ctx, scratch, |leaf| {
                     for k in 0..3 {
                         let (a, b) = (leaf[k], leaf[(k + 1) % 3]);
                         let mut walked = Vec::new();
-                        side_points(&ctx, &scratch, a, b, &mut walked);
-                        let scanned = side_points_scanned(&ctx, &scratch, a, b);
-                        assert_eq!(
-                            walked, scanned,
-                            "{test:?} {threshold}, triangle {t}, side {a:?} → {b:?}"
-                        );
+                        side_points(ctx, scratch, a, b, &mut walked);
+                        let scanned = side_points_scanned(ctx, scratch, a, b);
+                        assert_eq!(walked, scanned, "{what}, side {a:?} → {b:?}");
                         // `leaf_polygon` walks only the legs.
                         assert!(
                             k != 1 || scanned.is_empty(),
-                            "{test:?} {threshold}, triangle {t}: the hypotenuse holds a point"
+                            "{what}: the hypotenuse holds a point"
                         );
                         sides += 1;
                         points += scanned.len();
                         several += (scanned.len() >= 2) as usize;
                     }
                 });
-            }
-        }
+            },
+        );
         // Not a vacuous pass: many sides carry points.
         assert!(
             sides > 100_000 && points > 10_000 && several > 1000,

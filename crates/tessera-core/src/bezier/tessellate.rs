@@ -530,42 +530,28 @@ mod tests {
         assert!(emit_order(&[]).is_empty());
     }
 
-    /// A root known to be a leaf marks nothing, on every coarse triangle of the teaset at
-    /// two thresholds (and many are).
+    /// Every coarse triangle of the teaset, marked, at two Map4p thresholds.
+    fn for_each_marked_triangle(visit: impl FnMut(&str, &TriContext, &TriScratch)) {
+        crate::bezier::test_support::for_each_marked_triangle(
+            &["teapot", "teacup", "teaspoon"],
+            &[(EdgeTest::Map4p, 0.05), (EdgeTest::Map4p, 0.01)],
+            visit,
+        );
+    }
+
+    /// A root known to be a leaf marks nothing (and many are).
     #[test]
     fn a_root_known_to_be_a_leaf_marks_nothing() {
-        use crate::bezier::refine::{tri_mark, TriScratch};
-        use crate::bezier::{BezierModel, EdgeTest, PreparedBezier};
         let (mut known, mut walked) = (0, 0);
-        for name in ["teapot", "teacup", "teaspoon"] {
-            let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-                .join("../../assets/teaset")
-                .join(name);
-            let prep = PreparedBezier::new(&BezierModel::load(&dir).expect("model"));
-            let l = prep.layout;
-            let cps: Vec<_> = (0..l.patches).map(|p| prep.control_points(p)).collect();
-            for threshold in [0.05, 0.01] {
-                let params = AdaptiveParams {
-                    test: EdgeTest::Map4p,
-                    threshold,
-                    max_depth: AdaptiveParams::DEFAULT_MAX_DEPTH,
-                };
-                let bits: Vec<_> = (0..l.coarse_edges)
-                    .map(|e| edge_decide(&prep, &cps, &params, e).0)
-                    .collect();
-                for t in 0..l.coarse_triangles {
-                    let ctx = tri_context(&prep, &cps, &bits, &params, t);
-                    let mut s = TriScratch::new(params.max_depth);
-                    tri_mark(&ctx, &mut s);
-                    if root_known_leaf(&ctx) {
-                        known += 1;
-                        assert_eq!(s.words(), TriScratch::new(params.max_depth).words());
-                    } else {
-                        walked += 1;
-                    }
-                }
+        for_each_marked_triangle(|what, ctx, s| {
+            if root_known_leaf(ctx) {
+                known += 1;
+                let empty = TriScratch::new(ctx.lattice.depth);
+                assert_eq!(s.words(), empty.words(), "{what}");
+            } else {
+                walked += 1;
             }
-        }
+        });
         assert!(
             known > 500 && walked > 500,
             "{known} known leaves, {walked} walked"
@@ -573,44 +559,21 @@ mod tests {
     }
 
     /// The plain path writes what the bisection walk writes, on every plain coarse
-    /// triangle of the teaset at two thresholds (and there are many).
+    /// triangle (and there are many).
     #[test]
     fn plain_triangles_emit_what_the_walk_emits() {
-        use crate::bezier::refine::{tri_mark, TriScratch};
-        use crate::bezier::{BezierModel, EdgeTest, PreparedBezier};
         let mut plain_seen = 0;
-        for name in ["teapot", "teacup", "teaspoon"] {
-            let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-                .join("../../assets/teaset")
-                .join(name);
-            let prep = PreparedBezier::new(&BezierModel::load(&dir).expect("model"));
-            let l = prep.layout;
-            let cps: Vec<_> = (0..l.patches).map(|p| prep.control_points(p)).collect();
-            for threshold in [0.05, 0.01] {
-                let params = AdaptiveParams {
-                    test: EdgeTest::Map4p,
-                    threshold,
-                    max_depth: AdaptiveParams::DEFAULT_MAX_DEPTH,
-                };
-                let bits: Vec<_> = (0..l.coarse_edges)
-                    .map(|e| edge_decide(&prep, &cps, &params, e).0)
-                    .collect();
-                for t in 0..l.coarse_triangles {
-                    let ctx = tri_context(&prep, &cps, &bits, &params, t);
-                    let mut s = TriScratch::new(params.max_depth);
-                    tri_mark(&ctx, &mut s);
-                    if !is_plain(&ctx, s.inner_count(), tri_count(&ctx, &s)) {
-                        continue;
-                    }
-                    plain_seen += 1;
-                    let (mut walked, mut plain) = ([0u32; 3], [0u32; 3]);
-                    let mut records = [];
-                    tri_emit(&ctx, &s, 0, &[], 0, 0, &mut records, &mut walked);
-                    tri_emit_plain(&ctx, 0, &mut plain);
-                    assert_eq!(plain, walked, "{name} {threshold}, coarse triangle {t}");
-                }
+        for_each_marked_triangle(|what, ctx, s| {
+            if !is_plain(ctx, s.inner_count(), tri_count(ctx, s)) {
+                return;
             }
-        }
+            plain_seen += 1;
+            let (mut walked, mut plain) = ([0u32; 3], [0u32; 3]);
+            let mut records = [];
+            tri_emit(ctx, s, 0, &[], 0, 0, &mut records, &mut walked);
+            tri_emit_plain(ctx, 0, &mut plain);
+            assert_eq!(plain, walked, "{what}");
+        });
         assert!(plain_seen > 500, "only {plain_seen} plain coarse triangles");
     }
 }
