@@ -1,6 +1,7 @@
 // After the scan, one invocation: totals, the capacity check, the indirect draw
-// arguments, the vertex kernel's indirect dispatch and the emit order's bucket slots. Nothing is read back to draw.
-// Twin of the totals in `tessera_core::bezier::tessellate_adaptive`.
+// arguments, the emit order's bucket slots and the indirect dispatches of the emit and
+// vertex kernels. Nothing is read back to draw. Twin of the totals in
+// `tessera_core::bezier::tessellate_adaptive` and of the first half of `emit_order`.
 
 #include "shared/types.wgsl"
 

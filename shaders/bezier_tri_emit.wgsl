@@ -1,4 +1,5 @@
-// Stage 5c, one invocation per coarse triangle: where its inner points are evaluated (in
+// Stage 5c, one invocation per coarse triangle that is not plain (the first slots of the
+// emit order, dispatched indirectly by `bezier_finish`): where its inner points are evaluated (in
 // lattice order) and its indices. Twin of `tessera_core::bezier::tessellate::tri_emit`.
 
 #include "shared/types.wgsl"

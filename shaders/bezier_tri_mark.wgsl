@@ -1,4 +1,5 @@
-// Stages 3a and 3b for the coarse triangles whose root may split, one invocation each:
+// Stages 3a and 3b for the coarse triangles `bezier_tri_roots` did not decide (their
+// root may split, or Euler's formula does not hold), one invocation each:
 // mark the bisection tree as the lattice points it makes, then count the inner vertices
 // and the triangles the replay will make (by Euler's formula, without the replay). Twin
 // of `tri_mark`, `TriScratch::inner_count` and `tri_count` in `tessera_core::bezier`;

@@ -1,6 +1,6 @@
 // Stage 4b, one invocation per coarse triangle: its place in the order `tri_emit` takes
 // them in, those that make the most triangles first and the plain ones last (for
-// `tri_emit_plain`), from the bucket `tri_mark` chose. Twin of `emit_order` in
+// `tri_emit_plain`), from the bucket `tri_roots` or `tri_mark` chose. Twin of `emit_order` in
 // `tessera_core::bezier::tessellate`.
 //
 // A CPU device runs a workgroup's lanes in lockstep, each loop as long as its longest

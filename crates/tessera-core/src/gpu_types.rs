@@ -76,10 +76,12 @@ pub struct MapHalves {
 }
 
 impl MapHalves {
+    /// Two halves to a word.
     pub const WORDS_PER_PATCH: usize = MAP_RES * MAP_RES / 2;
 
     /// The words of `maps`, whose values are half-precision multiples of `map_scale`
-    /// ([`crate::bezier::prepare::quantize_maps`]).
+    /// with no subnormal half, as [`crate::bezier::prepare::quantize_maps`] leaves them:
+    /// the device's atlas kernel reads normal halves and zero only.
     pub fn new(maps: &[DisplacementMap], map_scale: f32) -> Self {
         let half = |d: f32| half::f16::from_f32(d / map_scale).to_bits() as u32;
         let words = maps
@@ -406,7 +408,8 @@ pub struct BezierStatus {
 }
 
 /// Bytes uploaded per patch and once per model for the map-based tessellator: the
-/// control-net texture, the map atlas, topology, curves and coarse vertices.
+/// control-net texture, the maps (in half precision; the atlas is built on the device),
+/// topology, curves and coarse vertices.
 pub fn bezier_upload_bytes(patches: usize, curves: usize, coarse_vertices: usize) -> usize {
     patches * std::mem::size_of::<GpuPatchTopo>()
         + NetTexture::bytes(patches) as usize

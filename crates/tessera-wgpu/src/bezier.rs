@@ -88,7 +88,7 @@ mod slot {
     pub const STATUS: u32 = 13;
     pub const TALLY: u32 = 14;
     pub const MAP_HALVES: u32 = 16;
-    pub const MAP_CELLS: u32 = 17;
+    pub const MAP_ATLAS_STORE: u32 = 17;
 }
 
 /// The compiled Bézier kernels of one device. Compiling them is the slow part of
@@ -311,8 +311,8 @@ struct Buffers {
     records: wgpu::Buffer,
     status: wgpu::Buffer,
     status_readback: wgpu::Buffer,
-    /// Atomic counters, zeroed each run: the flat test's evaluations and the emit
-    /// order's buckets ([`tally`]).
+    /// Atomic counters, zeroed each run: the flat test's evaluations, the emit order's
+    /// buckets and the mark kernel's list length ([`tally`]).
     tally: wgpu::Buffer,
     output: MeshBuffers,
 }
@@ -483,6 +483,10 @@ impl BezierStage {
                 "coarse vertices",
                 std::mem::size_of_val(coarse_records.as_slice()),
             ),
+            (
+                "displacement maps",
+                MapHalves::bytes(prepared.maps.len()) as usize,
+            ),
         ] {
             check_upload(device, what, bytes as u64)?;
         }
@@ -501,8 +505,8 @@ impl BezierStage {
                 limit: max_side,
             });
         }
-        // The atlas is built on the device from the maps as uploaded (`MapHalves`, a
-        // quarter of its size), by `bezier_map_cells` in the first recording.
+        // The atlas is built on the device from the maps as uploaded (`MapHalves`, 512
+        // of its 1800 bytes per patch), by `bezier_map_cells` in the first recording.
         let map_atlas = device.create_texture(&wgpu::TextureDescriptor {
             label: Some("tessera displacement-map atlas"),
             size: wgpu::Extent3d {
@@ -529,7 +533,7 @@ impl BezierStage {
         let map_cells_pending = pipelines.0.map_cells.bind_with_textures(
             device,
             &[(slot::PARAMS, &uniform), (slot::MAP_HALVES, &map_halves)],
-            &[(slot::MAP_CELLS, &map_atlas_view)],
+            &[(slot::MAP_ATLAS_STORE, &map_atlas_view)],
         );
         // Smaller than the atlas both ways: its size check covers this one.
         let nets = NetTexture::new(&prepared.patches);
@@ -658,8 +662,10 @@ impl BezierStage {
 
     /// Records the whole tessellation into `encoder`: the straight-line script of the
     /// module docs. Nothing is submitted; the output is valid once the caller's
-    /// submission has run. The first call also records the one-time copy of the maps
-    /// into their texture, so its encoder must be submitted, not dropped.
+    /// submission has run. The first call also records the one-time copy of the nets into
+    /// their texture and the kernel that builds the map atlas from the uploaded maps, so
+    /// its encoder must be submitted, not dropped (every later run would read an empty
+    /// atlas).
     pub fn prepare(
         &mut self,
         device: &wgpu::Device,
@@ -997,6 +1003,7 @@ impl GrowingStage for BezierStage {
 }
 
 /// What the decision kernels wrote (see [`BezierStage::read_intermediates`]).
+#[non_exhaustive]
 pub struct Intermediates {
     /// The map atlas's texels, row-major, as `bezier_map_cells` built them.
     pub map_atlas: Vec<[u16; 4]>,
@@ -1004,10 +1011,11 @@ pub struct Intermediates {
     pub edge_bits: Vec<u32>,
     /// The exclusive scan of `[edge vertices | inner vertices | triangles | 0]`.
     pub counts: Vec<u32>,
-    /// The coarse triangles in the order the emit kernels take them (`emit_order`;
-    /// within a bucket the order is the atomics' and may change from run to run).
+    /// By slot: the coarse triangles in the order the emit kernels take them
+    /// (`emit_order`; within a bucket the order is the atomics' and may change from run
+    /// to run).
     pub order: Vec<u32>,
-    /// Each coarse triangle's bucket in that order (`order_bucket`).
+    /// By coarse triangle: its bucket in that order (`order_bucket`).
     pub order_buckets: Vec<u32>,
     /// Per coarse triangle (`stride` words): `points_words` words of lattice points, then
     /// `pole_words`, then the points' nonzero groups (as `TriScratch::words`).

@@ -10,12 +10,13 @@
 use glam::Vec3;
 use tessera_core::bezier::refine::{tri_mark, TriScratch};
 use tessera_core::bezier::tessellate::{
-    edge_decide, emit_order, is_plain, order_bucket, tri_context,
+    edge_decide, emit_order, euler_count, is_plain, order_bucket, root_known_leaf, tri_context,
+    tri_count,
 };
 use tessera_core::bezier::{
     tessellate_adaptive, AdaptiveParams, BezierModel, EdgeTest, PreparedBezier,
 };
-use tessera_core::gpu_types::{MapAtlas, EDGE_BIT_WORDS};
+use tessera_core::gpu_types::{BezierStatus, MapAtlas, EDGE_BIT_WORDS};
 use tessera_wgpu::bezier::{BezierStage, Intermediates};
 use tessera_wgpu::headless::Gpu;
 
@@ -101,6 +102,13 @@ fn compare_decisions(
         }
     }
     compare_order(&inter, prep, &cps, &gpu_bits, params);
+    compare_dispatches(
+        &stage.read_status(&gpu.device).expect("status"),
+        prep,
+        &cps,
+        &gpu_bits,
+        params,
+    );
     Comparison {
         decisions: (l.coarse_edges + l.coarse_triangles) as usize,
         ties,
@@ -142,6 +150,39 @@ fn compare_order(
         gpu,
         emit_order(&buckets),
         "the GPU's emit order is not a bucketing of the triangles"
+    );
+}
+
+/// The sizes the device chose for its indirect kernels against the twins, from the
+/// GPU's own edge decisions: the mark kernel's list (the coarse triangles whose root is
+/// not known to be a leaf, or whose count Euler's formula does not give) and the
+/// triangles the general emit kernel takes (those not plain). A device that sent every
+/// triangle down the slow paths would still make the right mesh; this catches it.
+fn compare_dispatches(
+    status: &BezierStatus,
+    prep: &PreparedBezier,
+    cps: &[[Vec3; 16]],
+    gpu_bits: &[[u32; EDGE_BIT_WORDS]],
+    params: &AdaptiveParams,
+) {
+    let l = prep.layout;
+    let (mut marked, mut general) = (0u32, 0u32);
+    for t in 0..l.coarse_triangles {
+        let ctx = tri_context(prep, cps, gpu_bits, params, t);
+        let mut s = TriScratch::new(params.max_depth);
+        let known = root_known_leaf(&ctx) && euler_count(&ctx, &s).is_some();
+        marked += u32::from(!known);
+        tri_mark(&ctx, &mut s);
+        general += u32::from(!is_plain(&ctx, s.inner_count(), tri_count(&ctx, &s)));
+    }
+    assert_eq!(
+        status.general_triangles, general,
+        "plain and general triangles"
+    );
+    assert_eq!(
+        status.mark_dispatch[0],
+        marked.div_ceil(64),
+        "the mark kernel's workgroups ({marked} coarse triangles)"
     );
 }
 

@@ -211,11 +211,10 @@ impl PreparedBezier {
 /// Rounds every map value to half precision relative to a power-of-two scale, and
 /// returns the scale: each value becomes `f16(d / scale) · scale` (zero where that half
 /// is subnormal), so the GPU's `rgba16float` atlas holds it exactly and its reads equal
-/// the CPU's bit for bit. The
-/// scale puts the largest magnitude in [2^13, 2^14), far from the half range's ends
-/// whatever the model's units; a value keeps 11 significant bits, a relative error of at
-/// most 2^-12 of the largest (about 1e-5 of the model size on the teaset, far under
-/// any threshold).
+/// the CPU's bit for bit. The scale puts the largest magnitude in [2^13, 2^14), far
+/// from the half range's ends whatever the model's units; a value keeps 11 significant
+/// bits, a relative error of at most 2^-12 of the largest (about 1e-5 of the model size
+/// on the teaset, far under any threshold).
 pub fn quantize_maps(maps: &mut [DisplacementMap]) -> f32 {
     let largest = maps
         .iter()
@@ -229,7 +228,8 @@ pub fn quantize_maps(maps: &mut [DisplacementMap]) -> f32 {
     for d in maps.iter_mut().flat_map(|m| m.d.iter_mut()) {
         let h = half::f16::from_f32(*d / scale);
         // Subnormal halves (under 2^-27 of the largest value) become zero: the device
-        // converts the values when it builds its atlas, and need not keep them.
+        // converts the values when it builds its atlas, and need not keep them. (The
+        // maps are finite distances: no infinity or NaN reaches here.)
         let h = if h.is_normal() { h } else { half::f16::ZERO };
         *d = h.to_f32() * scale;
     }

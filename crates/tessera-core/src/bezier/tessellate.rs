@@ -4,10 +4,12 @@
 //! | stage | kernel | work item |
 //! |---|---|---|
 //! | [`edge_decide`] | `bezier_edge_decide.wgsl` | coarse edge |
-//! | [`tri_mark`], [`tri_count`] | `bezier_tri_mark.wgsl` | coarse triangle |
+//! | [`root_known_leaf`] and [`euler_count`] | `bezier_tri_roots.wgsl` | coarse triangle |
+//! | [`tri_mark`], [`tri_count`] | `bezier_tri_mark.wgsl` | coarse triangle not decided by its root |
 //! | [`exclusive_scan`] | `scan.wgsl` (the GPU scans all three counts as one array) | — |
-//! | totals | `bezier_finish.wgsl` | 1 |
-//! | [`coarse_vertex_records`](PreparedBezier::coarse_vertex_records) (uploaded), [`edge_emit`], [`tri_emit`] | `bezier_*_emit.wgsl` | edge / triangle |
+//! | totals, [`emit_order`]'s bucket slots | `bezier_finish.wgsl` | 1 |
+//! | [`emit_order`] | `bezier_tri_order.wgsl` | coarse triangle |
+//! | [`coarse_vertex_records`](PreparedBezier::coarse_vertex_records) (uploaded), [`edge_emit`], [`tri_emit`], [`tri_emit_plain`] | `bezier_*_emit*.wgsl` | edge / triangle (in the emit order) |
 //! | [`vertex_eval`] | `bezier_vertex_eval.wgsl` | output vertex |
 
 use glam::Vec3;
@@ -248,7 +250,8 @@ pub fn edge_emit(
 /// Whether the root of a coarse triangle's bisection is known to be a leaf without the
 /// interior test: its hypotenuse is a coarse side (the cell's diagonal), whose own
 /// decision says whether its midpoint is a point. `false` where that does not decide (a
-/// collapsed side). Twin of `root_known_leaf` in `shaders/shared/refine.wgsl`, which
+/// collapsed side, which a cell's diagonal never is: a guard). Twin of `root_known_leaf`
+/// in `shaders/shared/refine.wgsl`, which
 /// the root kernel (`bezier_tri_roots.wgsl`) asks so that the mark kernel walks only
 /// the triangles that split.
 pub fn root_known_leaf(ctx: &TriContext) -> bool {
@@ -307,7 +310,7 @@ pub fn emit_order(buckets: &[u32]) -> Vec<u32> {
     order
 }
 
-/// Stage 5c for a plain coarse triangle ([`is_plain`]): its one triangle, the corners of
+/// Stage 5d, one work item per plain coarse triangle ([`is_plain`]): its one triangle, the corners of
 /// its root as the walk would emit them. Twin of `bezier_tri_emit_plain.wgsl`.
 pub fn tri_emit_plain(ctx: &TriContext, first_index: u32, indices: &mut [u32]) {
     let corners = ctx.lattice.root().map(|p| ctx.vertex(p, &|_| 0));
@@ -322,8 +325,8 @@ pub fn tri_emit_plain(ctx: &TriContext, first_index: u32, indices: &mut [u32]) {
     sink.triangle(if ctx.flipped { [a, c, b] } else { [a, b, c] });
 }
 
-/// Stage 5c, one work item per coarse triangle: records of its inner points (in
-/// lattice order) and its indices.
+/// Stage 5c, one work item per coarse triangle that is not plain (the plain ones are
+/// [`tri_emit_plain`]'s): records of its inner points (in lattice order) and its indices.
 #[allow(clippy::too_many_arguments)]
 pub fn tri_emit(
     ctx: &TriContext,
