@@ -53,7 +53,7 @@ use tessera_core::Mesh;
 use wgpu::util::DeviceExt;
 
 use crate::error::{Error, Result};
-use crate::headless::{map_read, read_buffer};
+use crate::headless::{map_read, read_buffer, TextureReadback};
 use crate::kernel::{check_size, check_upload, storage, Kernel};
 use crate::output::MeshBuffers;
 use crate::scan::{PrefixSum, ScanKernels};
@@ -126,6 +126,7 @@ struct Pipelines {
     by_test: [[OnceLock<Arc<TestKernels>>; ARRAY_DEPTH_CLASSES.len()]; EdgeTest::ALL.len()],
     scan: ScanKernels,
     finish: Kernel,
+    tri_roots: Kernel,
     map_cells: Kernel,
     tri_order: Kernel,
     tri_emit_plain: Kernel,
@@ -140,6 +141,14 @@ impl Pipelines {
             by_test: Default::default(),
             scan: ScanKernels::new(device),
             finish: make("bezier_finish.wgsl"),
+            // It runs no edge test (its roots are decided by their side's bits), but the
+            // shared refinement code it includes declares the test's override.
+            tri_roots: Kernel::with_constants(
+                device,
+                "bezier_tri_roots.wgsl",
+                "main",
+                &[("EDGE_TEST", EdgeTest::Map4p.index() as f64)],
+            ),
             map_cells: make("bezier_map_cells.wgsl"),
             tri_order: make("bezier_tri_order.wgsl"),
             tri_emit_plain: make("bezier_tri_emit_plain.wgsl"),
@@ -160,7 +169,6 @@ impl Pipelines {
 /// its time at depth 6 on lavapipe.
 struct TestKernels {
     edge_decide: Kernel,
-    tri_roots: Kernel,
     tri_mark: Kernel,
     tri_emit: Kernel,
 }
@@ -177,7 +185,6 @@ impl TestKernels {
                 "main",
                 &constants,
             ),
-            tri_roots: make("bezier_tri_roots.wgsl"),
             tri_mark: make("bezier_tri_mark.wgsl"),
             tri_emit: make("bezier_tri_emit.wgsl"),
         }
@@ -255,7 +262,7 @@ impl BindGroups {
         let bind = |k: &Kernel| k.bind_with_textures(device, &all, &textures);
         BindGroups {
             edge_decide: bind(&t.edge_decide),
-            tri_roots: bind(&t.tri_roots),
+            tri_roots: bind(&p.tri_roots),
             tri_mark: bind(&t.tri_mark),
             finish: bind(&p.finish),
             tri_order: bind(&p.tri_order),
@@ -273,7 +280,7 @@ pub struct BezierStage {
     /// See [`BezierParams::map_scale`].
     map_scale: f32,
     /// The control nets' texels, until the first recording copies them in.
-    texture_uploads: Vec<TextureUpload>,
+    nets_upload: Option<TextureUpload>,
     /// The maps as uploaded ([`MapHalves`]), bound to the kernel that builds the map
     /// atlas from them, until the first recording dispatches it.
     map_cells_pending: Option<wgpu::BindGroup>,
@@ -342,8 +349,8 @@ fn scratch_buffer(
     Ok(storage(device, "tessera triangle scratch", bytes))
 }
 
-/// A texture, empty, and a buffer holding its texels (`texel_bytes` each, row-major): the
-/// constructor has no queue, so the first recording copies one into the other.
+/// A texture, empty, and a buffer holding its texels (row-major): the constructor has no
+/// queue, so the first recording copies one into the other.
 fn texture_upload(
     device: &wgpu::Device,
     label: &str,
@@ -490,10 +497,10 @@ impl BezierStage {
         ] {
             check_upload(device, what, bytes as u64)?;
         }
-        let atlas = MapAtlas::size(prepared.maps.len());
+        let (width, height) = MapAtlas::size(prepared.maps.len());
         let atlas = wgpu::Extent3d {
-            width: atlas.0,
-            height: atlas.1,
+            width,
+            height,
             depth_or_array_layers: 1,
         };
         let max_side = device.limits().max_texture_dimension_2d;
@@ -509,11 +516,7 @@ impl BezierStage {
         // of its 1800 bytes per patch), by `bezier_map_cells` in the first recording.
         let map_atlas = device.create_texture(&wgpu::TextureDescriptor {
             label: Some("tessera displacement-map atlas"),
-            size: wgpu::Extent3d {
-                width: atlas.width,
-                height: atlas.height,
-                depth_or_array_layers: 1,
-            },
+            size: atlas,
             mip_level_count: 1,
             sample_count: 1,
             dimension: wgpu::TextureDimension::D2,
@@ -584,7 +587,7 @@ impl BezierStage {
         };
         Ok(BezierStage {
             map_scale: prepared.map_scale,
-            texture_uploads: vec![nets_upload],
+            nets_upload: Some(nets_upload),
             map_cells_pending: Some(map_cells_pending),
             prepared_layout: l,
             params: *params,
@@ -709,7 +712,7 @@ impl BezierStage {
     /// The first recording also copies the nets into their texture and builds the map
     /// atlas from the uploaded maps.
     fn record_params(&mut self, device: &wgpu::Device, encoder: &mut wgpu::CommandEncoder) {
-        for up in std::mem::take(&mut self.texture_uploads) {
+        if let Some(up) = self.nets_upload.take() {
             encoder.copy_buffer_to_texture(
                 wgpu::TexelCopyBufferInfo {
                     buffer: &up.staging,
@@ -793,7 +796,7 @@ impl BezierStage {
                         .dispatch(&mut pass, &bg.edge_decide, l.coarse_edges, WORKGROUP)
                 }
                 Step::TriMark => {
-                    t.tri_roots
+                    p.tri_roots
                         .dispatch(&mut pass, &bg.tri_roots, l.coarse_triangles, WORKGROUP);
                     t.tri_mark.dispatch_indirect(
                         &mut pass,
@@ -917,35 +920,11 @@ impl BezierStage {
 
     /// The map atlas's texels as built on the device, row-major (see [`MapAtlas`]).
     fn read_map_atlas(&self, device: &wgpu::Device, queue: &wgpu::Queue) -> Result<Vec<[u16; 4]>> {
-        let texture = &self.buffers.map_atlas_texture;
-        let (width, height) = (texture.width(), texture.height());
-        let row = 8 * width;
-        let padded = row.next_multiple_of(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT);
-        let staging = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("tessera map atlas readback"),
-            size: padded as u64 * height as u64,
-            usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
-            mapped_at_creation: false,
-        });
         let mut encoder = device.create_command_encoder(&Default::default());
-        encoder.copy_texture_to_buffer(
-            texture.as_image_copy(),
-            wgpu::TexelCopyBufferInfo {
-                buffer: &staging,
-                layout: wgpu::TexelCopyBufferLayout {
-                    offset: 0,
-                    bytes_per_row: Some(padded),
-                    rows_per_image: None,
-                },
-            },
-            texture.size(),
-        );
+        let readback =
+            TextureReadback::record(device, &mut encoder, &self.buffers.map_atlas_texture);
         queue.submit([encoder.finish()]);
-        let bytes = map_read(device, &staging)?;
-        Ok(bytes
-            .chunks(padded as usize)
-            .flat_map(|r| bytemuck::pod_collect_to_vec::<u8, [u16; 4]>(&r[..row as usize]))
-            .collect())
+        Ok(bytemuck::pod_collect_to_vec(&readback.read(device)?))
     }
 
     /// The intermediate buffers, for comparison with the CPU twins in tests: the map

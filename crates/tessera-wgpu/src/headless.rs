@@ -174,3 +174,64 @@ pub(crate) fn map_read(device: &wgpu::Device, buffer: &wgpu::Buffer) -> Result<V
     buffer.unmap();
     Ok(bytes)
 }
+
+/// A texture's texels copied, inside a caller's encoder, into a mappable buffer whose
+/// rows are padded to the copy alignment; [`read`](Self::read) returns them unpadded,
+/// row-major, once the encoder has been submitted.
+pub(crate) struct TextureReadback {
+    staging: wgpu::Buffer,
+    row: usize,
+    padded_row: usize,
+}
+
+impl TextureReadback {
+    /// Records the copy of mip level 0 of `texture` (a format with one plane).
+    pub fn record(
+        device: &wgpu::Device,
+        encoder: &mut wgpu::CommandEncoder,
+        texture: &wgpu::Texture,
+    ) -> Self {
+        let texel = texture
+            .format()
+            .block_copy_size(None)
+            .expect("a single-plane format");
+        let row = texel * texture.width();
+        let padded_row = row.next_multiple_of(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT);
+        let staging = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("tessera texture readback"),
+            size: padded_row as u64 * texture.height() as u64,
+            usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+            mapped_at_creation: false,
+        });
+        encoder.copy_texture_to_buffer(
+            texture.as_image_copy(),
+            wgpu::TexelCopyBufferInfo {
+                buffer: &staging,
+                layout: wgpu::TexelCopyBufferLayout {
+                    offset: 0,
+                    bytes_per_row: Some(padded_row),
+                    rows_per_image: None,
+                },
+            },
+            wgpu::Extent3d {
+                depth_or_array_layers: 1,
+                ..texture.size()
+            },
+        );
+        TextureReadback {
+            staging,
+            row: row as usize,
+            padded_row: padded_row as usize,
+        }
+    }
+
+    /// The texels, unpadded (waits for the submitted copy).
+    pub fn read(self, device: &wgpu::Device) -> Result<Vec<u8>> {
+        let padded = map_read(device, &self.staging)?;
+        Ok(padded
+            .chunks(self.padded_row)
+            .flat_map(|r| &r[..self.row])
+            .copied()
+            .collect())
+    }
+}

@@ -8,7 +8,7 @@ use glam::Vec3;
 use image::RgbaImage;
 
 use crate::error::{Error, Result};
-use crate::headless::Gpu;
+use crate::headless::{Gpu, TextureReadback};
 use crate::output::MeshBuffers;
 use crate::render::{Camera, MeshRenderer, RenderOptions};
 
@@ -112,13 +112,6 @@ pub fn render_camera_to_rgba(
     let renderer = MeshRenderer::new(device, COLOR_FORMAT, Some(DEPTH_FORMAT), samples);
     renderer.prepare(&gpu.queue, camera, options);
 
-    let bytes_per_row = (width * 4).next_multiple_of(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT);
-    let staging = device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("tessera image readback"),
-        size: bytes_per_row as u64 * height as u64,
-        usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
-        mapped_at_creation: false,
-    });
     let [r, g, b] = BACKGROUND.map(|c| srgb_to_linear(c) as f64);
     let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
         label: Some("tessera image"),
@@ -147,33 +140,10 @@ pub fn render_camera_to_rgba(
         });
         renderer.draw(&mut pass, mesh);
     }
-    encoder.copy_texture_to_buffer(
-        wgpu::TexelCopyTextureInfo {
-            texture: &resolved,
-            mip_level: 0,
-            origin: wgpu::Origin3d::ZERO,
-            aspect: wgpu::TextureAspect::All,
-        },
-        wgpu::TexelCopyBufferInfo {
-            buffer: &staging,
-            layout: wgpu::TexelCopyBufferLayout {
-                offset: 0,
-                bytes_per_row: Some(bytes_per_row),
-                rows_per_image: Some(height),
-            },
-        },
-        size,
-    );
+    let readback = TextureReadback::record(device, &mut encoder, &resolved);
     gpu.queue.submit([encoder.finish()]);
-    let padded = gpu.map_and_copy(&staging)?;
+    let pixels = readback.read(device)?;
     gpu.check()?;
-
-    let row = (width * 4) as usize;
-    let mut pixels = Vec::with_capacity(row * height as usize);
-    for y in 0..height as usize {
-        let start = y * bytes_per_row as usize;
-        pixels.extend_from_slice(&padded[start..start + row]);
-    }
     RgbaImage::from_raw(width, height, pixels)
         .ok_or_else(|| Error::Readback("image buffer has the wrong size".into()))
 }

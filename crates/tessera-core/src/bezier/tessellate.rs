@@ -251,9 +251,8 @@ pub fn edge_emit(
 /// interior test: its hypotenuse is a coarse side (the cell's diagonal), whose own
 /// decision says whether its midpoint is a point. `false` where that does not decide (a
 /// collapsed side, which a cell's diagonal never is: a guard). Twin of `root_known_leaf`
-/// in `shaders/shared/refine.wgsl`, which
-/// the root kernel (`bezier_tri_roots.wgsl`) asks so that the mark kernel walks only
-/// the triangles that split.
+/// in `shaders/shared/refine.wgsl`, which the root kernel (`bezier_tri_roots.wgsl`) asks
+/// so that the mark kernel walks only the triangles that split.
 pub fn root_known_leaf(ctx: &TriContext) -> bool {
     let root = ctx.lattice.root();
     match ctx.lattice.common_side(root[1], root[2]) {
@@ -310,8 +309,9 @@ pub fn emit_order(buckets: &[u32]) -> Vec<u32> {
     order
 }
 
-/// Stage 5d, one work item per plain coarse triangle ([`is_plain`]): its one triangle, the corners of
-/// its root as the walk would emit them. Twin of `bezier_tri_emit_plain.wgsl`.
+/// Stage 5d, one work item per plain coarse triangle ([`is_plain`]): its one triangle,
+/// the corners of its root as the walk would emit them. Twin of
+/// `bezier_tri_emit_plain.wgsl`.
 pub fn tri_emit_plain(ctx: &TriContext, first_index: u32, indices: &mut [u32]) {
     let corners = ctx.lattice.root().map(|p| ctx.vertex(p, &|_| 0));
     let mut sink = EmitSink {
@@ -446,7 +446,10 @@ pub fn tessellate_adaptive_timed(
         let ctx = tri_context(prep, &cps, &bits, params, t);
         let mut s = TriScratch::new(params.max_depth);
         // The root kernel's triangles, then the mark kernel's.
-        let (inner, made) = match euler_count(&ctx, &s).filter(|_| root_known_leaf(&ctx)) {
+        let known = root_known_leaf(&ctx)
+            .then(|| euler_count(&ctx, &s))
+            .flatten();
+        let (inner, made) = match known {
             Some(made) => (0, made),
             None => {
                 evaluations += tri_mark(&ctx, &mut s) as u64;
