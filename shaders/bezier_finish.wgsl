@@ -12,7 +12,12 @@
 
 // The workgroup size of the kernels it dispatches (vertex_eval, tri_emit, tri_emit_plain).
 const VERTEX_WORKGROUP: u32 = 64u;
-const MAX_GROUPS_X: u32 = 32768u;
+
+// An indirect dispatch of `items` invocations (none on overflow), spilling into y.
+fn dispatch_of(items: u32, overflow: u32) -> vec3u {
+    let groups = select((items + VERTEX_WORKGROUP - 1u) / VERTEX_WORKGROUP, 0u, overflow != 0u);
+    return vec3u(min(groups, MAX_GROUPS_X), (groups + MAX_GROUPS_X - 1u) / MAX_GROUPS_X, 1u);
+}
 
 @compute @workgroup_size(1)
 fn main() {
@@ -36,10 +41,10 @@ fn main() {
     status.overflow = overflow;
     status.edge_vertices = edge_vertices;
     status.evaluations = tally[TALLY_EVALUATIONS] + vertices;
-    let groups = select((vertices + VERTEX_WORKGROUP - 1u) / VERTEX_WORKGROUP, 0u, overflow != 0u);
-    status.dispatch_x = min(groups, MAX_GROUPS_X);
-    status.dispatch_y = (groups + MAX_GROUPS_X - 1u) / MAX_GROUPS_X;
-    status.dispatch_z = 1u;
+    let vertex_dispatch = dispatch_of(vertices, overflow);
+    status.dispatch_x = vertex_dispatch.x;
+    status.dispatch_y = vertex_dispatch.y;
+    status.dispatch_z = vertex_dispatch.z;
     draw_args.index_count = select(indices, 0u, overflow != 0u);
     draw_args.instance_count = 1u;
     draw_args.first_index = 0u;
@@ -55,13 +60,12 @@ fn main() {
     // The plain triangles, last, go to their own kernel; no emit kernel runs on overflow.
     let general = tally[TALLY_ORDER + PLAIN_BUCKET];
     status.general_triangles = general;
-    let emit_groups = select((general + VERTEX_WORKGROUP - 1u) / VERTEX_WORKGROUP, 0u, overflow != 0u);
-    status.emit_dispatch_x = min(emit_groups, MAX_GROUPS_X);
-    status.emit_dispatch_y = (emit_groups + MAX_GROUPS_X - 1u) / MAX_GROUPS_X;
-    status.emit_dispatch_z = 1u;
-    let plain = t - general;
-    let plain_groups = select((plain + VERTEX_WORKGROUP - 1u) / VERTEX_WORKGROUP, 0u, overflow != 0u);
-    status.plain_dispatch_x = min(plain_groups, MAX_GROUPS_X);
-    status.plain_dispatch_y = (plain_groups + MAX_GROUPS_X - 1u) / MAX_GROUPS_X;
-    status.plain_dispatch_z = 1u;
+    let emit = dispatch_of(general, overflow);
+    status.emit_dispatch_x = emit.x;
+    status.emit_dispatch_y = emit.y;
+    status.emit_dispatch_z = emit.z;
+    let plain = dispatch_of(t - general, overflow);
+    status.plain_dispatch_x = plain.x;
+    status.plain_dispatch_y = plain.y;
+    status.plain_dispatch_z = plain.z;
 }

@@ -28,8 +28,6 @@
 @group(0) @binding(13) var<storage, read_write> status_words: array<atomic<u32>>;
 @group(0) @binding(14) var<storage, read_write> tally: array<atomic<u32>>;
 
-const MAX_GROUPS_X: u32 = 32768u;
-
 // The shared refinement code's sink (not called here).
 fn sink_triangle(a: VRef, b: VRef, c: VRef) {}
 

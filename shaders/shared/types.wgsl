@@ -114,6 +114,10 @@ const STATUS_MARK_DISPATCH: u32 = 15u;
 
 @group(0) @binding(0) var<uniform> params: BezierParams;
 
+// Workgroups in x at most per dispatch; more spill into y, which the kernels fold back
+// (twin of `MAX_GROUPS_X` in `tessera-wgpu`'s kernel.rs).
+const MAX_GROUPS_X: u32 = 32768u;
+
 // The tally buffer (binding 14; twin of `tessera_core::gpu_types::tally`): the flat
 // test's evaluations, then how many coarse triangles fall in each emit-order bucket
 // (turned into each bucket's first slot by the finish kernel), then how many the mark
