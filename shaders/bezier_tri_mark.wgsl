@@ -13,8 +13,8 @@
 #include "shared/need.wgsl"
 #include "shared/refine.wgsl"
 
-@group(0) @binding(1) var nets: texture_2d<f32>;
-@group(0) @binding(2) var maps: texture_2d<f32>;
+@group(0) @binding(1) var nets: texture_storage_2d<rgba32float, read>;
+@group(0) @binding(2) var maps: texture_storage_2d<rgba16float, read>;
 @group(0) @binding(3) var<storage, read> topo: array<GpuPatchTopo>;
 @group(0) @binding(4) var<storage, read> curves: array<GpuCurve>;
 @group(0) @binding(6) var<storage, read> edge_bits: array<vec4u>;

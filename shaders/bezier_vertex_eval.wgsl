@@ -5,7 +5,7 @@
 #include "shared/types.wgsl"
 #include "shared/patch.wgsl"
 
-@group(0) @binding(1) var nets: texture_2d<f32>;
+@group(0) @binding(1) var nets: texture_storage_2d<rgba32float, read>;
 @group(0) @binding(3) var<storage, read> topo: array<GpuPatchTopo>;
 @group(0) @binding(9) var<storage, read> records: array<VertexRecord>;
 @group(0) @binding(10) var<storage, read_write> out_vertices: array<OutVertex>;

@@ -1,6 +1,6 @@
 // Bicubic Bézier evaluation. Twin of `tessera_core::bezier::patch`.
-// Reads `nets: texture_2d<f32>` (declared by the kernel): per patch 12 rgba32float
-// texels, the 48 words of `GpuPatch::cp` in order (`tessera_core::gpu_types::NetTexture`).
+// Reads `nets: texture_storage_2d<rgba32float, read>` (declared by the kernel; a
+// read-only storage texture for the reason given in `map.wgsl`): per patch 12 texels, the 48 words of `GpuPatch::cp` in order (`tessera_core::gpu_types::NetTexture`).
 
 struct Frame {
     pos: vec3f,
@@ -28,7 +28,7 @@ fn bernstein(t: f32) -> Basis {
 
 fn net_texel(p: u32, k: u32) -> vec4f {
     let at = vec2u((p % NET_TEXTURE_PATCHES_PER_ROW) * 12u + k, p / NET_TEXTURE_PATCHES_PER_ROW);
-    return textureLoad(nets, at, 0);
+    return textureLoad(nets, at);
 }
 
 // Row `row` of the net weighted by the basis `bu`: its four points, `x y z` each, are

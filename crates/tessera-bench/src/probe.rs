@@ -3,8 +3,10 @@
 //! (`tessera_core::bezier::prepare::map_read`, one thread) against the same arithmetic run
 //! by the adapter with every lane busy and no branches, three ways: the kernels' own
 //! `map_read` (`shaders/shared/map.wgsl`: one fetch from the `rgba16float` atlas of
-//! cells, `MapAtlas`), four reads from a storage buffer (how the kernels read the maps
-//! before the atlas), and four fetches from an `r32float` texture.
+//! cells, `MapAtlas`, a read-only storage texture), the same fetch from the same atlas
+//! bound as a sampled texture (how the kernels read it before), four reads from a storage
+//! buffer (how the kernels read the maps before the atlas), and four fetches from an
+//! `r32float` sampled texture.
 //!
 //! It bounds what the kernels can gain over their CPU twins while they read the maps
 //! this way: a twin does the same reads, so when a straight-line read with every lane
@@ -65,11 +67,12 @@ struct DisplacementMap {
     d: array<f32, 256>,
 }
 
-@group(0) @binding(1) var nets: texture_2d<f32>;
-@group(0) @binding(2) var maps: texture_2d<f32>;
+@group(0) @binding(1) var nets: texture_storage_2d<rgba32float, read>;
+@group(0) @binding(2) var maps: texture_storage_2d<rgba16float, read>;
 @group(0) @binding(3) var<storage, read_write> probe_out: array<f32>;
 @group(0) @binding(4) var atlas: texture_2d<f32>;
 @group(0) @binding(5) var<storage, read> map_buffer: array<DisplacementMap>;
+@group(0) @binding(6) var sampled_maps: texture_2d<f32>;
 
 const PROBE_READS: u32 = 64u;
 const ATLAS_MAPS_PER_ROW: u32 = 64u;
@@ -91,6 +94,15 @@ fn map_read_storage(p: u32, u: f32, v: f32) -> f32 {
     return map_bilinear(row0, row1, cell.f);
 }
 
+// `map_read` with the atlas bound as a sampled texture: one fetch, as the kernels
+// before they read it as a storage texture.
+fn map_read_sampled(p: u32, u: f32, v: f32) -> f32 {
+    let cell = map_cell(u, v);
+    let tile = vec2u(p % MAP_ATLAS_TILES_PER_ROW, p / MAP_ATLAS_TILES_PER_ROW) * (MAP_RES - 1u);
+    let corners = textureLoad(sampled_maps, tile + cell.ij, 0) * params.map_scale;
+    return map_bilinear(corners.xy, corners.zw, cell.f);
+}
+
 // `map_read` from an `r32float` texture atlas of whole maps: four fetches.
 fn map_read_texture(p: u32, u: f32, v: f32) -> f32 {
     let cell = map_cell(u, v);
@@ -107,6 +119,16 @@ fn probe_atlas(@builtin(global_invocation_id) gid: vec3u) {
     for (var k = 0u; k < PROBE_READS; k++) {
         let uv = probe_uv(gid.x, k);
         acc += map_read(gid.x / 18u, uv.x, uv.y);
+    }
+    probe_out[gid.x] = acc;
+}
+
+@compute @workgroup_size(64)
+fn probe_sampled(@builtin(global_invocation_id) gid: vec3u) {
+    var acc = 0.0;
+    for (var k = 0u; k < PROBE_READS; k++) {
+        let uv = probe_uv(gid.x, k);
+        acc += map_read_sampled(gid.x / 18u, uv.x, uv.y);
     }
     probe_out[gid.x] = acc;
 }
@@ -249,7 +271,7 @@ pub fn run(assets: &std::path::Path, out_dir: &std::path::Path, quick: bool) {
                 sample_count: 1,
                 dimension: wgpu::TextureDimension::D2,
                 format: wgpu::TextureFormat::Rgba16Float,
-                usage: wgpu::TextureUsages::TEXTURE_BINDING,
+                usage: wgpu::TextureUsages::STORAGE_BINDING | wgpu::TextureUsages::TEXTURE_BINDING,
                 view_formats: &[],
             },
             wgpu::util::TextureDataOrder::LayerMajor,
@@ -275,7 +297,11 @@ pub fn run(assets: &std::path::Path, out_dir: &std::path::Path, quick: bool) {
     for (entry, label) in [
         (
             "probe_atlas",
-            "GPU, the kernels' `map_read` (one fetch from the `rgba16float` atlas of cells)",
+            "GPU, the kernels' `map_read` (one fetch from the `rgba16float` atlas of cells, a storage texture)",
+        ),
+        (
+            "probe_sampled",
+            "GPU, the same fetch with the atlas bound as a sampled texture",
         ),
         (
             "probe_buffer",
@@ -307,6 +333,10 @@ pub fn run(assets: &std::path::Path, out_dir: &std::path::Path, quick: bool) {
                 binding: 4,
                 resource: wgpu::BindingResource::TextureView(&atlas_view),
             },
+            "probe_sampled" => wgpu::BindGroupEntry {
+                binding: 6,
+                resource: wgpu::BindingResource::TextureView(&cells_view),
+            },
             _ => wgpu::BindGroupEntry {
                 binding: 2,
                 resource: wgpu::BindingResource::TextureView(&cells_view),
@@ -319,7 +349,7 @@ pub fn run(assets: &std::path::Path, out_dir: &std::path::Path, quick: bool) {
                 resource: out.as_entire_binding(),
             },
         ];
-        if entry == "probe_atlas" {
+        if entry == "probe_atlas" || entry == "probe_sampled" {
             entries.push(params_entry);
         }
         let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {

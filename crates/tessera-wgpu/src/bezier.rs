@@ -370,7 +370,8 @@ fn texture_upload(
         sample_count: 1,
         dimension: wgpu::TextureDimension::D2,
         format,
-        usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+        // Read as a read-only storage texture (see `shaders/shared/map.wgsl`).
+        usage: wgpu::TextureUsages::STORAGE_BINDING | wgpu::TextureUsages::COPY_DST,
         view_formats: &[],
     });
     let row = texels.len() / height as usize;
@@ -521,9 +522,9 @@ impl BezierStage {
             sample_count: 1,
             dimension: wgpu::TextureDimension::D2,
             format: wgpu::TextureFormat::Rgba16Float,
-            usage: wgpu::TextureUsages::TEXTURE_BINDING
-                | wgpu::TextureUsages::STORAGE_BINDING
-                | wgpu::TextureUsages::COPY_SRC,
+            // Written by `bezier_map_cells`, read by the kernels: storage both ways (see
+            // `shaders/shared/map.wgsl`).
+            usage: wgpu::TextureUsages::STORAGE_BINDING | wgpu::TextureUsages::COPY_SRC,
             view_formats: &[],
         });
         let map_atlas_view = map_atlas.create_view(&Default::default());
