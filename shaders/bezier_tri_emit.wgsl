@@ -16,7 +16,7 @@
 @group(0) @binding(4) var<storage, read> curves: array<GpuCurve>;
 @group(0) @binding(6) var<storage, read> edge_bits: array<vec4u>;
 @group(0) @binding(7) var<storage, read> counts: array<u32>;
-@group(0) @binding(8) var<storage, read> scratch: array<u32>;
+@group(0) @binding(8) var scratch: texture_storage_2d<r32uint, read>;
 @group(0) @binding(9) var<storage, read_write> records: array<VertexRecord>;
 @group(0) @binding(11) var<storage, read_write> out_indices: array<u32>;
 @group(0) @binding(13) var<storage, read> status: BezierStatus;
@@ -32,7 +32,7 @@ var<private> word_below: array<u32, MAX_POINTS_WORDS>;
 
 fn inner_rank(c: TriCtx, i: u32) -> u32 {
     let mask = (1u << (i % 32u)) - 1u;
-    return word_below[i / 32u] + countOneBits(scratch[c.points_base + i / 32u] & mask);
+    return word_below[i / 32u] + countOneBits(scratch_word(c.points_base + i / 32u) & mask);
 }
 
 // The triangle's side edges and the first vertex of each, read once (see `main`).
@@ -81,14 +81,14 @@ fn main(@builtin(global_invocation_id) gid: vec3u, @builtin(num_workgroups) grou
     var next = inner_base;
     var rows = LatticeRows(0u, 0u);
     let shift = word_group_shift(params.points_words);
-    var held = scratch[c.groups_index];
+    var held = scratch_word(c.groups_index);
     while held != 0u {
         let g = firstTrailingBit(held);
         held &= held - 1u;
         let end = min((g + 1u) << shift, params.points_words);
         for (var w = g << shift; w < end; w++) {
             word_below[w] = next - inner_base;
-            var bits = scratch[c.points_base + w];
+            var bits = scratch_word(c.points_base + w);
             while bits != 0u {
                 let i = 32u * w + firstTrailingBit(bits);
                 bits &= bits - 1u;

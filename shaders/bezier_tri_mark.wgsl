@@ -20,7 +20,7 @@
 @group(0) @binding(6) var<storage, read> edge_bits: array<vec4u>;
 @group(0) @binding(7) var<storage, read_write> counts: array<u32>;
 @group(0) @binding(14) var<storage, read_write> tally: array<atomic<u32>>;
-@group(0) @binding(8) var<storage, read_write> scratch: array<u32>;
+@group(0) @binding(8) var scratch: texture_storage_2d<r32uint, read_write>;
 
 // The counting sink: any injective numbering of inner points will do.
 var<private> triangles: u32;
@@ -31,6 +31,10 @@ fn sink_triangle(a: VRef, b: VRef, c: VRef) {
 
 fn inner_rank(c: TriCtx, i: u32) -> u32 {
     return i;
+}
+
+fn scratch_store(w: u32, value: u32) {
+    textureStore(scratch, scratch_texel(w), vec4u(value, 0u, 0u, 0u));
 }
 
 // Stage "mark": the bisection tree as the points it makes (twin of `tri_mark`), and
@@ -48,13 +52,14 @@ fn tri_mark(c: TriCtx) -> u32 {
             if pl.kind == PLACE_INSIDE {
                 let word = c.points_base + pl.f / 32u;
                 let bit = 1u << (pl.f % 32u);
-                let old = scratch[word];
-                scratch[word] = old | bit;
+                let old = scratch_word(word);
+                scratch_store(word, old | bit);
                 inner += u32((old & bit) == 0u);
                 groups |= 1u << ((pl.f / 32u) >> shift);
             } else if pl.kind == PLACE_SIDE && side_collapsed(c, pl.k) {
                 let i = pole_index(c.l, pl.k, pl.f);
-                scratch[c.pole_base + i / 32u] |= 1u << (i % 32u);
+                let word = c.pole_base + i / 32u;
+                scratch_store(word, scratch_word(word) | (1u << (i % 32u)));
             }
             w = walk_down(w);
         } else {
@@ -64,7 +69,7 @@ fn tri_mark(c: TriCtx) -> u32 {
             }
         }
     }
-    scratch[c.groups_index] = groups;
+    scratch_store(c.groups_index, groups);
     return inner;
 }
 

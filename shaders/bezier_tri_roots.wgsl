@@ -23,7 +23,7 @@
 @group(0) @binding(4) var<storage, read> curves: array<GpuCurve>;
 @group(0) @binding(6) var<storage, read> edge_bits: array<vec4u>;
 @group(0) @binding(7) var<storage, read_write> counts: array<u32>;
-@group(0) @binding(8) var<storage, read> scratch: array<u32>;
+@group(0) @binding(8) var scratch: texture_storage_2d<r32uint, read>;
 // The status as words, for the mark kernel's dispatch (STATUS_MARK_DISPATCH).
 @group(0) @binding(13) var<storage, read_write> status_words: array<atomic<u32>>;
 @group(0) @binding(14) var<storage, read_write> tally: array<atomic<u32>>;

@@ -1,7 +1,8 @@
 // Refinement of one coarse triangle by right-triangle bisection on its lattice.
 // Twin of `tessera_core::bezier::refine` (read that file for the why).
 // Reads `edge_bits` (array<vec4u>, EDGE_BIT_WORDS / 4 per coarse edge) and `scratch`
-// (array<u32>, points then pole words per coarse triangle). Kernels that include this
+// (an r32uint storage texture of words, points then pole words per coarse triangle, see
+// `scratch_word`). Kernels that include this
 // file define the sink: `fn sink_triangle(a: VRef, b: VRef, c: VRef)` and
 // `fn inner_rank(ctx: TriCtx, i: u32) -> u32`.
 
@@ -94,8 +95,20 @@ fn pole_index(l: Lattice, k: u32, f: u32) -> u32 {
     return k * (l.n + 1u) + f;
 }
 
+// Word w of the triangles' bit sets: a texel of the scratch texture, which the kernel
+// declares as an r32uint storage texture (read-write in `bezier_tri_mark`, read-only
+// elsewhere). A texture, not a storage buffer: a CPU device reads a buffer at per-lane
+// addresses in a loop over the lanes, and a texture with plain loads.
+fn scratch_texel(w: u32) -> vec2u {
+    return vec2u(w & ((1u << params.scratch_shift) - 1u), w >> params.scratch_shift);
+}
+
+fn scratch_word(w: u32) -> u32 {
+    return textureLoad(scratch, scratch_texel(w)).x;
+}
+
 fn scratch_bit(base: u32, i: u32) -> bool {
-    return ((scratch[base + i / 32u] >> (i % 32u)) & 1u) != 0u;
+    return ((scratch_word(base + i / 32u) >> (i % 32u)) & 1u) != 0u;
 }
 
 // Whether lattice point p is a vertex, given the points marked so far (twin of

@@ -77,8 +77,9 @@ struct BezierParams {
     index_capacity: u32,
     // What the map atlas's half-precision values are multiplied by (a power of two).
     map_scale: f32,
-    _pad0: u32,
-    _pad1: u32,
+    // Word w of `scratch` is texel (w mod 2^scratch_shift, w >> scratch_shift).
+    scratch_shift: u32,
+    _pad: u32,
 }
 
 // What the run needed and whether it fit; read back only when the caller asks.

@@ -355,7 +355,10 @@ pub struct BezierParams {
     pub index_capacity: u32,
     /// What the map atlas's half-precision values are multiplied by (a power of two).
     pub map_scale: f32,
-    pub _pad: [u32; 2],
+    /// Scratch word `w` is texel `(w mod 2^scratch_shift, w >> scratch_shift)` of the
+    /// scratch texture.
+    pub scratch_shift: u32,
+    pub _pad: u32,
 }
 
 impl BezierParams {
@@ -375,8 +378,8 @@ impl BezierParams {
         "vertex_capacity",
         "index_capacity",
         "map_scale",
-        "_pad0",
-        "_pad1",
+        "scratch_shift",
+        "_pad",
     ];
 }
 

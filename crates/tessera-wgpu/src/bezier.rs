@@ -250,7 +250,6 @@ impl BindGroups {
             (CURVES, &b.curves),
             (EDGE_BITS, &b.edge_bits),
             (COUNTS, &b.counts),
-            (SCRATCH, &b.scratch),
             (RECORDS, &b.records),
             (VERTICES, &b.output.vertices),
             (INDICES, &b.output.indices),
@@ -258,7 +257,11 @@ impl BindGroups {
             (STATUS, &b.status),
             (TALLY, &b.tally),
         ];
-        let textures = [(NETS, &b.nets), (MAPS, &b.map_atlas)];
+        let textures = [
+            (NETS, &b.nets),
+            (MAPS, &b.map_atlas),
+            (SCRATCH, &b.scratch.view),
+        ];
         let bind = |k: &Kernel| k.bind_with_textures(device, &all, &textures);
         BindGroups {
             edge_decide: bind(&t.edge_decide),
@@ -314,7 +317,7 @@ struct Buffers {
     edge_bits: wgpu::Buffer,
     counts: wgpu::Buffer,
     scan: PrefixSum,
-    scratch: wgpu::Buffer,
+    scratch: Scratch,
     records: wgpu::Buffer,
     status: wgpu::Buffer,
     status_readback: wgpu::Buffer,
@@ -339,14 +342,97 @@ fn triangle_stride(depth: u32) -> u32 {
     points + pole + 1
 }
 
-fn scratch_buffer(
-    device: &wgpu::Device,
-    depth: u32,
-    coarse_triangles: u32,
-) -> Result<wgpu::Buffer> {
-    let bytes = 4 * triangle_stride(depth) as u64 * coarse_triangles as u64;
-    check_size(device, "triangle scratch", bytes)?;
-    Ok(storage(device, "tessera triangle scratch", bytes))
+/// The coarse triangles' bit sets: word `w` is texel `(w mod width, w / width)` of an
+/// `r32uint` storage texture, `width = 1 << shift`. A texture, not a buffer: a CPU device
+/// (llvmpipe) reads a storage buffer at per-lane addresses in a loop over the lanes that
+/// stalls on each lane's insert, and reads a storage texture with plain loads.
+struct Scratch {
+    texture: wgpu::Texture,
+    view: wgpu::TextureView,
+    shift: u32,
+    /// Zeros for clearing it, `ZERO_ROWS` rows at most: copied over the texture in
+    /// bands, since clearing a texture directly needs a feature WebGPU lacks.
+    zeros: wgpu::Buffer,
+}
+
+impl Scratch {
+    /// Rows of zeros copied at once when the texture is cleared.
+    const ZERO_ROWS: u32 = 64;
+
+    fn new(device: &wgpu::Device, depth: u32, coarse_triangles: u32) -> Result<Self> {
+        let words = triangle_stride(depth) as u64 * coarse_triangles as u64;
+        let max_side = device.limits().max_texture_dimension_2d;
+        // As wide as the words need up to the widest power of two the device allows
+        // (and 64 words at least: copy rows are multiples of 256 bytes).
+        let widest = 1u32 << (31 - max_side.leading_zeros());
+        let width = (words.next_power_of_two() as u32).clamp(64, widest);
+        let height = words.div_ceil(width as u64);
+        if height > max_side as u64 {
+            return Err(Error::OutputTooLarge {
+                what: "triangle scratch",
+                bytes: 4 * words,
+                limit: 4 * widest as u64 * max_side as u64,
+            });
+        }
+        let texture = device.create_texture(&wgpu::TextureDescriptor {
+            label: Some("tessera triangle scratch"),
+            size: wgpu::Extent3d {
+                width,
+                height: height as u32,
+                depth_or_array_layers: 1,
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: wgpu::TextureFormat::R32Uint,
+            usage: wgpu::TextureUsages::STORAGE_BINDING
+                | wgpu::TextureUsages::COPY_DST
+                | wgpu::TextureUsages::COPY_SRC,
+            view_formats: &[],
+        });
+        let zero_rows = (height as u32).min(Self::ZERO_ROWS);
+        Ok(Scratch {
+            view: texture.create_view(&Default::default()),
+            texture,
+            shift: width.trailing_zeros(),
+            zeros: device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("tessera scratch zeros"),
+                size: 4 * width as u64 * zero_rows as u64,
+                usage: wgpu::BufferUsages::COPY_SRC,
+                mapped_at_creation: false,
+            }),
+        })
+    }
+
+    /// Records the copies that zero every word.
+    fn clear(&self, encoder: &mut wgpu::CommandEncoder) {
+        let (width, height) = (self.texture.width(), self.texture.height());
+        let band = Self::ZERO_ROWS.min(height);
+        for y in (0..height).step_by(band as usize) {
+            let rows = band.min(height - y);
+            encoder.copy_buffer_to_texture(
+                wgpu::TexelCopyBufferInfo {
+                    buffer: &self.zeros,
+                    layout: wgpu::TexelCopyBufferLayout {
+                        offset: 0,
+                        bytes_per_row: Some(4 * width),
+                        rows_per_image: None,
+                    },
+                },
+                wgpu::TexelCopyTextureInfo {
+                    texture: &self.texture,
+                    mip_level: 0,
+                    origin: wgpu::Origin3d { x: 0, y, z: 0 },
+                    aspect: wgpu::TextureAspect::All,
+                },
+                wgpu::Extent3d {
+                    width,
+                    height: rows,
+                    depth_or_array_layers: 1,
+                },
+            );
+        }
+    }
 }
 
 /// A texture, empty, and a buffer holding its texels (row-major): the constructor has no
@@ -575,7 +661,7 @@ impl BezierStage {
             ),
             counts,
             scan,
-            scratch: scratch_buffer(device, params.max_depth, l.coarse_triangles)?,
+            scratch: Scratch::new(device, params.max_depth, l.coarse_triangles)?,
             records: storage(
                 device,
                 "tessera vertex records",
@@ -608,7 +694,7 @@ impl BezierStage {
         let mut rebind = false;
         if params.max_depth != self.params.max_depth {
             let l = self.prepared_layout;
-            self.buffers.scratch = scratch_buffer(device, params.max_depth, l.coarse_triangles)?;
+            self.buffers.scratch = Scratch::new(device, params.max_depth, l.coarse_triangles)?;
             rebind = true;
         }
         if params.test != self.params.test
@@ -660,7 +746,8 @@ impl BezierStage {
             vertex_capacity: self.buffers.output.vertex_capacity,
             index_capacity: self.buffers.output.index_capacity,
             map_scale: self.map_scale,
-            _pad: [0; 2],
+            scratch_shift: self.buffers.scratch.shift,
+            _pad: 0,
         }
     }
 
@@ -772,7 +859,7 @@ impl BezierStage {
             // The triangles' bit sets start empty: a memset here, where zeroing them in
             // the kernel was a store per word and lane.
             Step::TriMark => {
-                encoder.clear_buffer(&b.scratch, 0, None);
+                b.scratch.clear(encoder);
                 // The root kernel raises the mark kernel's dispatch from zero.
                 let dispatch = std::mem::offset_of!(BezierStatus, mark_dispatch) as u64;
                 encoder.clear_buffer(&b.status, dispatch, Some(12));
@@ -928,6 +1015,19 @@ impl BezierStage {
         Ok(bytemuck::pod_collect_to_vec(&readback.read(device)?))
     }
 
+    /// The scratch words in order, without the last row's padding.
+    fn read_scratch(&self, device: &wgpu::Device, queue: &wgpu::Queue) -> Result<Vec<u32>> {
+        let mut encoder = device.create_command_encoder(&Default::default());
+        let readback = TextureReadback::record(device, &mut encoder, &self.buffers.scratch.texture);
+        queue.submit([encoder.finish()]);
+        let mut words: Vec<u32> = bytemuck::pod_collect_to_vec(&readback.read(device)?);
+        words.truncate(
+            (triangle_stride(self.params.max_depth) * self.prepared_layout.coarse_triangles)
+                as usize,
+        );
+        Ok(words)
+    }
+
     /// The intermediate buffers, for comparison with the CPU twins in tests: the map
     /// atlas, edge bit sets, the scanned counts, and each coarse triangle's scratch words.
     pub fn read_intermediates(
@@ -955,7 +1055,7 @@ impl BezierStage {
             counts,
             order,
             order_buckets,
-            scratch: words(&self.buffers.scratch)?,
+            scratch: self.read_scratch(device, queue)?,
             points_words,
             pole_words,
             stride: triangle_stride(self.params.max_depth),

@@ -504,10 +504,10 @@ fn a_model_past_one_atlas_row_matches_the_cpu() {
     gpu.check().expect("no wgpu validation errors");
 }
 
-/// A device whose textures cannot hold the atlas refuses the model with an error that
-/// says so, before wgpu sees an oversized texture.
+/// A device whose textures cannot hold the atlas or the triangles' bit sets refuses the
+/// model with an error that says so, before wgpu sees an oversized texture.
 #[test]
-fn a_map_atlas_past_the_texture_limit_is_an_error() {
+fn textures_past_the_texture_limit_are_an_error() {
     let gpu = Gpu::with_limits(|adapter| tessera_wgpu::wgpu::Limits {
         max_texture_dimension_2d: 256,
         ..tessera_wgpu::bezier::required_limits(adapter)
@@ -540,6 +540,33 @@ fn a_map_atlas_past_the_texture_limit_is_an_error() {
         teapot.points,
         teapot.nets[..16].to_vec(),
     ));
-    BezierStage::new(&gpu.device, &small, &params).expect("sixteen patches fit");
+    let mut stage = BezierStage::new(&gpu.device, &small, &params).expect("sixteen patches fit");
+    // At depth 8 their 288 coarse triangles' bit sets take 1063 words each: 1196 rows of
+    // 256 texels.
+    let deep = AdaptiveParams {
+        max_depth: 8,
+        ..params
+    };
+    for err in [
+        BezierStage::new(&gpu.device, &small, &deep).err(),
+        stage.set_params(&gpu.device, &deep).err(),
+    ] {
+        let err = err.expect("the scratch does not fit");
+        assert!(
+            matches!(
+                err,
+                tessera_wgpu::Error::OutputTooLarge {
+                    what: "triangle scratch",
+                    ..
+                }
+            ),
+            "{err}"
+        );
+    }
+    // The refused change left the stage as it was.
+    assert_eq!(stage.params().max_depth, 4);
+    stage
+        .run_blocking(&gpu.device, &gpu.queue)
+        .expect("the stage still runs");
     gpu.check().expect("no wgpu validation errors");
 }
