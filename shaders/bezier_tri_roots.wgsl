@@ -48,13 +48,17 @@ fn main(@builtin(global_invocation_id) gid: vec3u, @builtin(num_workgroups) grou
     }
     if made == NO_COUNT {
         // The mark kernel's: a slot in its list, and its dispatch raised to cover it
-        // (x capped as the other kernels', y the rest; zeroed before each run).
+        // (x capped as the other kernels', y the rest; zeroed before each run). Only the
+        // first slot of each workgroup raises it: the others need no more groups, and
+        // each atomic is a loop over the lanes on a CPU device.
         let slot = atomicAdd(&tally[TALLY_MARKED], 1u);
         counts[order_base() + slot] = t;
-        let needed = slot / 64u + 1u;
-        atomicMax(&status_words[STATUS_MARK_DISPATCH], min(needed, MAX_GROUPS_X));
-        atomicMax(&status_words[STATUS_MARK_DISPATCH + 1u], (needed + MAX_GROUPS_X - 1u) / MAX_GROUPS_X);
-        atomicMax(&status_words[STATUS_MARK_DISPATCH + 2u], 1u);
+        if slot % 64u == 0u {
+            let needed = slot / 64u + 1u;
+            atomicMax(&status_words[STATUS_MARK_DISPATCH], min(needed, MAX_GROUPS_X));
+            atomicMax(&status_words[STATUS_MARK_DISPATCH + 1u], (needed + MAX_GROUPS_X - 1u) / MAX_GROUPS_X);
+            atomicMax(&status_words[STATUS_MARK_DISPATCH + 2u], 1u);
+        }
         return;
     }
     counts[params.coarse_edges + t] = 0u;
