@@ -7,7 +7,7 @@
 //! |---|---|---|---|
 //! | 0 | copy + `bezier_map_cells`, first recording only | — / map cell | the control-net texture (the constructor has no queue); the displacement-map atlas, built from the maps as uploaded |
 //! | 1 | `bezier_edge_decide` | coarse edge | edge bit sets, edge vertex counts |
-//! | 2 | clear + `bezier_tri_roots` + `bezier_tri_mark` (indirect, over the triangles whose root may split) | coarse triangle | lattice points, inner vertex and triangle counts, emit-order buckets |
+//! | 2 | clear + `bezier_tri_roots` + `bezier_tri_mark` (indirect, over the triangles whose root may split) | coarse triangle | lattice points (bit sets in the `r32uint` scratch texture, cleared by copies of zeros), inner vertex and triangle counts, emit-order buckets |
 //! | 3 | `scan` (multi-level) | — | offsets of all three counts in one exclusive scan |
 //! | 4 | `bezier_finish` | 1 | totals, overflow flags, draw arguments, vertex dispatch, the emit order's bucket slots |
 //! | 4b | `bezier_tri_order` | coarse triangle | the emit order: those that make the most triangles first, the plain ones (no points; one triangle) last |
@@ -327,7 +327,7 @@ struct Buffers {
     output: MeshBuffers,
 }
 
-/// Words per coarse triangle in the scratch buffer at `depth`: lattice points, then
+/// Words per coarse triangle in the scratch texture at `depth`: lattice points, then
 /// collapsed-side points; one word of the points' nonzero groups follows them
 /// (`TriScratch::words`).
 fn triangle_words(depth: u32) -> (u32, u32) {
@@ -336,7 +336,7 @@ fn triangle_words(depth: u32) -> (u32, u32) {
     (points, pole)
 }
 
-/// A coarse triangle's words in the scratch buffer, its group word included.
+/// A coarse triangle's words in the scratch texture, its group word included.
 fn triangle_stride(depth: u32) -> u32 {
     let (points, pole) = triangle_words(depth);
     points + pole + 1
