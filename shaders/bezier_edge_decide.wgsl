@@ -6,13 +6,13 @@
 #include "shared/patch.wgsl"
 #include "shared/map.wgsl"
 #include "shared/lattice.wgsl"
+#include "shared/topo.wgsl"
 #include "shared/coarse.wgsl"
 #include "shared/need.wgsl"
 
 @group(0) @binding(1) var nets: texture_storage_2d<rgba32float, read>;
 @group(0) @binding(2) var maps: texture_storage_2d<rgba16float, read>;
-@group(0) @binding(3) var<storage, read> topo: array<GpuPatchTopo>;
-@group(0) @binding(4) var<storage, read> curves: array<GpuCurve>;
+@group(0) @binding(3) var topology: texture_storage_2d<rgba32uint, read>;
 @group(0) @binding(6) var<storage, read_write> edge_bits: array<vec4u>;
 @group(0) @binding(7) var<storage, read_write> counts: array<u32>;
 @group(0) @binding(14) var<storage, read_write> tally: array<atomic<u32>>;

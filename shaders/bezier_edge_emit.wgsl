@@ -3,10 +3,10 @@
 
 #include "shared/types.wgsl"
 #include "shared/lattice.wgsl"
+#include "shared/topo.wgsl"
 #include "shared/coarse.wgsl"
 
-@group(0) @binding(3) var<storage, read> topo: array<GpuPatchTopo>;
-@group(0) @binding(4) var<storage, read> curves: array<GpuCurve>;
+@group(0) @binding(3) var topology: texture_storage_2d<rgba32uint, read>;
 @group(0) @binding(6) var<storage, read> edge_bits: array<u32>;
 @group(0) @binding(7) var<storage, read> counts: array<u32>;
 @group(0) @binding(9) var<storage, read_write> records: array<VertexRecord>;

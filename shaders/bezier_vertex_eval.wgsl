@@ -4,9 +4,10 @@
 
 #include "shared/types.wgsl"
 #include "shared/patch.wgsl"
+#include "shared/topo.wgsl"
 
 @group(0) @binding(1) var nets: texture_storage_2d<rgba32float, read>;
-@group(0) @binding(3) var<storage, read> topo: array<GpuPatchTopo>;
+@group(0) @binding(3) var topology: texture_storage_2d<rgba32uint, read>;
 @group(0) @binding(9) var<storage, read> records: array<VertexRecord>;
 @group(0) @binding(10) var<storage, read_write> out_vertices: array<OutVertex>;
 @group(0) @binding(13) var<storage, read> status: BezierStatus;
@@ -20,7 +21,7 @@ fn main(@builtin(global_invocation_id) gid: vec3u, @builtin(num_workgroups) grou
     let r = records[v];
     let f = eval_frame(r.patch_id, r.u, r.v);
     var n = frame_normal(f, r.u, r.v);
-    if (topo[r.patch_id].flags & 1u) != 0u {
+    if patch_flipped(r.patch_id) {
         n = -n;
     }
     out_vertices[v] = OutVertex(

@@ -1,25 +1,13 @@
 // Numbering of coarse vertices and edges, computed from the patch topology (no tables).
 // Twin of `tessera_core::bezier::coarse_edges` and `PreparedBezier::coarse_vertex`.
-// Reads `topo: array<GpuPatchTopo>` and `curves: array<GpuCurve>`.
-
-fn side_curve(p: u32, side: u32) -> u32 {
-    return topo[p].sides[side] >> 1u;
-}
-
-fn side_reversed(p: u32, side: u32) -> bool {
-    return (topo[p].sides[side] & 1u) != 0u;
-}
+// Reads the topology through `topo.wgsl`, included before this file.
 
 fn curve_owner_side(c: u32) -> u32 {
-    return curves[c].flags & 3u;
+    return curve_at(c).flags & 3u;
 }
 
 fn curve_collapsed(c: u32) -> bool {
-    return (curves[c].flags & 4u) != 0u;
-}
-
-fn patch_flipped(p: u32) -> bool {
-    return (topo[p].flags & 1u) != 0u;
+    return (curve_at(c).flags & 4u) != 0u;
 }
 
 fn side_uv(side: u32, t: f32) -> vec2f {
@@ -107,7 +95,7 @@ fn edge_endpoints(e: u32) -> EdgeEnds {
         let c = e / 3u;
         let s = f32(e % 3u);
         let side = curve_owner_side(c);
-        return EdgeEnds(curves[c].owner, side_uv(side, s * THIRD), side_uv(side, (s + 1.0) * THIRD));
+        return EdgeEnds(curve_at(c).owner, side_uv(side, s * THIRD), side_uv(side, (s + 1.0) * THIRD));
     }
     let g = interior_edge_grid(e);
     return EdgeEnds(g.patch_id, vec2f(g.a) * THIRD, vec2f(g.b) * THIRD);
@@ -183,10 +171,11 @@ fn coarse_edge_sides(e: u32) -> EdgeSides {
     if e < 3u * params.curves {
         let c = e / 3u;
         let seg = e % 3u;
-        var qs = array<vec2u, 2>(vec2u(curves[c].owner, curve_owner_side(c)), vec2u(0u));
+        let curve = curve_at(c);
+        var qs = array<vec2u, 2>(vec2u(curve.owner, curve.flags & 3u), vec2u(0u));
         var users = 1u;
-        if curves[c].other != NO_SIDE {
-            qs[1] = vec2u(curves[c].other >> 2u, curves[c].other & 3u);
+        if curve.other != NO_SIDE {
+            qs[1] = vec2u(curve.other >> 2u, curve.other & 3u);
             users = 2u;
         }
         for (var u = 0u; u < users; u++) {
@@ -212,7 +201,7 @@ fn coarse_vertex(p: u32, g: vec2u) -> u32 {
         if g.x == n && g.y != n { slot = 1u; }
         if g.x == n && g.y == n { slot = 2u; }
         if g.x != n && g.y == n { slot = 3u; }
-        return topo[p].corners[slot];
+        return topo_corner(p, slot);
     }
     var side = 4u;
     var k = 0u;
@@ -222,11 +211,12 @@ fn coarse_vertex(p: u32, g: vec2u) -> u32 {
     else if g.x == 0u { side = 3u; k = g.y; }
     if side < 4u {
         let c = side_curve(p, side);
-        if curve_collapsed(c) {
-            return curves[c].coarse_vertex;
+        let curve = curve_at(c);
+        if (curve.flags & 4u) != 0u {
+            return curve.coarse_vertex;
         }
         let kk = select(k, n - k, side_reversed(p, side));
-        return curves[c].coarse_vertex + kk - 1u;
+        return curve.coarse_vertex + kk - 1u;
     }
     let interior_base = params.coarse_vertices - INTERIOR_COARSE_VERTICES_PER_PATCH * params.patches;
     return interior_base + INTERIOR_COARSE_VERTICES_PER_PATCH * p + (g.y - 1u) * 2u + (g.x - 1u);

@@ -249,6 +249,63 @@ impl NetTexture {
     }
 }
 
+/// Texels per row of the [`TopologyTexture`] (a power of two, like
+/// [`MAP_ATLAS_TILES_PER_ROW`]).
+pub const TOPOLOGY_TEXTURE_WIDTH: u32 = 1024;
+
+/// Texels of a [`GpuPatchTopo`] in the [`TopologyTexture`]: corners, sides, flags.
+pub const TOPO_TEXELS: u32 = 3;
+
+/// Patch topology and boundary curves as the GPU kernels read them: one `rgba32uint`
+/// texture, texel `i` at `(i mod 1024, i / 1024)`; patch `p`'s [`GpuPatchTopo`] in texels
+/// `3p .. 3p + 2` (corners, sides, then flags zero-padded), then curve `c`'s [`GpuCurve`]
+/// in texel `3 · patches + c`. The kernels read them at per-lane addresses, and on a CPU
+/// device a storage buffer read there is a loop over the lanes, a texel fetch a plain
+/// load (see [`NetTexture`]). One texture for both, since WebGPU's default limit is 4
+/// storage textures per kernel.
+#[derive(Clone, Debug, PartialEq)]
+pub struct TopologyTexture {
+    pub width: u32,
+    pub height: u32,
+    /// Row-major, `width × height` texels.
+    pub texels: Vec<[u32; 4]>,
+}
+
+impl TopologyTexture {
+    /// Texture size (width, height) in texels; at least one texel.
+    pub fn size(patches: usize, curves: usize) -> (u32, u32) {
+        let texels = (TOPO_TEXELS as usize * patches + curves).max(1);
+        let width = TOPOLOGY_TEXTURE_WIDTH as usize;
+        (texels.min(width) as u32, texels.div_ceil(width) as u32)
+    }
+
+    pub fn new(topo: &[GpuPatchTopo], curves: &[GpuCurve]) -> Self {
+        let (width, height) = Self::size(topo.len(), curves.len());
+        let mut texels = vec![[0u32; 4]; width as usize * height as usize];
+        for (p, t) in topo.iter().enumerate() {
+            let at = TOPO_TEXELS as usize * p;
+            texels[at] = t.corners;
+            texels[at + 1] = t.sides;
+            texels[at + 2] = [t.flags, 0, 0, 0];
+        }
+        let first_curve = TOPO_TEXELS as usize * topo.len();
+        for (c, curve) in curves.iter().enumerate() {
+            texels[first_curve + c] = [curve.owner, curve.flags, curve.coarse_vertex, curve.other];
+        }
+        TopologyTexture {
+            width,
+            height,
+            texels,
+        }
+    }
+
+    /// Bytes of the texture.
+    pub fn bytes(patches: usize, curves: usize) -> u64 {
+        let (w, h) = Self::size(patches, curves);
+        w as u64 * h as u64 * 16
+    }
+}
+
 /// Connectivity of one patch.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq, Eq)]
@@ -412,12 +469,11 @@ pub struct BezierStatus {
 
 /// Bytes uploaded per patch and once per model for the map-based tessellator: the
 /// control-net texture, the maps (in half precision; the atlas is built on the device),
-/// topology, curves and coarse vertices.
+/// the topology texture (patches and curves), and coarse vertices.
 pub fn bezier_upload_bytes(patches: usize, curves: usize, coarse_vertices: usize) -> usize {
-    patches * std::mem::size_of::<GpuPatchTopo>()
+    TopologyTexture::bytes(patches, curves) as usize
         + NetTexture::bytes(patches) as usize
         + MapHalves::bytes(patches) as usize
-        + curves * std::mem::size_of::<GpuCurve>()
         + coarse_vertices * std::mem::size_of::<VertexRecord>()
 }
 

@@ -46,8 +46,8 @@ use std::sync::{Arc, OnceLock};
 use tessera_core::bezier::lattice::{inv_lattice, Lattice};
 use tessera_core::bezier::{AdaptiveParams, EdgeTest, PreparedBezier};
 use tessera_core::gpu_types::{
-    tally, BezierParams, BezierStatus, MapAtlas, MapHalves, NetTexture, OutVertex, VertexRecord,
-    EDGE_BIT_WORDS, MAP_CELLS, MAX_DEPTH_LIMIT,
+    tally, BezierParams, BezierStatus, MapAtlas, MapHalves, NetTexture, OutVertex, TopologyTexture,
+    VertexRecord, EDGE_BIT_WORDS, MAP_CELLS, MAX_DEPTH_LIMIT,
 };
 use tessera_core::Mesh;
 use wgpu::util::DeviceExt;
@@ -76,8 +76,7 @@ mod slot {
     pub const PARAMS: u32 = 0;
     pub const NETS: u32 = 1;
     pub const MAPS: u32 = 2;
-    pub const TOPO: u32 = 3;
-    pub const CURVES: u32 = 4;
+    pub const TOPOLOGY: u32 = 3;
     pub const EDGE_BITS: u32 = 6;
     pub const COUNTS: u32 = 7;
     pub const SCRATCH: u32 = 8;
@@ -246,8 +245,6 @@ impl BindGroups {
         use slot::*;
         let all = [
             (PARAMS, &b.uniform),
-            (TOPO, &b.topo),
-            (CURVES, &b.curves),
             (EDGE_BITS, &b.edge_bits),
             (COUNTS, &b.counts),
             (RECORDS, &b.records),
@@ -259,6 +256,7 @@ impl BindGroups {
         ];
         let textures = [
             (NETS, &b.nets),
+            (TOPOLOGY, &b.topology),
             (MAPS, &b.map_atlas),
             (SCRATCH, &b.scratch.view),
         ];
@@ -282,8 +280,9 @@ impl BindGroups {
 pub struct BezierStage {
     /// See [`BezierParams::map_scale`].
     map_scale: f32,
-    /// The control nets' texels, until the first recording copies them in.
-    nets_upload: Option<TextureUpload>,
+    /// The texels of the control nets, the patch topology and the curves, until the
+    /// first recording copies them into their textures.
+    texture_uploads: Vec<TextureUpload>,
     /// The maps as uploaded ([`MapHalves`]), bound to the kernel that builds the map
     /// atlas from them, until the first recording dispatches it.
     map_cells_pending: Option<wgpu::BindGroup>,
@@ -311,8 +310,8 @@ struct Buffers {
     /// The displacement maps as half-precision cells ([`MapAtlas`]).
     map_atlas: wgpu::TextureView,
     map_atlas_texture: wgpu::Texture,
-    topo: wgpu::Buffer,
-    curves: wgpu::Buffer,
+    /// Patch topology and curves ([`TopologyTexture`]).
+    topology: wgpu::TextureView,
     coarse_records: wgpu::Buffer,
     edge_bits: wgpu::Buffer,
     counts: wgpu::Buffer,
@@ -567,11 +566,7 @@ impl BezierStage {
         for (what, bytes) in [
             (
                 "patch topology",
-                std::mem::size_of_val(prepared.topo.as_slice()),
-            ),
-            (
-                "boundary curves",
-                std::mem::size_of_val(prepared.curves.as_slice()),
+                TopologyTexture::bytes(prepared.topo.len(), prepared.curves.len()) as usize,
             ),
             (
                 "coarse vertices",
@@ -634,21 +629,22 @@ impl BezierStage {
             (nets.width, nets.height),
             bytemuck::cast_slice(&nets.texels),
         );
+        // Narrower than the atlas and fewer rows (at most 7 texels per patch, 1024 per
+        // row, where the atlas has 15 rows per 256 patches): its size check covers it.
+        let topology = TopologyTexture::new(&prepared.topo, &prepared.curves);
+        let topology_upload = texture_upload(
+            device,
+            "tessera topology texture",
+            wgpu::TextureFormat::Rgba32Uint,
+            (topology.width, topology.height),
+            bytemuck::cast_slice(&topology.texels),
+        );
         let buffers = Buffers {
             uniform,
             nets: nets_upload.texture.create_view(&Default::default()),
             map_atlas: map_atlas_view,
             map_atlas_texture: map_atlas,
-            topo: upload(
-                device,
-                "tessera topology",
-                bytemuck::cast_slice(&prepared.topo),
-            ),
-            curves: upload(
-                device,
-                "tessera curves",
-                bytemuck::cast_slice(&prepared.curves),
-            ),
+            topology: topology_upload.texture.create_view(&Default::default()),
             coarse_records: upload(
                 device,
                 "tessera coarse vertices",
@@ -674,7 +670,7 @@ impl BezierStage {
         };
         Ok(BezierStage {
             map_scale: prepared.map_scale,
-            nets_upload: Some(nets_upload),
+            texture_uploads: vec![nets_upload, topology_upload],
             map_cells_pending: Some(map_cells_pending),
             prepared_layout: l,
             params: *params,
@@ -800,7 +796,7 @@ impl BezierStage {
     /// The first recording also copies the nets into their texture and builds the map
     /// atlas from the uploaded maps.
     fn record_params(&mut self, device: &wgpu::Device, encoder: &mut wgpu::CommandEncoder) {
-        if let Some(up) = self.nets_upload.take() {
+        for up in self.texture_uploads.drain(..) {
             encoder.copy_buffer_to_texture(
                 wgpu::TexelCopyBufferInfo {
                     buffer: &up.staging,

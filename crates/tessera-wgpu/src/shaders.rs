@@ -20,6 +20,10 @@ pub const SOURCES: &[(&str, &str)] = &[
         include_str!("../../../shaders/shared/lattice.wgsl"),
     ),
     (
+        "shared/topo.wgsl",
+        include_str!("../../../shaders/shared/topo.wgsl"),
+    ),
+    (
         "shared/coarse.wgsl",
         include_str!("../../../shaders/shared/coarse.wgsl"),
     ),

@@ -413,6 +413,8 @@ fn bezier_constants_match_their_rust_twins() {
         ("MAP_RES", MAP_RES as u32),
         ("MAP_ATLAS_TILES_PER_ROW", MAP_ATLAS_TILES_PER_ROW),
         ("NET_TEXTURE_PATCHES_PER_ROW", NET_TEXTURE_PATCHES_PER_ROW),
+        ("TOPOLOGY_TEXTURE_WIDTH", TOPOLOGY_TEXTURE_WIDTH),
+        ("TOPO_TEXELS", TOPO_TEXELS),
         ("COARSE_SEGMENTS", COARSE_SEGMENTS as u32),
         (
             "COARSE_TRIANGLES_PER_PATCH",
@@ -440,4 +442,5 @@ fn bezier_constants_match_their_rust_twins() {
     // The atlas's tile lookup divides by a power of two (a shift).
     assert!(MAP_ATLAS_TILES_PER_ROW.is_power_of_two());
     assert!(NET_TEXTURE_PATCHES_PER_ROW.is_power_of_two());
+    assert!(TOPOLOGY_TEXTURE_WIDTH.is_power_of_two());
 }
