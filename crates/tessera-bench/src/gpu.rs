@@ -41,25 +41,6 @@ pub struct GpuReport {
     rows: Vec<GpuRow>,
 }
 
-/// `copies` teapots on a grid, `spacing` apart (1 copy of `patches` patches when `copies`
-/// is 0: the first `patches` patches of one teapot).
-fn teapots(base: &BezierModel, copies: usize, spacing: f32) -> BezierModel {
-    let side = (copies as f32).sqrt().ceil() as usize;
-    let mut points = Vec::new();
-    let mut nets = Vec::new();
-    for c in 0..copies {
-        let offset = Vec3::new(
-            (c % side) as f32 * spacing,
-            (c / side) as f32 * spacing,
-            0.0,
-        );
-        let first = points.len() as u32;
-        points.extend(base.points.iter().map(|p| *p + offset));
-        nets.extend(base.nets.iter().map(|n| n.map(|i| i + first)));
-    }
-    BezierModel::from_nets(points, nets)
-}
-
 fn single_patch(base: &BezierModel) -> BezierModel {
     // A body patch: no collapsed side, curved in both directions.
     let net = base.nets[4];
@@ -88,7 +69,7 @@ pub fn run(assets: &Path, out_dir: &Path, quick: bool) {
     let models = [
         (1, single_patch(&teapot)),
         (32, teapot.clone()),
-        (1024, teapots(&teapot, 32, 1.2 * diag)),
+        (1024, teapot.grid_of_copies(32, 1.2 * diag)),
     ];
     let mut rows = Vec::new();
     for (patches, model) in &models {

@@ -60,7 +60,8 @@ use crate::scan::{PrefixSum, ScanKernels};
 use crate::stage::GrowingStage;
 
 /// Limits the stage needs, within what `adapter` offers: large storage buffers for big
-/// models; no more than 8 storage buffers per kernel, so WebGPU's defaults suffice there.
+/// models; no more than 8 storage buffers and 4 storage textures per kernel, so WebGPU's
+/// defaults suffice there.
 pub fn required_limits(adapter: &wgpu::Limits) -> wgpu::Limits {
     wgpu::Limits {
         max_storage_buffer_binding_size: adapter.max_storage_buffer_binding_size,

@@ -115,6 +115,25 @@ impl BezierModel {
         }
     }
 
+    /// `copies` copies of the model on a square grid in the xy-plane, `spacing` apart:
+    /// the benchmarks' large inputs (32 teapots make 1024 patches).
+    pub fn grid_of_copies(&self, copies: usize, spacing: f32) -> BezierModel {
+        let side = (copies as f32).sqrt().ceil() as usize;
+        let mut points = Vec::with_capacity(copies * self.points.len());
+        let mut nets = Vec::with_capacity(copies * self.nets.len());
+        for c in 0..copies {
+            let offset = Vec3::new(
+                (c % side) as f32 * spacing,
+                (c / side) as f32 * spacing,
+                0.0,
+            );
+            let first = points.len() as u32;
+            points.extend(self.points.iter().map(|p| *p + offset));
+            nets.extend(self.nets.iter().map(|n| n.map(|i| i + first)));
+        }
+        BezierModel::from_nets(points, nets)
+    }
+
     /// Axis-aligned bounds of the control points.
     pub fn bounds(&self) -> (Vec3, Vec3) {
         let mut lo = Vec3::splat(f32::INFINITY);
