@@ -5,6 +5,8 @@
 //! triangles in index order (which the root kernel's list follows closely), sorted by
 //! their walks (the best any order can do), sorted by the points on their sides (known
 //! from the edge decisions before the walk), and split into two classes at a cut.
+//! (Running the mark kernel in the side-point order gained nothing on lavapipe: the
+//! README's GPU results say why.)
 //!
 //! ```sh
 //! cargo run --release -p tessera-bench --example walk_lanes
