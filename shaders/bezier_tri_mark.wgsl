@@ -49,17 +49,19 @@ fn tri_mark(c: TriCtx) -> u32 {
     loop {
         if splits(c, w.t, w.level) {
             let pl = place(c.l, lattice_mid(w.t.a, w.t.b));
-            if pl.kind == PLACE_INSIDE {
-                let word = c.points_base + pl.f / 32u;
-                let bit = 1u << (pl.f % 32u);
+            // One read-modify-write for either kind of mark, its word chosen by
+            // `select`: a masked device would run both branches' texel accesses.
+            let inside = pl.kind == PLACE_INSIDE;
+            let pole = pl.kind == PLACE_SIDE && side_collapsed(c, pl.k);
+            if inside || pole {
+                let i = select(pole_index(c.l, pl.k, pl.f), pl.f, inside);
+                let word = select(c.pole_base, c.points_base, inside) + i / 32u;
+                let bit = 1u << (i % 32u);
                 let old = scratch_word(word);
                 scratch_store(word, old | bit);
-                inner += u32((old & bit) == 0u);
-                groups |= 1u << ((pl.f / 32u) >> shift);
-            } else if pl.kind == PLACE_SIDE && side_collapsed(c, pl.k) {
-                let i = pole_index(c.l, pl.k, pl.f);
-                let word = c.pole_base + i / 32u;
-                scratch_store(word, scratch_word(word) | (1u << (i % 32u)));
+                let new_inner = inside && (old & bit) == 0u;
+                inner += u32(new_inner);
+                groups |= select(0u, 1u << ((pl.f / 32u) >> shift), inside);
             }
             w = walk_down(w);
         } else {
