@@ -406,10 +406,11 @@ fn cc_clip_net() {
 
 // Net k into bs_net (shape) and bs_offset.
 fn cc_load_net(k: u32) {
-    bs_offset = vec3f(cc_nets[k].cp[0], cc_nets[k].cp[1], cc_nets[k].cp[2]) - walk_origin;
+    let points = cc_net_points(k);
+    bs_offset = points[0] - walk_origin;
     bs_net[0] = vec3f(0.0);
     for (var q = 1u; q < 16u; q++) {
-        bs_net[q] = vec3f(cc_nets[k].cp[3u * q], cc_nets[k].cp[3u * q + 1u], cc_nets[k].cp[3u * q + 2u]);
+        bs_net[q] = points[q];
     }
 }
 

@@ -7,7 +7,10 @@
 @group(0) @binding(20) var<storage, read> cc_roots: array<u32>;
 @group(0) @binding(21) var<storage, read> cc_nodes: array<CcNode>;
 @group(0) @binding(22) var<storage, read> cc_splits: array<vec4u>;
-@group(0) @binding(23) var<storage, read> cc_nets: array<GpuPatch>;
+// The Bézier nets as a read-only storage texture (`tessera_core::gpu_types::NetTexture`:
+// 12 rgba32float texels per net): a storage buffer read at per-lane addresses is a loop
+// over the lanes on a CPU device, a texel fetch a plain load.
+@group(0) @binding(23) var cc_nets: texture_storage_2d<rgba32float, read>;
 @group(0) @binding(24) var<storage, read> cc_corners: array<CcCorner>;
 
 struct CcSample {
@@ -31,9 +34,33 @@ struct CcDerivs {
     pv: vec3f,
 }
 
+// The 16 points of net k, `x y z` each, from its 12 texels.
+fn cc_net_points(k: u32) -> array<vec3f, 16> {
+    let at = vec2u((k % NET_TEXTURE_PATCHES_PER_ROW) * 12u, k / NET_TEXTURE_PATCHES_PER_ROW);
+    let t0 = textureLoad(cc_nets, at);
+    let t1 = textureLoad(cc_nets, at + vec2u(1u, 0u));
+    let t2 = textureLoad(cc_nets, at + vec2u(2u, 0u));
+    let t3 = textureLoad(cc_nets, at + vec2u(3u, 0u));
+    let t4 = textureLoad(cc_nets, at + vec2u(4u, 0u));
+    let t5 = textureLoad(cc_nets, at + vec2u(5u, 0u));
+    let t6 = textureLoad(cc_nets, at + vec2u(6u, 0u));
+    let t7 = textureLoad(cc_nets, at + vec2u(7u, 0u));
+    let t8 = textureLoad(cc_nets, at + vec2u(8u, 0u));
+    let t9 = textureLoad(cc_nets, at + vec2u(9u, 0u));
+    let t10 = textureLoad(cc_nets, at + vec2u(10u, 0u));
+    let t11 = textureLoad(cc_nets, at + vec2u(11u, 0u));
+    return array<vec3f, 16>(
+        t0.xyz, vec3f(t0.w, t1.xy), vec3f(t1.zw, t2.x), t2.yzw,
+        t3.xyz, vec3f(t3.w, t4.xy), vec3f(t4.zw, t5.x), t5.yzw,
+        t6.xyz, vec3f(t6.w, t7.xy), vec3f(t7.zw, t8.x), t8.yzw,
+        t9.xyz, vec3f(t9.w, t10.xy), vec3f(t10.zw, t11.x), t11.yzw,
+    );
+}
+
 // Point 0 of a net is absolute, points 1..16 offsets from it (exact shape in f32 for the
 // tiny pieces at extraordinary vertices): the offsets' Bézier sum, then the origin added.
 fn cc_net_eval(k: u32, u: f32, v: f32) -> CcDerivs {
+    let pts = cc_net_points(k);
     let bu = cc_bernstein(u);
     let bv = cc_bernstein(v);
     let du = cc_bernstein_d(u);
@@ -45,13 +72,13 @@ fn cc_net_eval(k: u32, u: f32, v: f32) -> CcDerivs {
             if o == 0u {
                 continue;
             }
-            let c = vec3f(cc_nets[k].cp[o], cc_nets[k].cp[o + 1u], cc_nets[k].cp[o + 2u]);
+            let c = pts[4u * j + i];
             d.p += (bu[i] * bv[j]) * c;
             d.pu += (du[i] * bv[j]) * c;
             d.pv += (bu[i] * dv[j]) * c;
         }
     }
-    d.p += vec3f(cc_nets[k].cp[0], cc_nets[k].cp[1], cc_nets[k].cp[2]);
+    d.p += pts[0];
     return d;
 }
 

@@ -27,7 +27,7 @@ pub use stage::{CcCapacities, CcKernels, CcStage, CcStatus};
 pub use uniform::{CcUniformKernels, CcUniformStage};
 
 use tessera_core::catmull_clark::gpu_model::CcGpuModel;
-use tessera_core::gpu_types::{CcHashSlot, CcHashStatus};
+use tessera_core::gpu_types::{CcHashSlot, CcHashStatus, NetTexture};
 use wgpu::util::DeviceExt;
 
 use crate::error::{Error, Result};
@@ -39,7 +39,15 @@ pub struct CcModelBuffers {
     pub roots: wgpu::Buffer,
     pub nodes: wgpu::Buffer,
     pub splits: wgpu::Buffer,
+    /// The Bézier nets as uploaded, in the row layout of [`NetTexture`] (whole rows,
+    /// zero-padded), copied into [`nets_texture`](Self::nets_texture) by
+    /// [`record_nets_copy`](Self::record_nets_copy).
     pub nets: wgpu::Buffer,
+    /// What the kernels read (binding 23): a read-only `rgba32float` storage texture,
+    /// where a storage buffer read at per-lane addresses is a loop over the lanes on a
+    /// CPU device (the nets' reads were a fifth of the mark kernel's samples on lavapipe).
+    pub nets_texture: wgpu::Texture,
+    nets_view: wgpu::TextureView,
     pub corners: wgpu::Buffer,
     sizes: [usize; 5],
 }
@@ -79,14 +87,60 @@ impl CcModelBuffers {
                 usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
             })
         };
+        // The nets' buffer holds whole texture rows, so that one copy fills the texture.
+        let (width, height) = NetTexture::size(model.nets.len());
+        let net_bytes: &[u8] = bytemuck::cast_slice(&model.nets);
+        let mut rows = vec![0u8; NetTexture::bytes(model.nets.len()) as usize];
+        rows[..net_bytes.len()].copy_from_slice(net_bytes);
+        let nets = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("tessera cc nets"),
+            contents: &rows,
+            usage: wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
+        });
+        let nets_texture = device.create_texture(&wgpu::TextureDescriptor {
+            label: Some("tessera cc net texture"),
+            size: wgpu::Extent3d {
+                width,
+                height,
+                depth_or_array_layers: 1,
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: wgpu::TextureFormat::Rgba32Float,
+            usage: wgpu::TextureUsages::STORAGE_BINDING | wgpu::TextureUsages::COPY_DST,
+            view_formats: &[],
+        });
         Ok(CcModelBuffers {
             roots: init("tessera cc roots", bytemuck::cast_slice(&model.roots)),
             nodes: init("tessera cc nodes", bytemuck::cast_slice(&model.nodes)),
             splits: init("tessera cc splits", bytemuck::cast_slice(&model.splits)),
-            nets: init("tessera cc nets", bytemuck::cast_slice(&model.nets)),
+            nets,
+            nets_view: nets_texture.create_view(&Default::default()),
+            nets_texture,
             corners: init("tessera cc corners", bytemuck::cast_slice(&model.corners)),
             sizes: byte_sizes(model),
         })
+    }
+
+    /// Records the copy of the nets into their texture. Every recording that runs the
+    /// kernels starts with it (the stages' `prepare` and [`CcVertexEval::record`] do), so
+    /// that [`update`](Self::update) needs nothing else.
+    pub fn record_nets_copy(&self, encoder: &mut wgpu::CommandEncoder) {
+        let t = &self.nets_texture;
+        encoder.copy_buffer_to_texture(
+            wgpu::TexelCopyBufferInfo {
+                buffer: &self.nets,
+                layout: wgpu::TexelCopyBufferLayout {
+                    offset: 0,
+                    // One row needs no pitch; whole rows are 256 nets, 49 152 bytes.
+                    bytes_per_row: (t.height() > 1).then_some(16 * t.width()),
+                    rows_per_image: None,
+                },
+            },
+            t.as_image_copy(),
+            t.size(),
+        );
     }
 
     /// Re-uploads a model of the same shape (the control points moved, the topology did
@@ -115,14 +169,17 @@ impl CcModelBuffers {
         self.sizes.iter().sum()
     }
 
-    fn entries(&self) -> [(u32, &wgpu::Buffer); 5] {
+    fn entries(&self) -> [(u32, &wgpu::Buffer); 4] {
         [
             (20, &self.roots),
             (21, &self.nodes),
             (22, &self.splits),
-            (23, &self.nets),
             (24, &self.corners),
         ]
+    }
+
+    fn textures(&self) -> [(u32, &wgpu::TextureView); 1] {
+        [(23, &self.nets_view)]
     }
 }
 
@@ -154,6 +211,7 @@ impl CcVertexEval {
         out: &wgpu::Buffer,
         max_points: u32,
     ) {
+        model.record_nets_copy(encoder);
         let bind = self.bind(device, model, points, counts, out);
         self.record_bound(encoder, &bind, max_points);
     }
@@ -169,7 +227,8 @@ impl CcVertexEval {
     ) -> wgpu::BindGroup {
         let mut entries = model.entries().to_vec();
         entries.extend([(30, points), (31, out), (32, counts)]);
-        self.kernel.bind(device, &entries)
+        self.kernel
+            .bind_with_textures(device, &entries, &model.textures())
     }
 
     /// [`record`](Self::record) with a bind group made by [`bind`](Self::bind).

@@ -433,6 +433,9 @@ impl CcStage {
         encoder: &mut wgpu::CommandEncoder,
         mut stamps: Option<(&wgpu::QuerySet, &mut Vec<String>)>,
     ) {
+        // The kernels read the nets from their texture, refreshed from the buffer each
+        // run (`update` writes the buffer).
+        self.model.record_nets_copy(encoder);
         let mut stamp = |encoder: &mut wgpu::CommandEncoder, name: &str| {
             if let Some((set, names)) = stamps.as_mut() {
                 if !name.is_empty() {
@@ -921,24 +924,28 @@ impl Binds {
         // parity 1 is cells[0].
         let even = common(0);
         let odd = common(1);
+        // The nets are a texture (see `CcModelBuffers::nets_texture`).
+        let bind = |kernel: &Kernel, entries: &[(u32, &wgpu::Buffer)]| {
+            kernel.bind_with_textures(device, entries, &model.textures())
+        };
         Binds {
-            roots_count: k.roots_count.bind(device, &odd),
-            roots_emit: k.roots_emit.bind(device, &odd),
-            roots_finish: k.roots_finish.bind(device, &odd),
-            mark: [k.mark.bind(device, &even), k.mark.bind(device, &odd)],
-            split: [k.split.bind(device, &even), k.split.bind(device, &odd)],
-            split_finish: k.split_finish.bind(device, &even),
-            choose: k.choose.bind(device, &even),
-            next_round: k.next_round.bind(device, &even),
-            collect_count: k.collect_count.bind(device, &even),
-            collect_emit: k.collect_emit.bind(device, &even),
-            collect_finish: k.collect_finish.bind(device, &even),
-            leaf_keys: k.leaf_keys.bind(device, &even),
-            gather_points: k.gather_points.bind(device, &even),
-            polygon_count: k.polygon_count.bind(device, &even),
-            polygon_emit: k.polygon_emit.bind(device, &even),
-            triangulate: k.triangulate.bind(device, &even),
-            triangulate_finish: k.triangulate_finish.bind(device, &even),
+            roots_count: bind(&k.roots_count, &odd),
+            roots_emit: bind(&k.roots_emit, &odd),
+            roots_finish: bind(&k.roots_finish, &odd),
+            mark: [bind(&k.mark, &even), bind(&k.mark, &odd)],
+            split: [bind(&k.split, &even), bind(&k.split, &odd)],
+            split_finish: bind(&k.split_finish, &even),
+            choose: bind(&k.choose, &even),
+            next_round: bind(&k.next_round, &even),
+            collect_count: bind(&k.collect_count, &even),
+            collect_emit: bind(&k.collect_emit, &even),
+            collect_finish: bind(&k.collect_finish, &even),
+            leaf_keys: bind(&k.leaf_keys, &even),
+            gather_points: bind(&k.gather_points, &even),
+            polygon_count: bind(&k.polygon_count, &even),
+            polygon_emit: bind(&k.polygon_emit, &even),
+            triangulate: bind(&k.triangulate, &even),
+            triangulate_finish: bind(&k.triangulate_finish, &even),
             hash: b.hash.bind(device, &k.hash, &b.keys),
             eval: k.eval.bind(
                 device,
