@@ -406,12 +406,11 @@ fn cc_clip_net() {
 
 // Net k into bs_net (shape) and bs_offset.
 fn cc_load_net(k: u32) {
-    let points = cc_net_points(k);
-    bs_offset = points[0] - walk_origin;
-    bs_net[0] = vec3f(0.0);
-    for (var q = 1u; q < 16u; q++) {
-        bs_net[q] = points[q];
-    }
+    // Constant indices throughout (see `cc_net_eval`).
+    let p = cc_net_points(k);
+    bs_offset = p[0] - walk_origin;
+    bs_net = array<vec3f, 16>(vec3f(0.0), p[1], p[2], p[3], p[4], p[5], p[6], p[7], p[8],
+        p[9], p[10], p[11], p[12], p[13], p[14], p[15]);
 }
 
 // `Walk::small`: a node of `level` is at most 1/64 of the box's shorter side.

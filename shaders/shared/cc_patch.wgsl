@@ -57,28 +57,38 @@ fn cc_net_points(k: u32) -> array<vec3f, 16> {
     );
 }
 
+// One offset's terms of the sums (point `c` weighted by bu_i bv_j, du_i bv_j, bu_i dv_j).
+fn cc_net_term(d: CcDerivs, c: vec3f, bui: f32, dui: f32, bvj: f32, dvj: f32) -> CcDerivs {
+    return CcDerivs(d.p + (bui * bvj) * c, d.pu + (dui * bvj) * c, d.pv + (bui * dvj) * c);
+}
+
 // Point 0 of a net is absolute, points 1..16 offsets from it (exact shape in f32 for the
 // tiny pieces at extraordinary vertices): the offsets' Bézier sum, then the origin added.
 fn cc_net_eval(k: u32, u: f32, v: f32) -> CcDerivs {
-    let pts = cc_net_points(k);
+    let p = cc_net_points(k);
     let bu = cc_bernstein(u);
     let bv = cc_bernstein(v);
     let du = cc_bernstein_d(u);
     let dv = cc_bernstein_d(v);
+    // Written out, row by row (the twin's order), so that every index is a constant: a
+    // private array indexed by a loop counter is a memory access per lane on a CPU device.
     var d = CcDerivs(vec3f(0.0), vec3f(0.0), vec3f(0.0));
-    for (var j = 0u; j < 4u; j++) {
-        for (var i = 0u; i < 4u; i++) {
-            let o = 3u * (4u * j + i);
-            if o == 0u {
-                continue;
-            }
-            let c = pts[4u * j + i];
-            d.p += (bu[i] * bv[j]) * c;
-            d.pu += (du[i] * bv[j]) * c;
-            d.pv += (bu[i] * dv[j]) * c;
-        }
-    }
-    d.p += pts[0];
+    d = cc_net_term(d, p[1], bu.y, du.y, bv.x, dv.x);
+    d = cc_net_term(d, p[2], bu.z, du.z, bv.x, dv.x);
+    d = cc_net_term(d, p[3], bu.w, du.w, bv.x, dv.x);
+    d = cc_net_term(d, p[4], bu.x, du.x, bv.y, dv.y);
+    d = cc_net_term(d, p[5], bu.y, du.y, bv.y, dv.y);
+    d = cc_net_term(d, p[6], bu.z, du.z, bv.y, dv.y);
+    d = cc_net_term(d, p[7], bu.w, du.w, bv.y, dv.y);
+    d = cc_net_term(d, p[8], bu.x, du.x, bv.z, dv.z);
+    d = cc_net_term(d, p[9], bu.y, du.y, bv.z, dv.z);
+    d = cc_net_term(d, p[10], bu.z, du.z, bv.z, dv.z);
+    d = cc_net_term(d, p[11], bu.w, du.w, bv.z, dv.z);
+    d = cc_net_term(d, p[12], bu.x, du.x, bv.w, dv.w);
+    d = cc_net_term(d, p[13], bu.y, du.y, bv.w, dv.w);
+    d = cc_net_term(d, p[14], bu.z, du.z, bv.w, dv.w);
+    d = cc_net_term(d, p[15], bu.w, du.w, bv.w, dv.w);
+    d.p += p[0];
     return d;
 }
 
