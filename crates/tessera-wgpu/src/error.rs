@@ -36,6 +36,14 @@ pub enum Error {
         height: u32,
         limit: u32,
     },
+    /// Part of a model needs a texture larger than the device allows.
+    #[error("the model's {what} need a {width}×{height} texture, over the device's texture limit of {limit}; tessellate it with --backend cpu or split the mesh")]
+    TextureTooLarge {
+        what: &'static str,
+        width: u32,
+        height: u32,
+        limit: u32,
+    },
     /// Waiting for the GPU or mapping a buffer failed.
     #[error("GPU readback failed: {0}")]
     Readback(String),

@@ -135,6 +135,40 @@ fn gpu_evaluation_matches_its_twin_and_the_exact_surface() {
     }
 }
 
+/// A device whose textures cannot hold the nets refuses the model with an error that
+/// says so, before wgpu sees an oversized texture.
+#[test]
+fn nets_past_the_texture_limit_are_an_error() {
+    let gpu = Gpu::with_limits(|adapter| wgpu::Limits {
+        max_texture_dimension_2d: 256,
+        ..tessera_wgpu::bezier::required_limits(adapter)
+    })
+    .expect("device");
+    // The cube's 2160 nets (its quadtrees' pieces) take rows of 256 nets, 3072 texels.
+    let flat = CcGpuModel::new(&model("opensubdiv/catmark_cube.obj"));
+    assert_eq!(flat.nets.len(), 2160);
+    let err = CcModelBuffers::new(&gpu.device, &flat)
+        .err()
+        .expect("the nets do not fit");
+    assert!(
+        matches!(
+            err,
+            tessera_wgpu::Error::TextureTooLarge {
+                width: 3072,
+                height: 9,
+                limit: 256,
+                ..
+            }
+        ),
+        "{err}"
+    );
+    // Twenty-one nets fit (252 texels).
+    let mut small = flat.clone();
+    small.nets.truncate(21);
+    CcModelBuffers::new(&gpu.device, &small).expect("21 nets fit");
+    gpu.check().expect("no wgpu validation errors");
+}
+
 #[test]
 fn moved_control_points_reupload_in_place_and_a_new_shape_is_refused() {
     let gpu = gpu();

@@ -65,7 +65,8 @@ fn byte_sizes(model: &CcGpuModel) -> [usize; 5] {
 
 impl CcModelBuffers {
     /// Uploads `model`; [`Error::ModelTooLarge`] if one of its arrays is larger than a
-    /// storage buffer the device can bind (before anything is created).
+    /// storage buffer the device can bind, or its nets than a texture the device can
+    /// create (before anything is created).
     pub fn new(device: &wgpu::Device, model: &CcGpuModel) -> Result<Self> {
         let names = [
             "patch roots",
@@ -76,6 +77,16 @@ impl CcModelBuffers {
         ];
         for (what, bytes) in names.into_iter().zip(byte_sizes(model)) {
             check_upload(device, what, bytes as u64)?;
+        }
+        let (width, height) = NetTexture::size(model.nets.len());
+        let max_side = device.limits().max_texture_dimension_2d;
+        if width > max_side || height > max_side {
+            return Err(Error::TextureTooLarge {
+                what: "Bézier nets",
+                width,
+                height,
+                limit: max_side,
+            });
         }
         let init = |label: &str, bytes: &[u8]| {
             // Bindings are never empty: an empty array (a model without extraordinary
@@ -88,7 +99,6 @@ impl CcModelBuffers {
             })
         };
         // The nets' buffer holds whole texture rows, so that one copy fills the texture.
-        let (width, height) = NetTexture::size(model.nets.len());
         let net_bytes: &[u8] = bytemuck::cast_slice(&model.nets);
         let mut rows = vec![0u8; NetTexture::bytes(model.nets.len()) as usize];
         rows[..net_bytes.len()].copy_from_slice(net_bytes);
@@ -231,7 +241,9 @@ impl CcVertexEval {
             .bind_with_textures(device, &entries, &model.textures())
     }
 
-    /// [`record`](Self::record) with a bind group made by [`bind`](Self::bind).
+    /// [`record`](Self::record) with a bind group made by [`bind`](Self::bind). The
+    /// nets must have been copied into their texture in the same recording
+    /// ([`CcModelBuffers::record_nets_copy`]; `record` does it).
     pub fn record_bound(
         &self,
         encoder: &mut wgpu::CommandEncoder,
