@@ -402,9 +402,9 @@ pub struct BezierParams {
     pub coarse_vertices: u32,
     pub coarse_edges: u32,
     pub coarse_triangles: u32,
-    /// Words of lattice points per coarse triangle in the scratch buffer.
+    /// Words of lattice points per coarse triangle in the scratch texture.
     pub points_words: u32,
-    /// Words of collapsed-side points per coarse triangle in the scratch buffer.
+    /// Words of collapsed-side points per coarse triangle in the scratch texture.
     pub pole_words: u32,
     /// `1 / (3 · 2^max_depth)` (see `lattice::inv_lattice`).
     pub inv_lattice: f32,

@@ -53,8 +53,8 @@ use tessera_core::Mesh;
 use wgpu::util::DeviceExt;
 
 use crate::error::{Error, Result};
-use crate::headless::{map_read, read_buffer, TextureReadback};
-use crate::kernel::{check_size, check_upload, storage, Kernel};
+use crate::headless::{map_read, read_buffer, read_texture};
+use crate::kernel::{check_size, check_upload, storage, storage_texture, Kernel, TextureUpload};
 use crate::output::MeshBuffers;
 use crate::scan::{PrefixSum, ScanKernels};
 use crate::stage::GrowingStage;
@@ -296,13 +296,6 @@ pub struct BezierStage {
     bind_groups: BindGroups,
 }
 
-struct TextureUpload {
-    staging: wgpu::Buffer,
-    texture: wgpu::Texture,
-    extent: wgpu::Extent3d,
-    bytes_per_row: u32,
-}
-
 /// Every buffer of a stage: the upload, the working buffers, the output.
 struct Buffers {
     uniform: wgpu::Buffer,
@@ -374,22 +367,13 @@ impl Scratch {
                 limit: 4 * widest as u64 * max_side as u64,
             });
         }
-        let texture = device.create_texture(&wgpu::TextureDescriptor {
-            label: Some("tessera triangle scratch"),
-            size: wgpu::Extent3d {
-                width,
-                height: height as u32,
-                depth_or_array_layers: 1,
-            },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format: wgpu::TextureFormat::R32Uint,
-            usage: wgpu::TextureUsages::STORAGE_BINDING
-                | wgpu::TextureUsages::COPY_DST
-                | wgpu::TextureUsages::COPY_SRC,
-            view_formats: &[],
-        });
+        let texture = storage_texture(
+            device,
+            "tessera triangle scratch",
+            wgpu::TextureFormat::R32Uint,
+            (width, height as u32),
+            wgpu::TextureUsages::COPY_DST | wgpu::TextureUsages::COPY_SRC,
+        );
         let zero_rows = (height as u32).min(Self::ZERO_ROWS);
         Ok(Scratch {
             view: texture.create_view(&Default::default()),
@@ -432,51 +416,6 @@ impl Scratch {
                 },
             );
         }
-    }
-}
-
-/// A texture, empty, and a buffer holding its texels (row-major): the constructor has no
-/// queue, so the first recording copies one into the other.
-fn texture_upload(
-    device: &wgpu::Device,
-    label: &str,
-    format: wgpu::TextureFormat,
-    (width, height): (u32, u32),
-    texels: &[u8],
-) -> TextureUpload {
-    let extent = wgpu::Extent3d {
-        width,
-        height,
-        depth_or_array_layers: 1,
-    };
-    let texture = device.create_texture(&wgpu::TextureDescriptor {
-        label: Some(label),
-        size: extent,
-        mip_level_count: 1,
-        sample_count: 1,
-        dimension: wgpu::TextureDimension::D2,
-        format,
-        // Read as a read-only storage texture (see `shaders/shared/map.wgsl`).
-        usage: wgpu::TextureUsages::STORAGE_BINDING | wgpu::TextureUsages::COPY_DST,
-        view_formats: &[],
-    });
-    let row = texels.len() / height as usize;
-    // Buffer-to-texture copies take rows padded to 256 bytes.
-    let bytes_per_row = (row as u32).next_multiple_of(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT);
-    let mut contents = vec![0u8; bytes_per_row as usize * height as usize];
-    for (y, bytes) in texels.chunks(row).enumerate() {
-        contents[y * bytes_per_row as usize..][..bytes.len()].copy_from_slice(bytes);
-    }
-    let staging = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-        label: Some(label),
-        contents: &contents,
-        usage: wgpu::BufferUsages::COPY_SRC,
-    });
-    TextureUpload {
-        staging,
-        texture,
-        extent,
-        bytes_per_row,
     }
 }
 
@@ -581,34 +520,25 @@ impl BezierStage {
             check_upload(device, what, bytes as u64)?;
         }
         let (width, height) = MapAtlas::size(prepared.maps.len());
-        let atlas = wgpu::Extent3d {
-            width,
-            height,
-            depth_or_array_layers: 1,
-        };
         let max_side = device.limits().max_texture_dimension_2d;
-        if atlas.width > max_side || atlas.height > max_side {
+        if width > max_side || height > max_side {
             return Err(Error::MapAtlasTooLarge {
                 patches: l.patches,
-                width: atlas.width,
-                height: atlas.height,
+                width,
+                height,
                 limit: max_side,
             });
         }
         // The atlas is built on the device from the maps as uploaded (`MapHalves`, 512
-        // of its 1800 bytes per patch), by `bezier_map_cells` in the first recording.
-        let map_atlas = device.create_texture(&wgpu::TextureDescriptor {
-            label: Some("tessera displacement-map atlas"),
-            size: atlas,
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format: wgpu::TextureFormat::Rgba16Float,
-            // Written by `bezier_map_cells`, read by the kernels: storage both ways (see
-            // `shaders/shared/map.wgsl`).
-            usage: wgpu::TextureUsages::STORAGE_BINDING | wgpu::TextureUsages::COPY_SRC,
-            view_formats: &[],
-        });
+        // of its 1800 bytes per patch), by `bezier_map_cells` in the first recording:
+        // written by it, read by the kernels, a storage texture both ways.
+        let map_atlas = storage_texture(
+            device,
+            "tessera displacement-map atlas",
+            wgpu::TextureFormat::Rgba16Float,
+            (width, height),
+            wgpu::TextureUsages::COPY_SRC,
+        );
         let map_atlas_view = map_atlas.create_view(&Default::default());
         let halves = MapHalves::new(&prepared.maps, prepared.map_scale);
         let map_halves = upload(
@@ -623,7 +553,7 @@ impl BezierStage {
         );
         // Smaller than the atlas both ways: its size check covers this one.
         let nets = NetTexture::new(&prepared.patches);
-        let nets_upload = texture_upload(
+        let nets_upload = TextureUpload::new(
             device,
             "tessera control-net texture",
             wgpu::TextureFormat::Rgba32Float,
@@ -633,7 +563,7 @@ impl BezierStage {
         // Narrower than the atlas and fewer rows (at most 7 texels per patch, 1024 per
         // row, where the atlas has 15 rows per 256 patches): its size check covers it.
         let topology = TopologyTexture::new(&prepared.topo, &prepared.curves);
-        let topology_upload = texture_upload(
+        let topology_upload = TextureUpload::new(
             device,
             "tessera topology texture",
             wgpu::TextureFormat::Rgba32Uint,
@@ -798,18 +728,7 @@ impl BezierStage {
     /// atlas from the uploaded maps.
     fn record_params(&mut self, device: &wgpu::Device, encoder: &mut wgpu::CommandEncoder) {
         for up in self.texture_uploads.drain(..) {
-            encoder.copy_buffer_to_texture(
-                wgpu::TexelCopyBufferInfo {
-                    buffer: &up.staging,
-                    layout: wgpu::TexelCopyBufferLayout {
-                        offset: 0,
-                        bytes_per_row: Some(up.bytes_per_row),
-                        rows_per_image: None,
-                    },
-                },
-                up.texture.as_image_copy(),
-                up.extent,
-            );
+            up.record(encoder);
         }
         let staging = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("tessera bezier params upload"),
@@ -1005,19 +924,14 @@ impl BezierStage {
 
     /// The map atlas's texels as built on the device, row-major (see [`MapAtlas`]).
     fn read_map_atlas(&self, device: &wgpu::Device, queue: &wgpu::Queue) -> Result<Vec<[u16; 4]>> {
-        let mut encoder = device.create_command_encoder(&Default::default());
-        let readback =
-            TextureReadback::record(device, &mut encoder, &self.buffers.map_atlas_texture);
-        queue.submit([encoder.finish()]);
-        Ok(bytemuck::pod_collect_to_vec(&readback.read(device)?))
+        let texels = read_texture(device, queue, &self.buffers.map_atlas_texture)?;
+        Ok(bytemuck::pod_collect_to_vec(&texels))
     }
 
     /// The scratch words in order, without the last row's padding.
     fn read_scratch(&self, device: &wgpu::Device, queue: &wgpu::Queue) -> Result<Vec<u32>> {
-        let mut encoder = device.create_command_encoder(&Default::default());
-        let readback = TextureReadback::record(device, &mut encoder, &self.buffers.scratch.texture);
-        queue.submit([encoder.finish()]);
-        let mut words: Vec<u32> = bytemuck::pod_collect_to_vec(&readback.read(device)?);
+        let texels = read_texture(device, queue, &self.buffers.scratch.texture)?;
+        let mut words: Vec<u32> = bytemuck::pod_collect_to_vec(&texels);
         words.truncate(
             (triangle_stride(self.params.max_depth) * self.prepared_layout.coarse_triangles)
                 as usize,

@@ -235,3 +235,16 @@ impl TextureReadback {
             .collect())
     }
 }
+
+/// The texels of mip level 0 of `texture` (a format with one plane, `COPY_SRC` usage),
+/// row-major and unpadded, copied on their own submission.
+pub(crate) fn read_texture(
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    texture: &wgpu::Texture,
+) -> Result<Vec<u8>> {
+    let mut encoder = device.create_command_encoder(&Default::default());
+    let readback = TextureReadback::record(device, &mut encoder, texture);
+    queue.submit([encoder.finish()]);
+    readback.read(device)
+}

@@ -1,6 +1,8 @@
 //! What every compute stage shares: compiling a kernel with the bindings its entry point
 //! uses, binding buffers by number, and dispatching any number of invocations.
 
+use wgpu::util::DeviceExt;
+
 use crate::error::{Error, Result};
 use crate::shaders;
 
@@ -163,4 +165,93 @@ pub(crate) fn storage(device: &wgpu::Device, label: &str, size: u64) -> wgpu::Bu
             | wgpu::BufferUsages::COPY_DST,
         mapped_at_creation: false,
     })
+}
+
+/// A 2D texture the kernels bind as a storage texture (`usage` besides). The kernels
+/// read their tables from storage textures rather than storage buffers or sampled
+/// textures: on a CPU device (llvmpipe) a storage-buffer read at per-lane addresses is a
+/// loop over the lanes, and a sampled fetch loads its mip level's layout lane by lane
+/// (see `shaders/shared/map.wgsl`).
+pub(crate) fn storage_texture(
+    device: &wgpu::Device,
+    label: &str,
+    format: wgpu::TextureFormat,
+    (width, height): (u32, u32),
+    usage: wgpu::TextureUsages,
+) -> wgpu::Texture {
+    device.create_texture(&wgpu::TextureDescriptor {
+        label: Some(label),
+        size: wgpu::Extent3d {
+            width,
+            height,
+            depth_or_array_layers: 1,
+        },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format,
+        usage: wgpu::TextureUsages::STORAGE_BINDING | usage,
+        view_formats: &[],
+    })
+}
+
+/// A storage texture, empty, and a buffer holding its texels: the stages' constructors
+/// take no queue, so their first recording copies one into the other
+/// ([`TextureUpload::record`]).
+pub(crate) struct TextureUpload {
+    staging: wgpu::Buffer,
+    pub texture: wgpu::Texture,
+    bytes_per_row: u32,
+}
+
+impl TextureUpload {
+    /// `texels`: the texture's rows, row-major, without padding.
+    pub fn new(
+        device: &wgpu::Device,
+        label: &str,
+        format: wgpu::TextureFormat,
+        (width, height): (u32, u32),
+        texels: &[u8],
+    ) -> Self {
+        let texture = storage_texture(
+            device,
+            label,
+            format,
+            (width, height),
+            wgpu::TextureUsages::COPY_DST,
+        );
+        let row = texels.len() / height as usize;
+        // Buffer-to-texture copies take rows padded to 256 bytes.
+        let bytes_per_row = (row as u32).next_multiple_of(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT);
+        let mut contents = vec![0u8; bytes_per_row as usize * height as usize];
+        for (y, bytes) in texels.chunks(row).enumerate() {
+            contents[y * bytes_per_row as usize..][..bytes.len()].copy_from_slice(bytes);
+        }
+        let staging = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some(label),
+            contents: &contents,
+            usage: wgpu::BufferUsages::COPY_SRC,
+        });
+        TextureUpload {
+            staging,
+            texture,
+            bytes_per_row,
+        }
+    }
+
+    /// Records the copy of the texels into the texture.
+    pub fn record(&self, encoder: &mut wgpu::CommandEncoder) {
+        encoder.copy_buffer_to_texture(
+            wgpu::TexelCopyBufferInfo {
+                buffer: &self.staging,
+                layout: wgpu::TexelCopyBufferLayout {
+                    offset: 0,
+                    bytes_per_row: Some(self.bytes_per_row),
+                    rows_per_image: None,
+                },
+            },
+            self.texture.as_image_copy(),
+            self.texture.size(),
+        );
+    }
 }

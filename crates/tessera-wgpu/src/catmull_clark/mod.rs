@@ -26,12 +26,14 @@ mod uniform;
 pub use stage::{CcCapacities, CcKernels, CcStage, CcStatus};
 pub use uniform::{CcUniformKernels, CcUniformStage};
 
+use std::sync::Mutex;
+
 use tessera_core::catmull_clark::gpu_model::CcGpuModel;
 use tessera_core::gpu_types::{CcHashSlot, CcHashStatus, NetTexture};
 use wgpu::util::DeviceExt;
 
 use crate::error::{Error, Result};
-use crate::kernel::{check_size, check_upload, storage, Kernel};
+use crate::kernel::{check_size, check_upload, storage, Kernel, TextureUpload};
 use crate::scan::{PrefixSum, ScanKernels};
 
 /// The flattened quadtrees on the GPU (bindings 20–24 of the Catmull-Clark kernels).
@@ -39,15 +41,15 @@ pub struct CcModelBuffers {
     pub roots: wgpu::Buffer,
     pub nodes: wgpu::Buffer,
     pub splits: wgpu::Buffer,
-    /// The Bézier nets as uploaded, in the row layout of [`NetTexture`] (whole rows,
-    /// zero-padded), copied into [`nets_texture`](Self::nets_texture) by
-    /// [`record_nets_copy`](Self::record_nets_copy).
-    pub nets: wgpu::Buffer,
-    /// What the kernels read (binding 23): a read-only `rgba32float` storage texture,
-    /// where a storage buffer read at per-lane addresses is a loop over the lanes on a
-    /// CPU device (the nets' reads were a fifth of the mark kernel's samples on lavapipe).
-    pub nets_texture: wgpu::Texture,
+    /// The Bézier nets ([`NetTexture`], binding 23): a read-only `rgba32float` storage
+    /// texture, where a storage buffer read at per-lane addresses is a loop over the
+    /// lanes on a CPU device (the nets' reads were a fifth of the mark kernel's samples
+    /// on lavapipe).
+    pub nets: wgpu::Texture,
     nets_view: wgpu::TextureView,
+    /// The nets' texels, until the first recording copies them in
+    /// ([`record_upload`](Self::record_upload); the constructor has no queue).
+    nets_upload: Mutex<Option<TextureUpload>>,
     pub corners: wgpu::Buffer,
     sizes: [usize; 5],
 }
@@ -98,59 +100,38 @@ impl CcModelBuffers {
                 usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
             })
         };
-        // The nets' buffer holds whole texture rows, so that one copy fills the texture.
-        let net_bytes: &[u8] = bytemuck::cast_slice(&model.nets);
-        let mut rows = vec![0u8; NetTexture::bytes(model.nets.len()) as usize];
-        rows[..net_bytes.len()].copy_from_slice(net_bytes);
-        let nets = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("tessera cc nets"),
-            contents: &rows,
-            usage: wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
-        });
-        let nets_texture = device.create_texture(&wgpu::TextureDescriptor {
-            label: Some("tessera cc net texture"),
-            size: wgpu::Extent3d {
-                width,
-                height,
-                depth_or_array_layers: 1,
-            },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format: wgpu::TextureFormat::Rgba32Float,
-            usage: wgpu::TextureUsages::STORAGE_BINDING | wgpu::TextureUsages::COPY_DST,
-            view_formats: &[],
-        });
+        let nets = TextureUpload::new(
+            device,
+            "tessera cc net texture",
+            wgpu::TextureFormat::Rgba32Float,
+            (width, height),
+            bytemuck::cast_slice(&NetTexture::new(&model.nets).texels),
+        );
         Ok(CcModelBuffers {
             roots: init("tessera cc roots", bytemuck::cast_slice(&model.roots)),
             nodes: init("tessera cc nodes", bytemuck::cast_slice(&model.nodes)),
             splits: init("tessera cc splits", bytemuck::cast_slice(&model.splits)),
-            nets,
-            nets_view: nets_texture.create_view(&Default::default()),
-            nets_texture,
+            nets_view: nets.texture.create_view(&Default::default()),
+            nets: nets.texture.clone(),
+            nets_upload: Mutex::new(Some(nets)),
             corners: init("tessera cc corners", bytemuck::cast_slice(&model.corners)),
             sizes: byte_sizes(model),
         })
     }
 
-    /// Records the copy of the nets into their texture. Every recording that runs the
-    /// kernels starts with it (the stages' `prepare` and [`CcVertexEval::record`] do), so
-    /// that [`update`](Self::update) needs nothing else.
-    pub fn record_nets_copy(&self, encoder: &mut wgpu::CommandEncoder) {
-        let t = &self.nets_texture;
-        encoder.copy_buffer_to_texture(
-            wgpu::TexelCopyBufferInfo {
-                buffer: &self.nets,
-                layout: wgpu::TexelCopyBufferLayout {
-                    offset: 0,
-                    // One row needs no pitch; whole rows are 256 nets, 49 152 bytes.
-                    bytes_per_row: (t.height() > 1).then_some(16 * t.width()),
-                    rows_per_image: None,
-                },
-            },
-            t.as_image_copy(),
-            t.size(),
-        );
+    /// Records the one-time copy of the nets into their texture, if it is still
+    /// pending. Every recording that runs the kernels starts with it (the stages'
+    /// `prepare` and [`CcVertexEval::record`] do); the first such encoder must be
+    /// submitted, not dropped.
+    pub fn record_upload(&self, encoder: &mut wgpu::CommandEncoder) {
+        let pending = self
+            .nets_upload
+            .lock()
+            .unwrap_or_else(|e| e.into_inner())
+            .take();
+        if let Some(upload) = pending {
+            upload.record(encoder);
+        }
     }
 
     /// Re-uploads a model of the same shape (the control points moved, the topology did
@@ -169,8 +150,24 @@ impl CcModelBuffers {
         write(&self.roots, bytemuck::cast_slice(&model.roots));
         write(&self.nodes, bytemuck::cast_slice(&model.nodes));
         write(&self.splits, bytemuck::cast_slice(&model.splits));
-        write(&self.nets, bytemuck::cast_slice(&model.nets));
         write(&self.corners, bytemuck::cast_slice(&model.corners));
+        // The whole texture is written, so a first copy still pending would only put the
+        // old nets back.
+        self.nets_upload
+            .lock()
+            .unwrap_or_else(|e| e.into_inner())
+            .take();
+        let texels = NetTexture::new(&model.nets);
+        queue.write_texture(
+            self.nets.as_image_copy(),
+            bytemuck::cast_slice(&texels.texels),
+            wgpu::TexelCopyBufferLayout {
+                offset: 0,
+                bytes_per_row: Some(16 * texels.width),
+                rows_per_image: None,
+            },
+            self.nets.size(),
+        );
         Ok(())
     }
 
@@ -221,7 +218,7 @@ impl CcVertexEval {
         out: &wgpu::Buffer,
         max_points: u32,
     ) {
-        model.record_nets_copy(encoder);
+        model.record_upload(encoder);
         let bind = self.bind(device, model, points, counts, out);
         self.record_bound(encoder, &bind, max_points);
     }
@@ -242,8 +239,8 @@ impl CcVertexEval {
     }
 
     /// [`record`](Self::record) with a bind group made by [`bind`](Self::bind). The
-    /// nets must have been copied into their texture in the same recording
-    /// ([`CcModelBuffers::record_nets_copy`]; `record` does it).
+    /// nets must have been copied into their texture by this or an earlier recording
+    /// ([`CcModelBuffers::record_upload`]; `record` does it).
     pub fn record_bound(
         &self,
         encoder: &mut wgpu::CommandEncoder,

@@ -433,9 +433,8 @@ impl CcStage {
         encoder: &mut wgpu::CommandEncoder,
         mut stamps: Option<(&wgpu::QuerySet, &mut Vec<String>)>,
     ) {
-        // The kernels read the nets from their texture, refreshed from the buffer each
-        // run (`update` writes the buffer).
-        self.model.record_nets_copy(encoder);
+        // The nets' first copy into their texture (`update_points` writes it directly).
+        self.model.record_upload(encoder);
         let mut stamp = |encoder: &mut wgpu::CommandEncoder, name: &str| {
             if let Some((set, names)) = stamps.as_mut() {
                 if !name.is_empty() {
@@ -924,7 +923,7 @@ impl Binds {
         // parity 1 is cells[0].
         let even = common(0);
         let odd = common(1);
-        // The nets are a texture (see `CcModelBuffers::nets_texture`).
+        // The nets are a texture (see `CcModelBuffers::nets`).
         let bind = |kernel: &Kernel, entries: &[(u32, &wgpu::Buffer)]| {
             kernel.bind_with_textures(device, entries, &model.textures())
         };

@@ -178,7 +178,7 @@ impl CcUniformStage {
         _queue: &wgpu::Queue,
         encoder: &mut wgpu::CommandEncoder,
     ) {
-        self.model.record_nets_copy(encoder);
+        self.model.record_upload(encoder);
         let p = &self.params;
         let side = p.segments + 1;
         let [points, eval, cells] = &self.sized.binds;
