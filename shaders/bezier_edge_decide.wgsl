@@ -13,7 +13,9 @@
 @group(0) @binding(1) var nets: texture_storage_2d<rgba32float, read>;
 @group(0) @binding(2) var maps: texture_storage_2d<rgba16float, read>;
 @group(0) @binding(3) var topology: texture_storage_2d<rgba32uint, read>;
-@group(0) @binding(6) var<storage, read_write> edge_bits: array<vec4u>;
+// The edges' bit sets go to the scratch (`edge_set_word`), where the triangle kernels read
+// them with plain loads.
+@group(0) @binding(8) var scratch: texture_storage_2d<r32uint, write>;
 @group(0) @binding(7) var<storage, read_write> counts: array<u32>;
 @group(0) @binding(14) var<storage, read_write> tally: array<atomic<u32>>;
 
@@ -92,8 +94,16 @@ fn main(@builtin(global_invocation_id) gid: vec3u, @builtin(num_workgroups) grou
             lo += DYADIC_SCALE >> level;
         }
     }
-    edge_bits[2u * e] = bits.lo;
-    edge_bits[2u * e + 1u] = bits.hi;
+    // Written out: a vector indexed by a loop counter can become memory per lane.
+    let w = edge_set_word(e);
+    textureStore(scratch, scratch_texel(w), vec4u(bits.lo.x));
+    textureStore(scratch, scratch_texel(w + 1u), vec4u(bits.lo.y));
+    textureStore(scratch, scratch_texel(w + 2u), vec4u(bits.lo.z));
+    textureStore(scratch, scratch_texel(w + 3u), vec4u(bits.lo.w));
+    textureStore(scratch, scratch_texel(w + 4u), vec4u(bits.hi.x));
+    textureStore(scratch, scratch_texel(w + 5u), vec4u(bits.hi.y));
+    textureStore(scratch, scratch_texel(w + 6u), vec4u(bits.hi.z));
+    textureStore(scratch, scratch_texel(w + 7u), vec4u(bits.hi.w));
     counts[e] = set_count(bits);
     if flat_evaluations > 0u {
         atomicAdd(&tally[TALLY_EVALUATIONS], flat_evaluations);

@@ -14,7 +14,6 @@
 @group(0) @binding(1) var nets: texture_storage_2d<rgba32float, read>;
 @group(0) @binding(2) var maps: texture_storage_2d<rgba16float, read>;
 @group(0) @binding(3) var topology: texture_storage_2d<rgba32uint, read>;
-@group(0) @binding(6) var<storage, read> edge_bits: array<vec4u>;
 @group(0) @binding(7) var<storage, read> counts: array<u32>;
 @group(0) @binding(8) var scratch: texture_storage_2d<r32uint, read>;
 @group(0) @binding(9) var<storage, read_write> records: array<VertexRecord>;

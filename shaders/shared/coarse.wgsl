@@ -234,6 +234,19 @@ fn lerp_uv(a: vec2f, b: vec2f, k: u32) -> vec2f {
 // or a storage access, is a scalar loop over the lanes on a CPU device).
 const_assert EDGE_BIT_WORDS == 8u;
 
+// Word w of the scratch: a texel of an r32uint storage texture, `scratch` in the
+// kernels that declare it. A texture, not a storage buffer: a CPU device reads a buffer
+// at per-lane addresses in a loop over the lanes, and a texture with plain loads.
+fn scratch_texel(w: u32) -> vec2u {
+    return vec2u(w & ((1u << params.scratch_shift) - 1u), w >> params.scratch_shift);
+}
+
+// The scratch holds each coarse triangle's words (`tri_ctx`), then each coarse edge's
+// bit set, EDGE_BIT_WORDS words from this one (twin of `ScratchLayout`).
+fn edge_set_word(e: u32) -> u32 {
+    return params.coarse_triangles * (params.points_words + params.pole_words + 1u) + EDGE_BIT_WORDS * e;
+}
+
 struct EdgeSet {
     lo: vec4u,
     hi: vec4u,

@@ -1,14 +1,20 @@
 // Refinement of one coarse triangle by right-triangle bisection on its lattice.
 // Twin of `tessera_core::bezier::refine` (read that file for the why).
-// Reads `edge_bits` (array<vec4u>, EDGE_BIT_WORDS / 4 per coarse edge) and `scratch`
-// (an r32uint storage texture of words, points then pole words per coarse triangle, see
-// `scratch_word`). Kernels that include this
+// Reads `scratch` (an r32uint storage texture of words: points, pole and group words per
+// coarse triangle, then the coarse edges' bit sets, see `scratch_word` and
+// `edge_set_word`). Kernels that include this
 // file define the sink: `fn sink_triangle(a: VRef, b: VRef, c: VRef)` and
 // `fn inner_rank(ctx: TriCtx, i: u32) -> u32`.
 
-// A side's set, loaded once per coarse triangle (`EdgeSet` is in coarse.wgsl).
+// A side's set, loaded once per coarse triangle (`EdgeSet` is in coarse.wgsl) as eight
+// texel fetches: from a storage buffer, its two vec4 loads were loops over the lanes
+// with an insert per word, 70% of the root kernel.
 fn edge_set(e: u32) -> EdgeSet {
-    return EdgeSet(edge_bits[2u * e], edge_bits[2u * e + 1u]);
+    let w = edge_set_word(e);
+    return EdgeSet(
+        vec4u(scratch_word(w), scratch_word(w + 1u), scratch_word(w + 2u), scratch_word(w + 3u)),
+        vec4u(scratch_word(w + 4u), scratch_word(w + 5u), scratch_word(w + 6u), scratch_word(w + 7u)),
+    );
 }
 
 // What the triangle stages of one coarse triangle read (twin of `TriContext`).
@@ -95,14 +101,8 @@ fn pole_index(l: Lattice, k: u32, f: u32) -> u32 {
     return k * (l.n + 1u) + f;
 }
 
-// Word w of the triangles' bit sets: a texel of the scratch texture, which the kernel
-// declares as an r32uint storage texture (read-write in `bezier_tri_mark`, read-only
-// elsewhere). A texture, not a storage buffer: a CPU device reads a buffer at per-lane
-// addresses in a loop over the lanes, and a texture with plain loads.
-fn scratch_texel(w: u32) -> vec2u {
-    return vec2u(w & ((1u << params.scratch_shift) - 1u), w >> params.scratch_shift);
-}
-
+// Word w of the scratch (`scratch_texel`), which the kernel declares as an r32uint
+// storage texture (read-write in `bezier_tri_mark`, read-only elsewhere).
 fn scratch_word(w: u32) -> u32 {
     return textureLoad(scratch, scratch_texel(w)).x;
 }

@@ -6,8 +6,8 @@
 //! | # | kernel | per | writes |
 //! |---|---|---|---|
 //! | 0 | copy + `bezier_map_cells`, first recording only | — / map cell | the control-net texture (the constructor has no queue); the displacement-map atlas, built from the maps as uploaded |
-//! | 1 | `bezier_edge_decide` | coarse edge | edge bit sets, edge vertex counts |
-//! | 2 | clear + `bezier_tri_roots` + `bezier_tri_mark` (indirect, over the triangles whose root may split) | coarse triangle | lattice points (bit sets in the `r32uint` scratch texture, cleared by copies of zeros), inner vertex and triangle counts, emit-order buckets |
+//! | 1 | clear + `bezier_edge_decide` | coarse edge | edge bit sets (in the `r32uint` scratch texture, after the triangles' words), edge vertex counts |
+//! | 2 | `bezier_tri_roots` + `bezier_tri_mark` (indirect, over the triangles whose root may split) | coarse triangle | lattice points (bit sets in the scratch texture, cleared by copies of zeros before step 1), inner vertex and triangle counts, emit-order buckets |
 //! | 3 | `scan` (multi-level) | — | offsets of all three counts in one exclusive scan |
 //! | 4 | `bezier_finish` | 1 | totals, overflow flags, draw arguments, vertex dispatch, the emit order's bucket slots |
 //! | 4b | `bezier_tri_order` | coarse triangle | the emit order: those that make the most triangles first, the plain ones (no points; one triangle) last |
@@ -78,7 +78,6 @@ mod slot {
     pub const NETS: u32 = 1;
     pub const MAPS: u32 = 2;
     pub const TOPOLOGY: u32 = 3;
-    pub const EDGE_BITS: u32 = 6;
     pub const COUNTS: u32 = 7;
     pub const SCRATCH: u32 = 8;
     pub const RECORDS: u32 = 9;
@@ -246,7 +245,6 @@ impl BindGroups {
         use slot::*;
         let all = [
             (PARAMS, &b.uniform),
-            (EDGE_BITS, &b.edge_bits),
             (COUNTS, &b.counts),
             (RECORDS, &b.records),
             (VERTICES, &b.output.vertices),
@@ -307,7 +305,6 @@ struct Buffers {
     /// Patch topology and curves ([`TopologyTexture`]).
     topology: wgpu::TextureView,
     coarse_records: wgpu::Buffer,
-    edge_bits: wgpu::Buffer,
     counts: wgpu::Buffer,
     scan: PrefixSum,
     scratch: Scratch,
@@ -335,14 +332,37 @@ fn triangle_stride(depth: u32) -> u32 {
     points + pole + 1
 }
 
-/// The coarse triangles' bit sets: word `w` is texel `(w mod width, w / width)` of an
-/// `r32uint` storage texture, `width = 1 << shift`. A texture, not a buffer: a CPU device
-/// (llvmpipe) reads a storage buffer at per-lane addresses in a loop over the lanes that
-/// stalls on each lane's insert, and reads a storage texture with plain loads.
+/// Where the scratch's words are (twin of `scratch_texel`'s callers in the shaders): each
+/// coarse triangle's `triangle_stride` words, then each coarse edge's bit set,
+/// `EDGE_BIT_WORDS` words from `edge_sets` on (`edge_set_word`).
+#[derive(Clone, Copy)]
+struct ScratchLayout {
+    edge_sets: u64,
+    words: u64,
+}
+
+impl ScratchLayout {
+    fn new(depth: u32, l: tessera_core::bezier::prepare::CoarseLayout) -> Self {
+        let edge_sets = triangle_stride(depth) as u64 * l.coarse_triangles as u64;
+        ScratchLayout {
+            edge_sets,
+            words: edge_sets + EDGE_BIT_WORDS as u64 * l.coarse_edges as u64,
+        }
+    }
+}
+
+/// The coarse triangles' bit sets, then the coarse edges' ([`ScratchLayout`]): word `w`
+/// is texel `(w mod width, w / width)` of an `r32uint` storage texture, `width = 1 <<
+/// shift`. A texture, not a buffer: a CPU device (llvmpipe) reads a storage buffer at
+/// per-lane addresses in a loop over the lanes that stalls on each lane's insert, and
+/// reads a storage texture with plain loads.
 struct Scratch {
     texture: wgpu::Texture,
     view: wgpu::TextureView,
     shift: u32,
+    /// The rows that hold the triangles' words, the ones each run clears (the edge
+    /// kernel writes every word of the edges' sets).
+    triangle_rows: u32,
     /// Zeros for clearing it, `ZERO_ROWS` rows at most: copied over the texture in
     /// bands, since clearing a texture directly needs a feature WebGPU lacks.
     zeros: wgpu::Buffer,
@@ -352,8 +372,8 @@ impl Scratch {
     /// Rows of zeros copied at once when the texture is cleared.
     const ZERO_ROWS: u32 = 64;
 
-    fn new(device: &wgpu::Device, depth: u32, coarse_triangles: u32) -> Result<Self> {
-        let words = triangle_stride(depth) as u64 * coarse_triangles as u64;
+    fn new(device: &wgpu::Device, layout: ScratchLayout) -> Result<Self> {
+        let words = layout.words;
         let max_side = device.limits().max_texture_dimension_2d;
         // As wide as the words need up to the widest power of two the device allows
         // (and 64 words at least: copy rows are multiples of 256 bytes).
@@ -362,23 +382,25 @@ impl Scratch {
         let height = words.div_ceil(width as u64);
         if height > max_side as u64 {
             return Err(Error::OutputTooLarge {
-                what: "triangle scratch",
+                what: "scratch",
                 bytes: 4 * words,
                 limit: 4 * widest as u64 * max_side as u64,
             });
         }
         let texture = storage_texture(
             device,
-            "tessera triangle scratch",
+            "tessera scratch",
             wgpu::TextureFormat::R32Uint,
             (width, height as u32),
             wgpu::TextureUsages::COPY_DST | wgpu::TextureUsages::COPY_SRC,
         );
-        let zero_rows = (height as u32).min(Self::ZERO_ROWS);
+        let triangle_rows = layout.edge_sets.div_ceil(width as u64) as u32;
+        let zero_rows = triangle_rows.clamp(1, Self::ZERO_ROWS);
         Ok(Scratch {
             view: texture.create_view(&Default::default()),
             texture,
             shift: width.trailing_zeros(),
+            triangle_rows,
             zeros: device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("tessera scratch zeros"),
                 size: 4 * width as u64 * zero_rows as u64,
@@ -388,10 +410,11 @@ impl Scratch {
         })
     }
 
-    /// Records the copies that zero every word.
+    /// Records the copies that zero the triangles' words (and the first edge words that
+    /// share their last row, which the edge kernel writes after).
     fn clear(&self, encoder: &mut wgpu::CommandEncoder) {
-        let (width, height) = (self.texture.width(), self.texture.height());
-        let band = Self::ZERO_ROWS.min(height);
+        let (width, height) = (self.texture.width(), self.triangle_rows);
+        let band = Self::ZERO_ROWS.min(height).max(1);
         for y in (0..height).step_by(band as usize) {
             let rows = band.min(height - y);
             encoder.copy_buffer_to_texture(
@@ -472,11 +495,6 @@ impl BezierStage {
         // The scan's values, then the emit order and each triangle's bucket in it.
         let counts_bytes = 4 * (counts_len as u64 + 2 * l.coarse_triangles as u64);
         check_size(device, "count", counts_bytes)?;
-        check_size(
-            device,
-            "edge bits",
-            4 * (EDGE_BIT_WORDS as u64) * l.coarse_edges as u64,
-        )?;
         let counts = storage(device, "tessera counts", counts_bytes);
         let scan = PrefixSum::new(device, &pipelines.0.scan, &counts, counts_len);
         let uniform = device.create_buffer(&wgpu::BufferDescriptor {
@@ -581,14 +599,9 @@ impl BezierStage {
                 "tessera coarse vertices",
                 bytemuck::cast_slice(&coarse_records),
             ),
-            edge_bits: storage(
-                device,
-                "tessera edge bits",
-                4 * (EDGE_BIT_WORDS as u64) * l.coarse_edges as u64,
-            ),
             counts,
             scan,
-            scratch: Scratch::new(device, params.max_depth, l.coarse_triangles)?,
+            scratch: Scratch::new(device, ScratchLayout::new(params.max_depth, l))?,
             records: storage(
                 device,
                 "tessera vertex records",
@@ -621,7 +634,7 @@ impl BezierStage {
         let mut rebind = false;
         if params.max_depth != self.params.max_depth {
             let l = self.prepared_layout;
-            self.buffers.scratch = Scratch::new(device, params.max_depth, l.coarse_triangles)?;
+            self.buffers.scratch = Scratch::new(device, ScratchLayout::new(params.max_depth, l))?;
             rebind = true;
         }
         if params.test != self.params.test
@@ -771,11 +784,12 @@ impl BezierStage {
                 // The scan's trailing slot collects the grand total: zero it each run.
                 encoder.clear_buffer(&b.counts, 4 * (counts_len as u64 - 1), Some(4));
                 encoder.clear_buffer(&b.tally, 0, None);
-            }
-            // The triangles' bit sets start empty: a memset here, where zeroing them in
-            // the kernel was a store per word and lane.
-            Step::TriMark => {
+                // The triangles' bit sets start empty: a memset here, where zeroing them
+                // in the kernel was a store per word and lane. Before the edge kernel,
+                // which writes every edge's set into the same texture.
                 b.scratch.clear(encoder);
+            }
+            Step::TriMark => {
                 // The root kernel raises the mark kernel's dispatch from zero.
                 let dispatch = std::mem::offset_of!(BezierStatus, mark_dispatch) as u64;
                 encoder.clear_buffer(&b.status, dispatch, Some(12));
@@ -928,15 +942,18 @@ impl BezierStage {
         Ok(bytemuck::pod_collect_to_vec(&texels))
     }
 
-    /// The scratch words in order, without the last row's padding.
-    fn read_scratch(&self, device: &wgpu::Device, queue: &wgpu::Queue) -> Result<Vec<u32>> {
+    /// The scratch words in order: the triangles' words, then the edges' bit sets.
+    fn read_scratch(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+    ) -> Result<(Vec<u32>, Vec<u32>)> {
         let texels = read_texture(device, queue, &self.buffers.scratch.texture)?;
         let mut words: Vec<u32> = bytemuck::pod_collect_to_vec(&texels);
-        words.truncate(
-            (triangle_stride(self.params.max_depth) * self.prepared_layout.coarse_triangles)
-                as usize,
-        );
-        Ok(words)
+        let layout = ScratchLayout::new(self.params.max_depth, self.prepared_layout);
+        words.truncate(layout.words as usize);
+        let edge_sets = words.split_off(layout.edge_sets as usize);
+        Ok((words, edge_sets))
     }
 
     /// The intermediate buffers, for comparison with the CPU twins in tests: the map
@@ -960,13 +977,14 @@ impl BezierStage {
         let l = self.prepared_layout;
         let mut order = counts.split_off((l.coarse_edges + 2 * l.coarse_triangles + 1) as usize);
         let order_buckets = order.split_off(l.coarse_triangles as usize);
+        let (scratch, edge_bits) = self.read_scratch(device, queue)?;
         Ok(Intermediates {
             map_atlas: self.read_map_atlas(device, queue)?,
-            edge_bits: words(&self.buffers.edge_bits)?,
+            edge_bits,
             counts,
             order,
             order_buckets,
-            scratch: self.read_scratch(device, queue)?,
+            scratch,
             points_words,
             pole_words,
             stride: triangle_stride(self.params.max_depth),

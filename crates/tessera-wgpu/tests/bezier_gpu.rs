@@ -542,7 +542,7 @@ fn textures_past_the_texture_limit_are_an_error() {
     ));
     let mut stage = BezierStage::new(&gpu.device, &small, &params).expect("sixteen patches fit");
     // At depth 8 their 288 coarse triangles' bit sets take 1063 words each: 1196 rows of
-    // 256 texels.
+    // 256 texels, before the edges' sets.
     let deep = AdaptiveParams {
         max_depth: 8,
         ..params
@@ -556,7 +556,7 @@ fn textures_past_the_texture_limit_are_an_error() {
             matches!(
                 err,
                 tessera_wgpu::Error::OutputTooLarge {
-                    what: "triangle scratch",
+                    what: "scratch",
                     ..
                 }
             ),
