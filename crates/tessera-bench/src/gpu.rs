@@ -98,26 +98,30 @@ pub fn run(assets: &Path, out_dir: &Path, quick: bool) {
             let status = stage
                 .run_blocking(&gpu.device, &gpu.queue)
                 .expect("first run");
-            let gpu_ms =
-                gpu_median_ms(&gpu, repeats, |e| stage.prepare(&gpu.device, &gpu.queue, e));
+            // The GPU and the CPU reference run in turns, one run each per round, so that
+            // both see the same state of this shared machine: timed in two bursts, the
+            // ratio moved with whatever the machine did between them.
+            let mut gpu_runs = Vec::new();
+            let mut cpu_runs = Vec::new();
+            let mut cpu_triangles = 0;
+            let mut stages = Vec::new();
+            for _ in 0..repeats {
+                gpu_runs.push(gpu_run_ms(&gpu, |e| {
+                    stage.prepare(&gpu.device, &gpu.queue, e)
+                }));
+                let t = Instant::now();
+                let (out, s) = tessellate_adaptive_timed(&prep, &params).expect("cpu");
+                cpu_runs.push(t.elapsed().as_secs_f64() * 1e3);
+                cpu_triangles = out.mesh.triangle_count();
+                stages.push(s);
+            }
             gpu.check().expect("no wgpu errors");
+            let gpu_ms = median(gpu_runs);
+            let cpu_ms = median(cpu_runs);
             // One kernel per submission, for the per-kernel column (not the timed run).
             let kernels_ms = stage
                 .profile_kernels(&gpu.device, &gpu.queue)
                 .expect("profile");
-            let mut cpu_triangles = 0;
-            let mut stages = Vec::new();
-            let cpu_ms = median(
-                (0..repeats)
-                    .map(|_| {
-                        let t = Instant::now();
-                        let (out, s) = tessellate_adaptive_timed(&prep, &params).expect("cpu");
-                        cpu_triangles = out.mesh.triangle_count();
-                        stages.push(s);
-                        t.elapsed().as_secs_f64() * 1e3
-                    })
-                    .collect(),
-            );
             let stage_median = |f: fn(&StageTimes) -> f64| median(stages.iter().map(f).collect());
             let cpu_stages_ms = vec![
                 ("edge_decide".to_string(), stage_median(|s| s.edge_decide)),
@@ -167,23 +171,22 @@ pub(crate) fn gpu_median_ms(
     repeats: usize,
     mut record: impl FnMut(&mut tessera_wgpu::wgpu::CommandEncoder),
 ) -> f64 {
-    median(
-        (0..repeats)
-            .map(|_| {
-                let t = Instant::now();
-                let mut encoder = gpu.device.create_command_encoder(&Default::default());
-                record(&mut encoder);
-                gpu.queue.submit([encoder.finish()]);
-                gpu.wait().expect("gpu");
-                t.elapsed().as_secs_f64() * 1e3
-            })
-            .collect(),
-    )
+    median((0..repeats).map(|_| gpu_run_ms(gpu, &mut record)).collect())
+}
+
+/// One run of what `record` puts into an encoder: recorded, submitted and waited for (ms).
+fn gpu_run_ms(gpu: &Gpu, record: impl FnOnce(&mut tessera_wgpu::wgpu::CommandEncoder)) -> f64 {
+    let t = Instant::now();
+    let mut encoder = gpu.device.create_command_encoder(&Default::default());
+    record(&mut encoder);
+    gpu.queue.submit([encoder.finish()]);
+    gpu.wait().expect("gpu");
+    t.elapsed().as_secs_f64() * 1e3
 }
 
 fn table(r: &GpuReport) -> String {
     let mut s = format!(
-        "Measured by `cargo xtask bench` on {} (map4p, max depth 6; medians of {} runs; GPU time = record + submit + wait, after a first run that sizes the buffers; CPU = the reference twins, one thread).\n\n",
+        "Measured by `cargo xtask bench` on {} (map4p, max depth 6; medians of {} runs, GPU and CPU in turns; GPU time = record + submit + wait, after a first run that sizes the buffers; CPU = the reference twins, one thread).\n\n",
         r.adapter, r.repeats
     );
     s += "| patches | threshold | triangles | CPU (ms) | GPU (ms) | GPU speed-up | GPU triangles/s | GPU kernels alone (ms) | CPU stages (ms) |\n|---:|---:|---:|---:|---:|---:|---:|---|---|\n";
