@@ -145,16 +145,59 @@ fn cc_side_points(s: u32) -> array<vec3f, 4> {
     }
 }
 
+// The range of the seven control values of a cubic split at its middle (twin of
+// `halved_range`).
+fn cc_halved_range(a: vec4f) -> vec2f {
+    let b01 = 0.5 * (a.x + a.y);
+    let b12 = 0.5 * (a.y + a.z);
+    let b23 = 0.5 * (a.z + a.w);
+    let c0 = 0.5 * (b01 + b12);
+    let c1 = 0.5 * (b12 + b23);
+    let m = 0.5 * (c0 + c1);
+    let lo = min(min(min(a.x, b01), min(c0, m)), min(min(c1, b23), a.w));
+    let hi = max(max(max(a.x, b01), max(c0, m)), max(max(c1, b23), a.w));
+    return vec2f(lo, hi);
+}
+
+// Column i of the piece's heights above the slab's plane (rows v = 0..3 as components).
+fn cc_heights(i: u32) -> vec4f {
+    return vec4f(dot(bs_normal, bs_net[i] + bs_offset), dot(bs_normal, bs_net[4u + i] + bs_offset),
+        dot(bs_normal, bs_net[8u + i] + bs_offset), dot(bs_normal, bs_net[12u + i] + bs_offset));
+}
+
+// The range of the 7 x 7 control values of a bicubic split at u = v = 1/2, from its four
+// columns: split along u as vectors, then each of the seven along v (twin of
+// `halved_grid_range`).
+fn cc_halved_grid_range(c0: vec4f, c1: vec4f, c2: vec4f, c3: vec4f) -> vec2f {
+    let b01 = 0.5 * (c0 + c1);
+    let b12 = 0.5 * (c1 + c2);
+    let b23 = 0.5 * (c2 + c3);
+    let d0 = 0.5 * (b01 + b12);
+    let d1 = 0.5 * (b12 + b23);
+    let m = 0.5 * (d0 + d1);
+    // Written out: an array indexed by a loop counter can become memory per lane.
+    let r0 = cc_halved_range(c0);
+    let r1 = cc_halved_range(b01);
+    let r2 = cc_halved_range(d0);
+    let r3 = cc_halved_range(m);
+    let r4 = cc_halved_range(d1);
+    let r5 = cc_halved_range(b23);
+    let r6 = cc_halved_range(c3);
+    let lo = min(min(min(r0.x, r1.x), min(r2.x, r3.x)), min(min(r4.x, r5.x), r6.x));
+    let hi = max(max(max(r0.y, r1.y), max(r2.y, r3.y)), max(max(r4.y, r5.y), r6.y));
+    return vec2f(lo, hi);
+}
+
 // Whether the piece keeps the slab bound's conditions; its heights and side bands
 // summed. No early exit: loops of fixed length without one are unrolled by the
 // compiler, so that every array index is a constant (a lavapipe lane loop otherwise).
 // Where the piece fails, bs_slab turns false for good and the sums are never read.
 fn cc_slab_piece(sides: u32) -> bool {
-    for (var k = 0u; k < 16u; k++) {
-        let h = dot(bs_normal, bs_net[k] + bs_offset);
-        bs_lo = min(bs_lo, h);
-        bs_hi = max(bs_hi, h);
-    }
+    // The heights of the net split at u = v = 1/2 (twin of `halved_grid_range`).
+    let hr = cc_halved_grid_range(
+        cc_heights(0u), cc_heights(1u), cc_heights(2u), cc_heights(3u));
+    bs_lo = min(bs_lo, hr.x);
+    bs_hi = max(bs_hi, hr.y);
     // n · (a × b) > 0 for every u-step a and v-step b: with (e1, e2, n) right-handed
     // that is the perp-dot of their projections, which is cheaper.
     var du: array<vec2f, 12>;
@@ -185,14 +228,16 @@ fn cc_slab_piece(sides: u32) -> bool {
         let d = bs_chords[s];
         let pts = cc_side_points(s);
         let start = bs_corners[cc_side_start(s)];
-        var band = bs_band[s];
-        for (var t = 0u; t < 4u; t++) {
-            if t < 3u {
-                ok = ok && (!on || dot(cc_project(pts[t + 1u] - pts[t]), d) > 0.0);
-            }
-            let off = cc_perp_dot(d, cc_project(pts[t] + bs_offset - start));
-            band = vec2f(min(band.x, off), max(band.y, off));
+        for (var t = 0u; t < 3u; t++) {
+            ok = ok && (!on || dot(cc_project(pts[t + 1u] - pts[t]), d) > 0.0);
         }
+        // The side's offsets from its chord, split at its middle likewise.
+        let off = vec4f(cc_perp_dot(d, cc_project(pts[0] + bs_offset - start)),
+            cc_perp_dot(d, cc_project(pts[1] + bs_offset - start)),
+            cc_perp_dot(d, cc_project(pts[2] + bs_offset - start)),
+            cc_perp_dot(d, cc_project(pts[3] + bs_offset - start)));
+        let r = cc_halved_range(off);
+        let band = vec2f(min(bs_band[s].x, r.x), max(bs_band[s].y, r.y));
         bs_band[s] = select(bs_band[s], band, on);
     }
     return ok;

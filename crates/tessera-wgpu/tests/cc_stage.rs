@@ -152,7 +152,7 @@ fn gpu_adaptive_matches_the_cpu_reference() {
         let finer = tessellate_adaptive(
             &model,
             &CcParams {
-                tolerance: 0.8 * params.tolerance,
+                tolerance: 0.5 * params.tolerance,
                 ..params
             },
         )

@@ -225,11 +225,13 @@ impl BoundSum {
     /// pass to the end instead of returning early: a failing piece turns the slab bound
     /// off for good, so the sums it still adds are never read.)
     fn slab_piece(&mut self, shape: &Net, net: &Net, sides: u32) -> bool {
-        for p in net {
-            let h = self.normal.dot(*p);
-            self.lo = self.lo.min(h);
-            self.hi = self.hi.max(h);
-        }
+        // The heights of the net split at u = v = 1/2: the four halves' control points
+        // hold the surface more tightly than the net's (the bound over whole patches
+        // fell from 1.5 to 1.2 times the sampled error, median on Spot). A height is
+        // linear in the point, so the heights split as the points would.
+        let (lo, hi) = halved_grid_range(std::array::from_fn(|k| self.normal.dot(net[k])));
+        self.lo = self.lo.min(lo);
+        self.hi = self.hi.max(hi);
         // n · (a × b) > 0 for every u-step a and v-step b: with (e1, e2, n) right-handed
         // that is the perp-dot of their projections, which is cheaper.
         let mut du = [DVec2::ZERO; 12];
@@ -263,10 +265,9 @@ impl BoundSum {
                 }
             }
             let start = self.corners[start_corner];
-            for p in pts {
-                let off = d.perp_dot(project(self.plane, p - start));
-                self.band[s] = (self.band[s].0.min(off), self.band[s].1.max(off));
-            }
+            // The side's offsets from its chord, split at its middle likewise.
+            let (lo, hi) = halved_range(pts.map(|p| d.perp_dot(project(self.plane, p - start))));
+            self.band[s] = (self.band[s].0.min(lo), self.band[s].1.max(hi));
         }
         true
     }
@@ -327,6 +328,40 @@ impl BoundSum {
         }
         bound + ROUNDING_RELATIVE * self.scale_rel + ROUNDING_ABSOLUTE * self.scale_abs
     }
+}
+
+/// The range of the seven control values of a cubic (control values `a`) split at its
+/// middle by de Casteljau: it holds the cubic's values, more tightly than `a` does.
+pub fn halved_range(a: [f64; 4]) -> (f64, f64) {
+    let b01 = 0.5 * (a[0] + a[1]);
+    let b12 = 0.5 * (a[1] + a[2]);
+    let b23 = 0.5 * (a[2] + a[3]);
+    let c0 = 0.5 * (b01 + b12);
+    let c1 = 0.5 * (b12 + b23);
+    let m = 0.5 * (c0 + c1);
+    let all = [a[0], b01, c0, m, c1, b23, a[3]];
+    let lo = all.iter().copied().fold(f64::INFINITY, f64::min);
+    let hi = all.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    (lo, hi)
+}
+
+/// The range of the 7 × 7 control values of a bicubic (control values `h`, row-major in
+/// v) split at u = 1/2 and v = 1/2: the columns are split along u as vectors, then each
+/// of the seven along v ([`halved_range`]).
+pub fn halved_grid_range(h: [f64; 16]) -> (f64, f64) {
+    let col = |i: usize| [h[i], h[4 + i], h[8 + i], h[12 + i]];
+    let (c0, c1, c2, c3) = (col(0), col(1), col(2), col(3));
+    let mid =
+        |a: [f64; 4], b: [f64; 4]| -> [f64; 4] { std::array::from_fn(|j| 0.5 * (a[j] + b[j])) };
+    let (b01, b12, b23) = (mid(c0, c1), mid(c1, c2), mid(c2, c3));
+    let (d0, d1) = (mid(b01, b12), mid(b12, b23));
+    let m = mid(d0, d1);
+    [c0, b01, d0, m, d1, b23, c3]
+        .into_iter()
+        .map(halved_range)
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), (a, b)| {
+            (lo.min(a), hi.max(b))
+        })
 }
 
 /// Whether `a.perp_dot(b) > 0` for every `a` of `du` and `b` of `dv`, in linear time.
