@@ -190,6 +190,73 @@ fn non_manifold_edges_are_reported_as_such() {
     );
 }
 
+/// Positions of a uniform tessellation (4 segments per patch side) that appear exactly
+/// `copies` times, to 1e-9: where sheets cut apart meet again.
+fn shared_points(control: &tessera_core::catmull_clark::ControlMesh, copies: usize) -> usize {
+    use tessera_core::catmull_clark::{tessellate_uniform, SurfaceModel, TREE_DEPTH};
+    let model = SurfaceModel::new(
+        PatchMesh::new(control).expect("valid after the cut"),
+        TREE_DEPTH,
+    );
+    let mesh = tessellate_uniform(&model, 4).expect("uniform").mesh;
+    let mut seen = std::collections::HashMap::new();
+    for v in &mesh.vertices {
+        let p = glam::DVec3::from_array(v.position.map(f64::from));
+        *seen
+            .entry((p * 1e6).round().to_array().map(|x| x as i64))
+            .or_insert(0) += 1;
+    }
+    seen.values().filter(|&&n| n == copies).count()
+}
+
+#[test]
+fn cutting_non_manifold_edges_gives_sheets_that_meet_along_the_cut() {
+    // The fan's three sheets share a chain of four edges whose ends are corners in every
+    // sheet: cut apart, each sheet ends in the same boundary curve there, so the uniform
+    // grids of the three meet point for point along it: 4 edges, 2 patch sides each, 4
+    // segments per side, 33 points, each in all three sheets.
+    let mut fan = control_mesh("opensubdiv/catmark_fan.obj");
+    let vertices = fan.positions.len();
+    assert_eq!(fan.split_non_manifold().expect("the fan can be cut"), 4);
+    // The chain's 5 vertices, copied for the second and third sheet.
+    assert_eq!(fan.positions.len(), vertices + 2 * 5);
+    assert_eq!(shared_points(&fan, 3), 33);
+    // The check has teeth: move one sheet's copy of a vertex inside the chain, and the
+    // curves part around it.
+    let mut moved = fan.clone();
+    // Copies are made in face order: the second sheet's of vertices 8, 9, 10, 11, 12,
+    // then the third sheet's of 9, 8, 10, ...: its copy of vertex 10 is the eighth.
+    let copy = vertices + 7;
+    assert_eq!(fan.positions[copy], fan.positions[9]);
+    assert!(
+        fan.faces[10].contains(&(copy as u32)),
+        "{:?}",
+        fan.faces[10]
+    );
+    moved.positions[copy].z += 1e-3;
+    let after = shared_points(&moved, 3);
+    assert!(after < 33, "{after} points still shared");
+    // Cutting twice changes nothing; a manifold mesh is left as it is.
+    assert_eq!(fan.split_non_manifold().unwrap(), 0);
+    let mut cube = control_mesh("opensubdiv/catmark_cube.obj");
+    let before = (cube.positions.clone(), cube.faces.clone());
+    assert_eq!(cube.split_non_manifold().unwrap(), 0);
+    assert_eq!((cube.positions, cube.faces), before);
+}
+
+#[test]
+fn a_cut_whose_sheets_would_part_is_an_error() {
+    // Edge 1-2 has three faces; in the third sheet vertex 1 has two faces and a boundary
+    // edge that is not cut, so that sheet's boundary curve leaves the cut there while the
+    // other two make vertex 1 a corner: refused, naming the vertex.
+    let text = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 1 -1 0\nv 0 -1 0\nv 1 0 1\nv 0 0 1\nv 0 0 2\nv -1 0 1\n\
+                f 1 2 3 4\nf 2 1 6 5\nf 1 2 7 8\nf 1 8 9 10\n";
+    let mut mesh = parse(text).expect("parses");
+    let err = mesh.split_non_manifold().unwrap_err().to_string();
+    assert!(err.contains("non-manifold edges at vertex 1:"), "{err}");
+    assert_eq!(err.lines().count(), 1, "{err}");
+}
+
 #[test]
 fn valence_limits_are_errors() {
     // OpenSubdiv's pole with valence 360.

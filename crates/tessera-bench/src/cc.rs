@@ -48,13 +48,15 @@ struct Row {
 }
 
 /// (file, detailed)
-const MODELS: [(&str, bool); 10] = [
+const MODELS: [(&str, bool); 11] = [
     ("opensubdiv/catmark_car.obj", true),
     ("opensubdiv/catmark_bishop.obj", true),
     ("opensubdiv/catmark_rook.obj", true),
     ("catmull_clark/spot_control_mesh.obj", true),
     ("catmull_clark/blub_control_mesh.obj", true),
     ("catmull_clark/penguin_control_mesh.obj", true),
+    // Non-manifold: cut into its three sheets (`ControlMesh::split_non_manifold`).
+    ("opensubdiv/catmark_fan.obj", true),
     ("opensubdiv/catmark_cube.obj", false),
     ("opensubdiv/catmark_torus.obj", false),
     ("opensubdiv/catmark_pyramid.obj", false),
@@ -67,7 +69,8 @@ pub fn run(assets: &Path, out_dir: &Path, quick: bool) {
     let mut rows = Vec::new();
     for (file, detailed) in MODELS {
         let path = assets.join(file);
-        let control = load_control_mesh(&path).expect("shipped mesh");
+        let mut control = load_control_mesh(&path).expect("shipped mesh");
+        let cut = control.split_non_manifold().expect("sheets that meet");
         let model = SurfaceModel::new(PatchMesh::new(&control).expect("valid mesh"), TREE_DEPTH);
         let diag = control.bbox_diag();
         let samples = surface_samples(&model, 32);
@@ -121,11 +124,11 @@ pub fn run(assets: &Path, out_dir: &Path, quick: bool) {
             }
             let paper_triangles = paper.mesh.triangle_count();
             let row = Row {
-                model: Path::new(file)
-                    .file_stem()
-                    .unwrap()
-                    .to_string_lossy()
-                    .into(),
+                model: format!(
+                    "{}{}",
+                    Path::new(file).file_stem().unwrap().to_string_lossy(),
+                    if cut > 0 { " (sheets cut apart)" } else { "" }
+                ),
                 detailed,
                 patches: model.mesh.surface_patches().count(),
                 tolerance_rel: rel,

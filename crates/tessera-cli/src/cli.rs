@@ -99,6 +99,11 @@ pub struct TessellateArgs {
     /// Catmull-Clark adaptive: how each patch is first split (default search).
     #[arg(long, value_enum)]
     pub first_split: Option<FirstSplit>,
+    /// Catmull-Clark: cut the mesh along its non-manifold edges (three faces or more) and
+    /// tessellate each sheet of faces with its own boundary there, as OpenSubdiv does;
+    /// without it such edges are an error.
+    #[arg(long)]
+    pub split_non_manifold: bool,
     /// Search the threshold (or the uniform segment count) for this many triangles (±2%).
     #[arg(long, conflicts_with = "threshold")]
     pub target_triangles: Option<usize>,
@@ -152,6 +157,9 @@ pub struct RenderArgs {
     /// Catmull-Clark adaptive: how each patch is first split (default search).
     #[arg(long, value_enum)]
     pub first_split: Option<FirstSplit>,
+    /// Catmull-Clark: cut the mesh along its non-manifold edges (see `tessellate`).
+    #[arg(long)]
+    pub split_non_manifold: bool,
     /// Draw the triangle edges over the shading.
     #[arg(long)]
     pub wireframe: bool,

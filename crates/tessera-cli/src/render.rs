@@ -10,7 +10,7 @@ use tessera_wgpu::image_out::{render_camera_to_rgba, save_png};
 use tessera_wgpu::render::Camera;
 use tessera_wgpu::{Error, RenderOptions};
 
-use tessera_core::catmull_clark::{CcParams, PatchMesh, SurfaceModel, MAX_DEPTH, TREE_DEPTH};
+use tessera_core::catmull_clark::{CcParams, SurfaceModel, MAX_DEPTH, TREE_DEPTH};
 use tessera_wgpu::bezier::BezierStage;
 use tessera_wgpu::catmull_clark::{CcStage, CcUniformStage};
 use tessera_wgpu::glam::DVec3;
@@ -98,11 +98,12 @@ pub fn render(args: RenderArgs) -> Result<(), Error> {
     }
     let mut timings = GpuTimings::default();
     let (gpu, output, (lo, hi), what, (triangles, vertices)) = if cc {
-        let control = tessera_core::io::load_control_mesh(&args.input)?;
+        let mut control = tessera_core::io::load_control_mesh(&args.input)?;
         for w in &control.warnings {
             eprintln!("warning: {w}");
         }
-        let model = SurfaceModel::new(PatchMesh::new(&control)?, TREE_DEPTH);
+        let mesh = crate::catmull_clark::patch_mesh(&mut control, args.split_non_manifold)?;
+        let model = SurfaceModel::new(mesh, TREE_DEPTH);
         let (lo, hi) = control.positions.iter().fold(
             (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
             |(lo, hi), p| (lo.min(*p), hi.max(*p)),

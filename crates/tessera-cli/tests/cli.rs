@@ -506,7 +506,7 @@ fn bad_control_meshes_fail_with_one_line() {
     expect_cc_failure(format!("{sq}f 1 2\n").as_bytes(), ":5: face has 2 vertices");
     expect_cc_failure(
         format!("{sq}v 0 -1 0\nv 0 0 1\nf 1 2 3\nf 2 1 5\nf 1 2 6\n").as_bytes(),
-        ":9: non-manifold edge 1-2",
+        ":9: non-manifold edge 1-2: used by more than two faces (--split-non-manifold cuts the mesh there)",
     );
     let pole = std::fs::read(asset("opensubdiv/catmark_pole360.obj")).unwrap();
     expect_cc_failure(&pole, "valence 360; at most 64");
@@ -654,4 +654,49 @@ fn catmull_clark_on_the_gpu_writes_what_the_cpu_writes_and_renders() {
         assert!(String::from_utf8_lossy(&out.stderr).contains(expect));
     }
     assert!(!tmp("never.png").exists());
+}
+
+#[test]
+fn split_non_manifold_tessellates_each_sheet() {
+    // OpenSubdiv's fan (three sheets on a chain of edges) is refused as it is, and cut
+    // into sheets with the flag, on both backends alike.
+    let fan = asset("opensubdiv/catmark_fan.obj");
+    let mut counts = Vec::new();
+    for backend in ["cpu", "gpu"] {
+        let ply = tmp(&format!("fan_{backend}.ply"));
+        let out = run_ok(
+            tessera()
+                .arg("tessellate")
+                .arg(&fan)
+                .args([
+                    "--split-non-manifold",
+                    "--tolerance-rel",
+                    "3e-3",
+                    "--measure",
+                ])
+                .args(["--backend", backend, "-o"])
+                .arg(&ply),
+        );
+        assert!(ply.exists());
+        let stdout = String::from_utf8_lossy(&out.stdout).to_string();
+        let triangles: String = stdout
+            .split(" triangles")
+            .next()
+            .and_then(|s| s.rsplit(' ').next())
+            .unwrap()
+            .to_string();
+        let triangles: usize = triangles.parse().unwrap_or_else(|_| panic!("{stdout}"));
+        assert!(triangles > 0);
+        counts.push(triangles);
+    }
+    assert_eq!(counts[0], counts[1], "cpu and gpu triangle counts");
+    let r = tessera()
+        .arg("tessellate")
+        .arg(&fan)
+        .arg("-o")
+        .arg(tmp("fan_refused.ply"))
+        .output()
+        .unwrap();
+    assert!(!r.status.success());
+    assert!(String::from_utf8_lossy(&r.stderr).contains("--split-non-manifold"));
 }

@@ -64,4 +64,139 @@ impl ControlMesh {
         let (lo, hi) = self.bounds();
         (hi - lo).length()
     }
+
+    /// Cuts the mesh along its non-manifold edges (edges of three faces or more), as
+    /// OpenSubdiv treats them: as sharp edges where each sheet of faces ends. Faces
+    /// joined through edges of exactly two faces form a sheet; each sheet gets its own
+    /// copy of the vertices on cut edges (the first sheet by face order keeps the
+    /// original index), so that each sheet meets the cut as a boundary. Returns the
+    /// number of edges cut; a mesh without non-manifold edges is left as it is.
+    ///
+    /// The sheets' boundary curves along the cut coincide, so the surface does not
+    /// open there, where every sheet subdivides each vertex of the cut alike: as a
+    /// corner (one face in the sheet, under the edge-and-corner rule) in every sheet,
+    /// or as a boundary vertex between the same two cut edges in every sheet. Elsewhere
+    /// OpenSubdiv's rules and a sheet's boundary rule differ, and this is an error
+    /// naming the vertex. Faces with an index out of range are left to
+    /// [`super::PatchMesh::new`] to report.
+    pub fn split_non_manifold(&mut self) -> crate::Result<usize> {
+        use std::collections::{BTreeMap, HashMap};
+        let nv = self.positions.len() as u32;
+        if self.faces.iter().flatten().any(|&v| v >= nv) {
+            return Ok(0);
+        }
+        let key = |a: u32, b: u32| (a.min(b), a.max(b));
+        let mut edge_faces: HashMap<(u32, u32), Vec<usize>> = HashMap::new();
+        for (f, face) in self.faces.iter().enumerate() {
+            for k in 0..face.len() {
+                let e = key(face[k], face[(k + 1) % face.len()]);
+                edge_faces.entry(e).or_default().push(f);
+            }
+        }
+        let cut: Vec<(u32, u32)> = {
+            let mut c: Vec<_> = edge_faces
+                .iter()
+                .filter(|(_, fs)| fs.len() > 2)
+                .map(|(e, _)| *e)
+                .collect();
+            c.sort_unstable();
+            c
+        };
+        if cut.is_empty() {
+            return Ok(0);
+        }
+        // Sheets: faces joined through edges of exactly two faces (union-find).
+        let mut parent: Vec<usize> = (0..self.faces.len()).collect();
+        fn root(parent: &mut [usize], mut f: usize) -> usize {
+            while parent[f] != f {
+                parent[f] = parent[parent[f]];
+                f = parent[f];
+            }
+            f
+        }
+        for fs in edge_faces.values().filter(|fs| fs.len() == 2) {
+            let (a, b) = (root(&mut parent, fs[0]), root(&mut parent, fs[1]));
+            parent[a.max(b)] = a.min(b);
+        }
+        let sheet: Vec<usize> = (0..self.faces.len())
+            .map(|f| root(&mut parent, f))
+            .collect();
+        let is_cut = |a: u32, b: u32| cut.binary_search(&key(a, b)).is_ok();
+        // How each sheet subdivides each vertex of the cut: as a corner, or as a
+        // boundary vertex between two neighbours (its boundary edges in the sheet).
+        let mut faces_at: BTreeMap<(u32, usize), usize> = BTreeMap::new();
+        let mut boundary_at: BTreeMap<(u32, usize), Vec<u32>> = BTreeMap::new();
+        for (f, face) in self.faces.iter().enumerate() {
+            let n = face.len();
+            for k in 0..n {
+                let v = face[k];
+                *faces_at.entry((v, sheet[f])).or_default() += 1;
+                for w in [face[(k + 1) % n], face[(k + n - 1) % n]] {
+                    // An edge is a boundary of sheet s where only one face of s uses it.
+                    let in_sheet = edge_faces[&key(v, w)]
+                        .iter()
+                        .filter(|&&g| sheet[g] == sheet[f])
+                        .count();
+                    if in_sheet == 1 {
+                        boundary_at.entry((v, sheet[f])).or_default().push(w);
+                    }
+                }
+            }
+        }
+        let corners = self.boundary == BoundaryRule::EdgeAndCorner;
+        let mut cut_vertices: Vec<u32> = cut.iter().flat_map(|&(a, b)| [a, b]).collect();
+        cut_vertices.sort_unstable();
+        cut_vertices.dedup();
+        for &v in &cut_vertices {
+            let mut modes = faces_at
+                .range((v, 0)..=(v, usize::MAX))
+                .map(|(&(_, s), &n)| {
+                    if corners && n == 1 {
+                        None
+                    } else {
+                        let mut b = boundary_at.get(&(v, s)).cloned().unwrap_or_default();
+                        b.sort_unstable();
+                        b.dedup();
+                        Some(b)
+                    }
+                });
+            let first = modes.next().flatten();
+            let agree = modes.all(|m| m == first)
+                && first
+                    .as_ref()
+                    .is_none_or(|b| b.len() == 2 && b.iter().all(|&w| is_cut(v, w)));
+            if !agree {
+                return Err(crate::Error::input(
+                    &self.source,
+                    format!(
+                        "non-manifold edges at vertex {}: its sheets of faces would subdivide it differently (a corner in some, a boundary vertex in others, or with other neighbours), so they would not meet there",
+                        v + 1
+                    ),
+                ));
+            }
+        }
+        // One copy of each cut vertex per sheet.
+        let mut copies: HashMap<(u32, usize), u32> = HashMap::new();
+        let mut kept: HashMap<u32, usize> = HashMap::new();
+        for f in 0..self.faces.len() {
+            for k in 0..self.faces[f].len() {
+                let v = self.faces[f][k];
+                if cut_vertices.binary_search(&v).is_err() {
+                    continue;
+                }
+                let s = sheet[f];
+                let owner = *kept.entry(v).or_insert(s);
+                if owner == s {
+                    continue;
+                }
+                let positions = &mut self.positions;
+                let id = *copies.entry((v, s)).or_insert_with(|| {
+                    positions.push(positions[v as usize]);
+                    positions.len() as u32 - 1
+                });
+                self.faces[f][k] = id;
+            }
+        }
+        Ok(cut.len())
+    }
 }
