@@ -178,23 +178,21 @@ impl ControlMesh {
         // One copy of each cut vertex per sheet.
         let mut copies: HashMap<(u32, usize), u32> = HashMap::new();
         let mut kept: HashMap<u32, usize> = HashMap::new();
-        for f in 0..self.faces.len() {
-            for k in 0..self.faces[f].len() {
-                let v = self.faces[f][k];
-                if cut_vertices.binary_search(&v).is_err() {
+        let positions = &mut self.positions;
+        for (face, &s) in self.faces.iter_mut().zip(&sheet) {
+            for v in face.iter_mut() {
+                if cut_vertices.binary_search(v).is_err() {
                     continue;
                 }
-                let s = sheet[f];
-                let owner = *kept.entry(v).or_insert(s);
+                let owner = *kept.entry(*v).or_insert(s);
                 if owner == s {
                     continue;
                 }
-                let positions = &mut self.positions;
-                let id = *copies.entry((v, s)).or_insert_with(|| {
-                    positions.push(positions[v as usize]);
+                let original = *v;
+                *v = *copies.entry((original, s)).or_insert_with(|| {
+                    positions.push(positions[original as usize]);
                     positions.len() as u32 - 1
                 });
-                self.faces[f][k] = id;
             }
         }
         Ok(cut.len())
