@@ -77,9 +77,11 @@ pub fn render(args: RenderArgs) -> Result<(), Error> {
         )
         .into());
     }
-    if !cc && (args.tolerance_rel.is_some() || args.first_split.is_some()) {
+    if !cc
+        && (args.tolerance_rel.is_some() || args.first_split.is_some() || args.split_non_manifold)
+    {
         return Err(CoreError::Param(
-            "--tolerance-rel and --first-split are Catmull-Clark options; Bézier surfaces take --threshold".into(),
+            "--tolerance-rel, --first-split and --split-non-manifold are Catmull-Clark options; Bézier surfaces take --threshold".into(),
         )
         .into());
     }

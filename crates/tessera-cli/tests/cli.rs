@@ -220,7 +220,12 @@ fn bad_parameters_fail_cleanly() {
         (
             &teapot,
             &["--first-split", "midpoint"],
-            "--first-split are Catmull-Clark options",
+            "--split-non-manifold are Catmull-Clark options",
+        ),
+        (
+            &teapot,
+            &["--split-non-manifold"],
+            "--split-non-manifold are Catmull-Clark options",
         ),
         (
             &cube,
@@ -639,7 +644,12 @@ fn catmull_clark_on_the_gpu_writes_what_the_cpu_writes_and_renders() {
         (
             &["--first-split", "midpoint"],
             "teaset/teapot",
-            "--first-split are Catmull-Clark options",
+            "--split-non-manifold are Catmull-Clark options",
+        ),
+        (
+            &["--split-non-manifold"],
+            "teaset/teapot",
+            "--split-non-manifold are Catmull-Clark options",
         ),
     ] {
         let out = tessera()
