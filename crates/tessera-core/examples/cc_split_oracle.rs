@@ -35,15 +35,14 @@ fn main() {
     let n = 32;
     let mut per_patch = Vec::new();
     for p in model.mesh.surface_patches() {
-        let samples: Vec<DVec3> = (0..n * n)
+        // (u, v) and position of each sample.
+        let samples: Vec<(f64, f64, DVec3)> = (0..n * n)
             .map(|k| {
-                model
-                    .eval(
-                        p,
-                        (k % n) as f64 / (n - 1) as f64,
-                        (k / n) as f64 / (n - 1) as f64,
-                    )
-                    .position
+                let (u, v) = (
+                    (k % n) as f64 / (n - 1) as f64,
+                    (k / n) as f64 / (n - 1) as f64,
+                );
+                (u, v, model.eval(p, u, v).position)
             })
             .collect();
         let errs: Vec<f64> = grids
@@ -54,12 +53,13 @@ fn main() {
                         .eval(p, a as f64 / nu as f64, b as f64 / nv as f64)
                         .position
                 };
-                let mut best_cells = Vec::new();
+                // Each cell's two triangulations: diagonal 0–2, then 1–3.
+                let mut cells = Vec::new();
                 for b in 0..nv {
                     for a in 0..nu {
                         let (c00, c10, c01, c11) =
                             (q(a, b), q(a + 1, b), q(a, b + 1), q(a + 1, b + 1));
-                        best_cells.push([
+                        cells.push([
                             [c00, c10, c11],
                             [c00, c11, c01],
                             [c00, c10, c01],
@@ -67,28 +67,18 @@ fn main() {
                         ]);
                     }
                 }
-                // Per cell the better diagonal: evaluate both triangulations globally (the
-                // max over samples), picking per cell greedily by its own samples.
+                // Each cell keeps the triangulation nearer its own samples.
                 let d = |s: DVec3, t: &[DVec3; 3]| {
                     (closest_point_on_triangle(s, t[0], t[1], t[2]) - s).length()
                 };
                 let mut tris: Vec<[DVec3; 3]> = Vec::new();
-                for (ci, cell) in best_cells.iter().enumerate() {
-                    let (a, b) = (ci % nu, ci / nu);
+                for (ci, cell) in cells.iter().enumerate() {
+                    let (a, b) = ((ci % nu) as f64, (ci / nu) as f64);
+                    let inside = |t: f64, lo: f64| t >= lo - 1e-9 && t <= lo + 1.0 + 1e-9;
                     let own: Vec<DVec3> = samples
                         .iter()
-                        .enumerate()
-                        .filter(|(k, _)| {
-                            let (u, v) = (
-                                (k % n) as f64 / (n - 1) as f64,
-                                (k / n) as f64 / (n - 1) as f64,
-                            );
-                            u * nu as f64 >= a as f64 - 1e-9
-                                && u * nu as f64 <= a as f64 + 1.0 + 1e-9
-                                && v * nv as f64 >= b as f64 - 1e-9
-                                && v * nv as f64 <= b as f64 + 1.0 + 1e-9
-                        })
-                        .map(|(_, s)| *s)
+                        .filter(|(u, v, _)| inside(u * nu as f64, a) && inside(v * nv as f64, b))
+                        .map(|&(_, _, s)| s)
                         .collect();
                     let e = |t0: &[DVec3; 3], t1: &[DVec3; 3]| {
                         own.iter()
@@ -103,7 +93,7 @@ fn main() {
                 }
                 samples
                     .iter()
-                    .map(|&s| tris.iter().map(|t| d(s, t)).fold(f64::MAX, f64::min))
+                    .map(|&(_, _, s)| tris.iter().map(|t| d(s, t)).fold(f64::MAX, f64::min))
                     .fold(0.0, f64::max)
             })
             .collect();

@@ -122,6 +122,10 @@ impl ControlMesh {
             .map(|f| root(&mut parent, f))
             .collect();
         let is_cut = |a: u32, b: u32| cut.binary_search(&key(a, b)).is_ok();
+        let mut cut_vertices: Vec<u32> = cut.iter().flat_map(|&(a, b)| [a, b]).collect();
+        cut_vertices.sort_unstable();
+        cut_vertices.dedup();
+        let on_cut = |v: u32| cut_vertices.binary_search(&v).is_ok();
         // How each sheet subdivides each vertex of the cut: as a corner, or as a
         // boundary vertex between two neighbours (its boundary edges in the sheet).
         let mut faces_at: BTreeMap<(u32, usize), usize> = BTreeMap::new();
@@ -130,6 +134,9 @@ impl ControlMesh {
             let n = face.len();
             for k in 0..n {
                 let v = face[k];
+                if !on_cut(v) {
+                    continue;
+                }
                 *faces_at.entry((v, sheet[f])).or_default() += 1;
                 for w in [face[(k + 1) % n], face[(k + n - 1) % n]] {
                     // An edge is a boundary of sheet s where only one face of s uses it.
@@ -144,9 +151,6 @@ impl ControlMesh {
             }
         }
         let corners = self.boundary == BoundaryRule::EdgeAndCorner;
-        let mut cut_vertices: Vec<u32> = cut.iter().flat_map(|&(a, b)| [a, b]).collect();
-        cut_vertices.sort_unstable();
-        cut_vertices.dedup();
         for &v in &cut_vertices {
             let mut modes = faces_at
                 .range((v, 0)..=(v, usize::MAX))
@@ -181,7 +185,7 @@ impl ControlMesh {
         let positions = &mut self.positions;
         for (face, &s) in self.faces.iter_mut().zip(&sheet) {
             for v in face.iter_mut() {
-                if cut_vertices.binary_search(v).is_err() {
+                if !on_cut(*v) {
                     continue;
                 }
                 let owner = *kept.entry(*v).or_insert(s);
