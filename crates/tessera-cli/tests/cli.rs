@@ -336,7 +336,7 @@ fn glb_output_reads_back_as_a_control_mesh() {
 }
 
 #[test]
-fn gpu_and_cpu_backends_write_identical_files() {
+fn gpu_and_cpu_backends_write_the_same_mesh() {
     let (gpu, cpu, stats) = (tmp("gpu.ply"), tmp("cpu.ply"), tmp("gpu.json"));
     for (backend, out) in [("gpu", &gpu), ("cpu", &cpu)] {
         run_ok(
@@ -363,11 +363,100 @@ fn gpu_and_cpu_backends_write_identical_files() {
                 .is_some());
         }
     }
-    assert_eq!(
-        std::fs::read(&gpu).unwrap(),
-        std::fs::read(&cpu).unwrap(),
-        "the GPU and CPU backends write the same PLY"
+    let (gpu, cpu) = (
+        std::fs::read_to_string(&gpu).unwrap(),
+        std::fs::read_to_string(&cpu).unwrap(),
     );
+    same_ply_mesh(&gpu, &cpu).unwrap();
+    // The comparison fails on a planted difference: the last face turned around, the
+    // first vertex moved by 6e-4, about 7e-5 of the model (7× the tolerance).
+    let edit = |index: usize, change: &dyn Fn(&str) -> String| {
+        let lines: Vec<String> = cpu
+            .lines()
+            .enumerate()
+            .map(|(i, l)| if i == index { change(l) } else { l.to_string() })
+            .collect();
+        lines.join("\n") + "\n"
+    };
+    let turned = edit(cpu.lines().count() - 1, &|l| {
+        let k: Vec<&str> = l.split(' ').collect();
+        format!("{} {} {} {}", k[0], k[3], k[2], k[1])
+    });
+    let e = same_ply_mesh(&gpu, &turned).unwrap_err();
+    assert!(e.starts_with("face"), "{e}");
+    let first_vertex = cpu.lines().position(|l| l == "end_header").unwrap() + 1;
+    let moved = edit(first_vertex, &|l| {
+        let mut f: Vec<f64> = l.split(' ').map(|x| x.parse().unwrap()).collect();
+        f[0] += 6e-4; // the teapot's diagonal is about 8.2
+        f.iter().map(f64::to_string).collect::<Vec<_>>().join(" ")
+    });
+    let e = same_ply_mesh(&gpu, &moved).unwrap_err();
+    assert!(e.starts_with("vertex 0"), "{e}");
+}
+
+/// Whether two ASCII PLY files (`x y z nx ny nz u v patch` vertices) hold the same mesh,
+/// as the GPU and CPU backends must write it: the same header and faces, positions within
+/// 1e-5 of the model's diagonal, normals within 1e-3, the same (patch, u, v). Not byte for
+/// byte: a GPU may fuse a multiply and an add where the CPU rounds twice.
+fn same_ply_mesh(actual: &str, expected: &str) -> Result<(), String> {
+    /// Header lines, vertex rows, face lines.
+    fn split(s: &str) -> (Vec<&str>, Vec<Vec<f64>>, Vec<&str>) {
+        let end = s
+            .lines()
+            .position(|l| l == "end_header")
+            .expect("a PLY header");
+        let lines: Vec<&str> = s.lines().collect();
+        let vertices: usize = lines
+            .iter()
+            .find_map(|l| l.strip_prefix("element vertex "))
+            .expect("a vertex count")
+            .parse()
+            .unwrap();
+        let body = &lines[end + 1..];
+        let rows: Vec<Vec<f64>> = body[..vertices]
+            .iter()
+            .map(|l| l.split(' ').map(|x| x.parse().unwrap()).collect())
+            .collect();
+        (lines[..=end].to_vec(), rows, body[vertices..].to_vec())
+    }
+    let (a_header, a_rows, a_faces) = split(actual);
+    let (e_header, e_rows, e_faces) = split(expected);
+    if a_header != e_header {
+        return Err(format!("headers differ: {a_header:?} and {e_header:?}"));
+    }
+    if let Some(k) =
+        (0..a_faces.len().max(e_faces.len())).find(|&k| a_faces.get(k) != e_faces.get(k))
+    {
+        return Err(format!(
+            "face {k} differs: {:?} and {:?}",
+            a_faces.get(k),
+            e_faces.get(k)
+        ));
+    }
+    let (mut lo, mut hi) = ([f64::MAX; 3], [f64::MIN; 3]);
+    for r in &e_rows {
+        for c in 0..3 {
+            lo[c] = lo[c].min(r[c]);
+            hi[c] = hi[c].max(r[c]);
+        }
+    }
+    let diag = (0..3).map(|c| (hi[c] - lo[c]).powi(2)).sum::<f64>().sqrt();
+    let dist = |a: &[f64], b: &[f64]| {
+        a.iter()
+            .zip(b)
+            .map(|(x, y)| (x - y).powi(2))
+            .sum::<f64>()
+            .sqrt()
+    };
+    for (k, (a, e)) in a_rows.iter().zip(&e_rows).enumerate() {
+        let (dp, dn) = (dist(&a[0..3], &e[0..3]), dist(&a[3..6], &e[3..6]));
+        if dp > 1e-5 * diag || dn > 1e-3 || a[6..] != e[6..] {
+            return Err(format!(
+                "vertex {k} differs: {a:?} and {e:?} (diagonal {diag})"
+            ));
+        }
+    }
+    Ok(())
 }
 
 #[test]
