@@ -9,11 +9,11 @@
 //! differences along edges and lines; a part that is missing, moved or recoloured makes a
 //! solid patch, which the second count catches even when it is small. The fraction leaves
 //! out differing pixels that a one-pixel shift explains (each image's colour there is
-//! found within one pixel in the other): GPUs rasterize lines differently, and a one-pixel
-//! wireframe shift is not a different picture. The clustered count keeps them. A failed check writes
-//! `<name>.actual.png` and `<name>.diff.png` (differing pixels in red over a faded copy of
-//! the reference) into an output folder, and a reference is (re)written instead of
-//! compared when [`BLESS_ENV`] is set.
+//! found within one pixel in the other): GPUs rasterize lines differently, and a
+//! one-pixel wireframe shift is not a different picture. The clustered count keeps them.
+//! A failed check writes `<name>.actual.png` and `<name>.diff.png` (differing pixels in
+//! red over a faded copy of the reference) into an output folder, and a reference is
+//! (re)written instead of compared when [`BLESS_ENV`] is set.
 
 use std::path::{Path, PathBuf};
 
