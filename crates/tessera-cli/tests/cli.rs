@@ -401,11 +401,11 @@ fn gpu_and_cpu_backends_write_the_same_mesh() {
 fn same_ply_mesh(actual: &str, expected: &str) -> Result<(), String> {
     /// Header lines, vertex rows, face lines.
     fn split(s: &str) -> (Vec<&str>, Vec<Vec<f64>>, Vec<&str>) {
-        let end = s
-            .lines()
-            .position(|l| l == "end_header")
-            .expect("a PLY header");
         let lines: Vec<&str> = s.lines().collect();
+        let end = lines
+            .iter()
+            .position(|&l| l == "end_header")
+            .expect("a PLY header");
         let vertices: usize = lines
             .iter()
             .find_map(|l| l.strip_prefix("element vertex "))
