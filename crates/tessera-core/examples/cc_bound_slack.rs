@@ -2,8 +2,7 @@
 //! (33×33 exact samples) to a cell's two triangles (the worse of the two diagonals),
 //! - for some irregular patches of a mesh, the bound of the cell `[0, 2^-k]²` at the
 //!   extraordinary vertex;
-//! - over every patch, the bound of the whole patch (quantiles).
-//!
+//! - over every patch, the bound of the whole patch (quantiles);
 //! - with a tolerance R (relative to the control mesh's diagonal, as the CLI and the
 //!   bench take it): how many whole patches pass the bound, and how many would pass by
 //!   the sampled error of the worse and of the better diagonal.
@@ -13,7 +12,8 @@ use std::path::Path;
 use tessera_core::catmull_clark::*;
 use tessera_core::measure::closest_point_on_triangle;
 
-/// The bound of box `b = [u0, u1, v0, v1]` of patch `p` and the sampled distance.
+/// The bound of box `b = [u0, u1, v0, v1]` of patch `p`, and the sampled distances to
+/// the worse and to the better of its two triangulations.
 fn bound_and_truth(model: &SurfaceModel, p: usize, b: [f64; 4]) -> (f64, f64, f64) {
     let bound = adaptive::flatness_bound(model, p, b);
     let c = [(b[0], b[2]), (b[1], b[2]), (b[1], b[3]), (b[0], b[3])]
