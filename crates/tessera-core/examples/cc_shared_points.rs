@@ -11,27 +11,38 @@
 //! Arguments: the mesh and a tolerance relative to the control mesh's diagonal.
 use std::collections::HashMap;
 use std::path::Path;
-use tessera_core::catmull_clark::adaptive::{first_splits, flatness_bound};
+use tessera_core::catmull_clark::adaptive::{first_splits, flatness_bound, CcParams, FirstSplit};
 use tessera_core::catmull_clark::keys::point_key;
 use tessera_core::catmull_clark::{PatchMesh, SurfaceModel, MAX_DEPTH, TREE_DEPTH};
 use tessera_core::io::load_control_mesh;
 
-/// The adaptive grid: 840 = lcm(1..=8) units per first-split step, `MAX_DEPTH` halvings.
-const GRID: u32 = 840 << MAX_DEPTH;
-
-/// Marks cell `[i, i + w] × [j, j + h]` of patch `p` as the reference does; pushes the
-/// leaves.
-fn mark(model: &SurfaceModel, p: usize, c: [u32; 4], left: u32, tol: f64, out: &mut Vec<[u32; 4]>) {
+/// Marks cell `[i, i + w] × [j, j + h]` (in units of `1 / grid`) of patch `p` as the
+/// reference does; pushes the leaves.
+fn mark(
+    model: &SurfaceModel,
+    p: usize,
+    c: [u32; 4],
+    left: u32,
+    params: &CcParams,
+    out: &mut Vec<[u32; 4]>,
+) {
     let [i, j, w, h] = c;
-    let t = |x: u32| x as f64 / GRID as f64;
+    let t = |x: u32| x as f64 / params.grid() as f64;
     let bound = flatness_bound(model, p, [t(i), t(i + w), t(j), t(j + h)]);
-    if bound <= tol || left == 0 {
+    if bound <= params.tolerance || left == 0 {
         out.push(c);
         return;
     }
     let (w, h) = (w / 2, h / 2);
     for (di, dj) in [(0, 0), (1, 0), (1, 1), (0, 1)] {
-        mark(model, p, [i + di * w, j + dj * h, w, h], left - 1, tol, out);
+        mark(
+            model,
+            p,
+            [i + di * w, j + dj * h, w, h],
+            left - 1,
+            params,
+            out,
+        );
     }
 }
 
@@ -45,7 +56,12 @@ fn main() {
         .expect("a number");
     let control = load_control_mesh(Path::new(&path)).expect("a valid mesh");
     let model = SurfaceModel::new(PatchMesh::new(&control).expect("valid"), TREE_DEPTH);
-    let tol = rel * control.bbox_diag();
+    let params = CcParams {
+        tolerance: rel * control.bbox_diag(),
+        max_depth: MAX_DEPTH,
+        first_split: FirstSplit::Search,
+    };
+    let grid = params.grid();
     let splits: Vec<(u32, u32)> = first_splits().collect();
     // Per patch, per trial: (leaf count, sorted keys of the leaves' corners).
     let mut trials: Vec<Vec<(usize, Vec<u64>)>> = Vec::new();
@@ -53,16 +69,16 @@ fn main() {
         let per = splits
             .iter()
             .map(|&(ku, kv)| {
-                let (w, h) = (GRID / ku, GRID / kv);
+                let (w, h) = (grid / ku, grid / kv);
                 let mut leaves = Vec::new();
                 for c in 0..ku * kv {
                     let cell = [(c % ku) * w, (c / ku) * h, w, h];
-                    mark(&model, p, cell, MAX_DEPTH, tol, &mut leaves);
+                    mark(&model, p, cell, MAX_DEPTH, &params, &mut leaves);
                 }
                 let mut keys: Vec<u64> = leaves
                     .iter()
                     .flat_map(|&[i, j, w, h]| [(i, j), (i + w, j), (i + w, j + h), (i, j + h)])
-                    .map(|(a, b)| point_key(&model.mesh, p, a, b, GRID))
+                    .map(|(a, b)| point_key(&model.mesh, p, a, b, grid))
                     .collect();
                 keys.sort_unstable();
                 keys.dedup();

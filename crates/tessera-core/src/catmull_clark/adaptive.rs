@@ -119,6 +119,12 @@ pub struct CcParams {
 }
 
 impl CcParams {
+    /// Grid units per patch side: `840 · 2^max_depth`, in which every cell corner of
+    /// every first split and later midpoint split is an integer (the GPU's `grid`).
+    pub fn grid(&self) -> u32 {
+        BASE_GRID << self.max_depth
+    }
+
     /// Checks the tolerance (positive, and at least [`MIN_TOLERANCE_REL`] of the
     /// bounding-box diagonal of the refined control points) and the depth.
     pub fn validate(&self, model: &SurfaceModel) -> Result<()> {
@@ -195,7 +201,7 @@ impl<'a> Evaluator<'a> {
     fn new(model: &'a SurfaceModel, params: &CcParams) -> Self {
         Evaluator {
             model,
-            n: BASE_GRID << params.max_depth,
+            n: params.grid(),
             bounds: 0,
             points: HashMap::new(),
         }

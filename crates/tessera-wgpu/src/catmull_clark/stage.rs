@@ -751,7 +751,7 @@ fn status_size() -> u64 {
 
 fn tess_params(patch_count: u32, params: &CcParams, caps: CcCapacities) -> CcTessParams {
     CcTessParams {
-        grid: 840 << params.max_depth,
+        grid: params.grid(),
         max_depth: params.max_depth,
         tolerance: params.tolerance as f32,
         patch_count,
