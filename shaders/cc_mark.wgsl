@@ -1,5 +1,6 @@
 // One invocation per cell of the current list: the flatness bound of the cell
-// (`shared/cc_bound.wgsl`), and the decision: a leaf if the bound is within the tolerance
+// (`shared/cc_bound.wgsl`) unless its centre and side midpoints already prove it
+// must be split (`cc_split_proof`), and the decision: a leaf if the bound is within the tolerance
 // or the cell is at the deepest level, else split (flag 1, scanned next). Splits are
 // counted per (patch, trial) for the first-split search.
 // Twin: `tessera_core::catmull_clark::adaptive::mark` (the bound: `bound::box_bound`).
@@ -26,16 +27,31 @@ fn main(@builtin(global_invocation_id) gid: vec3u, @builtin(num_workgroups) grou
         flags[c] = 0u;
         return;
     }
-    atomicAdd(&cc_state.bounds, 1u);
     let size = cc_cell_size(cell);
     let i1 = cell.i + size.x;
     let j1 = cell.j + size.y;
     let corners = array<vec3f, 4>(cc_corner(cell.patch_id, cell.i, cell.j),
         cc_corner(cell.patch_id, i1, cell.j), cc_corner(cell.patch_id, i1, j1), cc_corner(cell.patch_id, cell.i, j1));
-    // Grid units to walk units: CC_WALK_ONE / grid = 2^(18 - max_depth).
-    let scale = CC_WALK_ONE / cc_params.grid;
-    let bound = cc_box_bound(cell.patch_id, vec4u(cell.i, i1, cell.j, j1) * scale, corners);
     let depth = cell.trial_depth >> 8u;
+    // A cell whose children's corners already prove it too far from flat is split
+    // without its bound.
+    var bound = CC_INFINITY;
+    var proven = false;
+    if depth < cc_params.max_depth {
+        let w = size.x / 2u;
+        let h = size.y / 2u;
+        let centre = cc_corner(cell.patch_id, cell.i + w, cell.j + h);
+        let mids = array<vec3f, 4>(cc_corner(cell.patch_id, cell.i + w, cell.j),
+            cc_corner(cell.patch_id, i1, cell.j + h), cc_corner(cell.patch_id, cell.i + w, j1),
+            cc_corner(cell.patch_id, cell.i, cell.j + h));
+        proven = cc_split_proof(corners, centre, mids) > cc_params.tolerance;
+    }
+    if !proven {
+        atomicAdd(&cc_state.bounds, 1u);
+        // Grid units to walk units: CC_WALK_ONE / grid = 2^(18 - max_depth).
+        let scale = CC_WALK_ONE / cc_params.grid;
+        bound = cc_box_bound(cell.patch_id, vec4u(cell.i, i1, cell.j, j1) * scale, corners);
+    }
     let leaf = bound <= cc_params.tolerance || depth >= cc_params.max_depth;
     flags[c] = select(1u, 0u, leaf);
     let t = cell.trial_depth & 0xffu;

@@ -3,6 +3,7 @@
 
 use glam::DVec3;
 use tessera_core::catmull_clark::adaptive::flatness_bound;
+use tessera_core::catmull_clark::bound::split_proof;
 use tessera_core::catmull_clark::triangulate::{self, PolyVertex};
 use tessera_core::catmull_clark::{
     surface_samples, tessellate_adaptive, tessellate_uniform, CcParams, CcTessellation,
@@ -239,6 +240,57 @@ fn the_bound_of_a_cell_is_above_its_true_error() {
     assert!(
         tightest > 0.5,
         "the bound is never within 2× of the truth: {tightest}"
+    );
+}
+
+#[test]
+fn the_split_proof_never_exceeds_the_bound() {
+    // The proof skips the walk of a cell its centre and side midpoints already show to be
+    // too far from flat; it must never be above the bound, or it would split cells the
+    // bound passes. Cells of every size, at extraordinary corners too. The largest ratio
+    // proof/bound shows the check has teeth (a proof twice as large would fail it), and
+    // the share of cells it proves that it is worth its evaluations.
+    let (mut tightest, mut cells, mut useful) = (0f64, 0, 0);
+    for name in [
+        "catmull_clark/spot_control_mesh.obj",
+        "opensubdiv/catmark_edgeonly.obj",
+        "opensubdiv/catmark_car.obj",
+        "opensubdiv/catmark_pyramid.obj",
+    ] {
+        let model = cc_model(name);
+        for p in (0..model.mesh.patch_count()).step_by(13) {
+            for (u0, v0, s) in [
+                (0.0, 0.0, 1.0),
+                (0.0, 0.0, 0.5),
+                (0.5, 0.5, 0.5),
+                (0.0, 0.0, 0.125),
+                (0.25, 0.125, 0.125),
+                (0.0, 0.0, 1.0 / 3.0),
+            ] {
+                let b = [u0, u0 + s, v0, v0 + s];
+                let bound = flatness_bound(&model, p, b);
+                let at = |u: f64, v: f64| model.eval(p, u0 + s * u, v0 + s * v).position;
+                let corners = [at(0.0, 0.0), at(1.0, 0.0), at(1.0, 1.0), at(0.0, 1.0)];
+                let mids = [at(0.5, 0.0), at(1.0, 0.5), at(0.5, 1.0), at(0.0, 0.5)];
+                let proof = split_proof(corners, at(0.5, 0.5), mids);
+                assert!(
+                    proof <= bound,
+                    "{name} patch {p} {b:?}: proof {proof} > bound {bound}"
+                );
+                tightest = tightest.max(proof / bound);
+                cells += 1;
+                useful += usize::from(proof > 0.5 * bound);
+            }
+        }
+    }
+    eprintln!("tightest {tightest}, {useful} of {cells} within 2x");
+    assert!(
+        tightest > 0.5,
+        "the proof is never within 2× of the bound: {tightest}"
+    );
+    assert!(
+        4 * useful > cells,
+        "the proof is within 2× of the bound on {useful} of {cells}"
     );
 }
 

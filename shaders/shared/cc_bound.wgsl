@@ -320,6 +320,41 @@ fn bound_finish() -> f32 {
     return bound + 64.0 * CC_F32_EPSILON * bs_scale_rel + 8.0 * CC_F32_EPSILON * bs_scale_abs;
 }
 
+// `bound::split_proof`: a lower bound on cc_box_bound from the box's corners c, its
+// centre and the midpoints of its sides (side k from corner k to corner k + 1); above the
+// tolerance it proves the box must be split.
+fn cc_split_proof(c: array<vec3f, 4>, centre: vec3f, mids: array<vec3f, 4>) -> f32 {
+    var scale_abs = cc_max_abs(centre);
+    var scale_rel = cc_max_abs(centre - c[0]);
+    for (var k = 0u; k < 4u; k++) {
+        scale_abs = max(scale_abs, max(cc_max_abs(c[k]), cc_max_abs(mids[k])));
+        scale_rel = max(scale_rel, max(cc_max_abs(c[k] - c[0]), cc_max_abs(mids[k] - c[0])));
+    }
+    let s = centre - c[0];
+    var parametric = length(s - 0.25 * ((c[1] - c[0]) + (c[2] - c[0]) + (c[3] - c[0])));
+    for (var k = 0u; k < 4u; k++) {
+        let side = (mids[k] - c[0]) - 0.5 * ((c[k] - c[0]) + (c[(k + 1u) % 4u] - c[0]));
+        parametric = max(parametric, 2.0 * length(side));
+    }
+    // Without a normal the slab bound is off and the parametric bound is the bound.
+    var proof = parametric;
+    let cr = cross(c[2] - c[0], c[3] - c[1]);
+    let len = length(cr);
+    if len > 0.0 {
+        let n = cr / len;
+        var lo = min(0.0, dot(n, s));
+        var hi = max(0.0, dot(n, s));
+        for (var k = 0u; k < 4u; k++) {
+            let hc = dot(n, c[k] - c[0]);
+            let hm = dot(n, mids[k] - c[0]);
+            lo = min(lo, min(hc, hm));
+            hi = max(hi, max(hc, hm));
+        }
+        proof = min(proof, hi - lo);
+    }
+    return proof - 64.0 * CC_F32_EPSILON * scale_rel - 8.0 * CC_F32_EPSILON * scale_abs;
+}
+
 // ---- The walk (`bound::box_bound`).
 //
 // One node per iteration of one loop, whose body holds the piece and vertex code once:

@@ -330,6 +330,55 @@ impl BoundSum {
     }
 }
 
+/// A lower bound on the flatness bound of a box ([`box_bound`]) from surface points
+/// the box's children need anyway: its corners `c`, its centre and the midpoints of its
+/// sides (side `k` from corner `k` to corner `k + 1`). Where it is above ε the box must
+/// be split, and the walk is skipped: the same decision for a fraction of the cost.
+/// Both parts of the bound are at least their part here:
+/// - Parametric. Along a side, `S` at the midpoint is within `M / 8` of the mean of the
+///   side's ends (`|g''| / 8` for `g` the side, `M` bounding second directional
+///   derivatives in the box's unit coordinates); at the centre within `M / 4` of the
+///   corners' mean (the mean of the same along both diagonals, where `|g''| ≤ 2M`). So
+///   `M / 4` is at least twice the first and once the second. At a vertex the bound
+///   holds `D + D_side`, which bound `|S − B|` over the box and along its sides (`B` the
+///   bilinear quad, which is the corners' mean at the centre and the ends' mean at a
+///   side's midpoint).
+/// - Slab. Every surface point of the box lies between the heights `lo` and `hi` along
+///   the same normal, so `sqrt(T² + δ²) ≥ T ≥` the spread of the nine points' heights.
+///
+/// The allowance for rounding is subtracted, as the bound adds it; the kernel
+/// (`cc_split_proof` in `shaders/shared/cc_bound.wgsl`) computes the same in single
+/// precision.
+pub fn split_proof(corners: [DVec3; 4], centre: DVec3, mids: [DVec3; 4]) -> f64 {
+    let c = corners.map(|p| p - corners[0]);
+    let s = centre - corners[0];
+    let m = mids.map(|p| p - corners[0]);
+    let points = || corners.iter().chain([&centre]).chain(&mids);
+    let scale_abs = points().map(|p| p.abs().max_element()).fold(0.0, f64::max);
+    let scale_rel = points()
+        .map(|p| (*p - corners[0]).abs().max_element())
+        .fold(0.0, f64::max);
+    let mut parametric = (s - 0.25 * (c[0] + c[1] + c[2] + c[3])).length();
+    for k in 0..4 {
+        let side = m[k] - 0.5 * (c[k] + c[(k + 1) % 4]);
+        parametric = parametric.max(2.0 * side.length());
+    }
+    let cross = (c[2] - c[0]).cross(c[3] - c[1]);
+    let len = cross.length();
+    // Without a normal the slab bound is off and the parametric bound is the bound.
+    let mut proof = parametric;
+    if len > 0.0 {
+        let n = cross / len;
+        let (mut lo, mut hi) = (0f64, 0f64);
+        for p in [c[1], c[2], c[3], s, m[0], m[1], m[2], m[3]] {
+            lo = lo.min(n.dot(p));
+            hi = hi.max(n.dot(p));
+        }
+        proof = proof.min(hi - lo);
+    }
+    proof - ROUNDING_RELATIVE * scale_rel - ROUNDING_ABSOLUTE * scale_abs
+}
+
 /// The range of the seven control values of a cubic (control values `a`) split at its
 /// middle by de Casteljau: it holds the cubic's values, more tightly than `a` does.
 pub fn halved_range(a: [f64; 4]) -> (f64, f64) {
