@@ -34,10 +34,12 @@ fn main(@builtin(global_invocation_id) gid: vec3u, @builtin(num_workgroups) grou
         cc_corner(cell.patch_id, i1, cell.j), cc_corner(cell.patch_id, i1, j1), cc_corner(cell.patch_id, cell.i, j1));
     let depth = cell.trial_depth >> 8u;
     // A cell whose children's corners already prove it too far from flat is split
-    // without its bound.
+    // without its bound. Only at a vertex: a regular patch's bound is one Bézier piece,
+    // about as costly as the proof's five evaluations.
     var bound = CC_INFINITY;
     var proven = false;
-    if depth < cc_params.max_depth {
+    let regular = (cc_nodes[cc_roots[cell.patch_id]].kind & CC_NODE_KIND_MASK) == CC_NODE_BEZIER;
+    if depth < cc_params.max_depth && !regular {
         let w = size.x / 2u;
         let h = size.y / 2u;
         let centre = cc_corner(cell.patch_id, cell.i + w, cell.j + h);
