@@ -48,7 +48,9 @@ fn main(@builtin(global_invocation_id) gid: vec3u, @builtin(num_workgroups) grou
             cc_corner(cell.patch_id, cell.i, cell.j + h));
         proven = cc_split_proof(corners, centre, mids) > cc_params.tolerance;
     }
-    if !proven {
+    if proven {
+        atomicAdd(&cc_state.proven, 1u);
+    } else {
         atomicAdd(&cc_state.bounds, 1u);
         // Grid units to walk units: CC_WALK_ONE / grid = 2^(18 - max_depth).
         let scale = CC_WALK_ONE / cc_params.grid;

@@ -22,6 +22,7 @@ struct CcCounters {
     vertices: u32,
     search_leaves: u32,
     bounds: atomic<u32>,
+    proven: atomic<u32>,
     trials: array<atomic<u32>>,
 }
 

@@ -320,6 +320,7 @@ pub fn run_gpu(
         unmet: status.state.unmet as usize,
         max_bound: status.max_bound() as f64,
         bounds: status.state.bounds as u64,
+        proven: status.state.proven as u64,
     })
 }
 
@@ -343,5 +344,6 @@ pub fn run_gpu_uniform(
         unmet: 0,
         max_bound: 0.0,
         bounds: 0,
+        proven: 0,
     })
 }

@@ -784,6 +784,9 @@ pub struct CcState {
     pub vertices: u32,
     /// Leaves of every trial of the search so far (also beyond capacity).
     pub search_leaves: u32,
-    /// Flatness bounds computed (cells tested, every trial of the search included).
+    /// Flatness bounds computed (every trial of the search included).
     pub bounds: u32,
+    /// Cells split on the split proof alone, without a bound: with `bounds`, the cells
+    /// tested.
+    pub proven: u32,
 }

@@ -343,6 +343,7 @@ fn catmull_clark_parameters_and_counters_match_their_rust_twins() {
         ("vertices", offset_of!(CcState, vertices)),
         ("search_leaves", offset_of!(CcState, search_leaves)),
         ("bounds", offset_of!(CcState, bounds)),
+        ("proven", offset_of!(CcState, proven)),
         ("trials", size_of::<CcState>()),
     ];
     let members: Vec<(&str, usize)> = members

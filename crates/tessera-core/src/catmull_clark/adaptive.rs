@@ -174,6 +174,9 @@ pub struct CcTessellation {
     /// Flatness bounds computed, every trial of the first-split search included: the
     /// method's cost, most of its time.
     pub bounds: u64,
+    /// Cells split on the split proof alone, without a bound: with
+    /// [`bounds`](Self::bounds), every cell tested.
+    pub proven: u64,
 }
 
 /// A cell of a patch: `[i, i + w] × [j, j + h]` in grid units.
@@ -198,6 +201,8 @@ struct Evaluator<'a> {
     n: u32,
     /// Flatness bounds computed so far.
     bounds: u64,
+    /// Cells split on the split proof alone so far.
+    proven: u64,
     points: HashMap<u64, (SurfacePoint, usize, u32, u32)>,
 }
 
@@ -208,6 +213,7 @@ impl<'a> Evaluator<'a> {
             model,
             n: params.grid(),
             bounds: 0,
+            proven: 0,
             points: HashMap::new(),
         }
     }
@@ -262,6 +268,7 @@ fn mark(
         split_proof(corners, centre, mids) > tolerance
     };
     let bound = if proven {
+        eval.proven += 1;
         f64::INFINITY
     } else {
         eval.bounds += 1;
@@ -304,6 +311,7 @@ fn tessellate_with_splits(
     let marking = mark_patches(&mut eval, params, splits);
     out.unmet = marking.unmet;
     out.bounds = eval.bounds;
+    out.proven = eval.proven;
     out.max_bound = marking.max_bound;
     let leaves = marking.leaves;
     out.leaves = leaves.len();
@@ -656,8 +664,9 @@ mod tests {
         )
         .expect("fine");
         // Per patch, the 1×1 split is always tried in full: a tree of L1 ≥ L leaves and
-        // (L1 - 1) / 3 inner cells (L the leaves kept, whichever split won).
-        let (bounds, leaves) = (fine.bounds, fine.leaves as u64);
+        // (L1 - 1) / 3 inner cells (L the leaves kept, whichever split won), each tested
+        // by a bound or by the split proof.
+        let (bounds, leaves) = (fine.bounds + fine.proven, fine.leaves as u64);
         assert!(leaves > patches, "the fine run must split");
         assert!(
             bounds >= leaves + (leaves - patches) / 3,
@@ -667,10 +676,11 @@ mod tests {
 
     #[test]
     fn midpoint_splits_grow_one_tree_per_patch() {
-        // Without the search every bound belongs to the one quadtree of its patch: a
-        // tree with L leaves over P roots has (L - P) / 3 inner cells, so exactly
-        // L + (L - P) / 3 bounds, and the 1×1 split everywhere. The search may only
-        // do better, and on Spot it must (it is why the search exists).
+        // Without the search every cell tested belongs to the one quadtree of its patch:
+        // a tree with L leaves over P roots has (L - P) / 3 inner cells, so exactly
+        // L + (L - P) / 3 cells, each with a bound or split on the split proof (some
+        // are: both meshes have vertices), and the 1×1 split everywhere. The search may
+        // only do better, and on Spot it must (it is why the search exists).
         let assets = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets");
         for (name, rel) in [
             ("opensubdiv/catmark_cube.obj", 1e-3),
@@ -690,7 +700,9 @@ mod tests {
             let ours = tessellate_adaptive(&model, &search).expect("search");
             let patches = model.mesh.surface_patches().count() as u64;
             let leaves = paper.leaves as u64;
-            assert_eq!(paper.bounds, leaves + (leaves - patches) / 3, "{name}");
+            let tested = paper.bounds + paper.proven;
+            assert_eq!(tested, leaves + (leaves - patches) / 3, "{name}");
+            assert!(paper.proven > 0, "{name}: no cell split on the proof");
             assert_eq!((paper.unmet, ours.unmet), (0, 0), "{name}");
             assert!(paper.max_bound <= midpoint.tolerance, "{name}");
             assert!(ours.leaves < paper.leaves, "{name}: {} leaves", ours.leaves);
