@@ -1,8 +1,8 @@
 // One invocation per cell of the current list: the flatness bound of the cell
-// (`shared/cc_bound.wgsl`) unless its centre and side midpoints already prove it
-// must be split (`cc_split_proof`), and the decision: a leaf if the bound is within the tolerance
-// or the cell is at the deepest level, else split (flag 1, scanned next). Splits are
-// counted per (patch, trial) for the first-split search.
+// (`shared/cc_bound.wgsl`) unless its centre and side midpoints already prove it must be
+// split (`cc_split_proof`), and the decision: a leaf if the bound is within the
+// tolerance or the cell is at the deepest level, else split (flag 1, scanned next).
+// Splits are counted per (patch, trial) for the first-split search.
 // Twin: `tessera_core::catmull_clark::adaptive::mark` (the bound: `bound::box_bound`).
 
 #include "shared/cc_tess.wgsl"

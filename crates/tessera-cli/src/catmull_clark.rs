@@ -51,6 +51,8 @@ struct Stats {
     unmet: Option<usize>,
     /// Adaptive: flatness bounds computed, the first-split search's trials included.
     flatness_bounds: Option<u64>,
+    /// Adaptive: cells at a vertex split on the split proof alone, without a bound.
+    split_proofs: Option<u64>,
     warnings: Vec<String>,
     timings_ms: Timings,
     #[serde(flatten)]
@@ -214,6 +216,7 @@ pub fn tessellate(args: TessellateArgs) -> Result<(), Error> {
         guaranteed_error: tolerance.map(|_| out.max_bound),
         unmet: tolerance.map(|_| out.unmet),
         flatness_bounds: tolerance.map(|_| out.bounds),
+        split_proofs: tolerance.map(|_| out.proven),
         warnings,
         timings_ms: timings,
         error,

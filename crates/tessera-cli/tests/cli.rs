@@ -534,7 +534,8 @@ fn catmull_clark_adaptive_and_uniform_write_ply_and_stats() {
     assert_eq!(json["first_split"], "search");
 
     // --first-split midpoint: the paper's subdivision, one quadtree per patch (L leaves
-    // over P patches cost L + (L - P) / 3 bounds), more triangles, still within ε.
+    // over P patches test L + (L - P) / 3 cells, each with a bound or the split proof),
+    // more triangles, still within ε.
     let (search_tris, search_bounds) = (json["triangles"].clone(), json["flatness_bounds"].clone());
     run_ok(
         tessera()
@@ -551,7 +552,15 @@ fn catmull_clark_adaptive_and_uniform_write_ply_and_stats() {
         json["leaves"].as_u64().unwrap(),
         json["patches"].as_u64().unwrap(),
     );
-    assert_eq!(json["flatness_bounds"], leaves + (leaves - patches) / 3);
+    let (bounds, proofs) = (
+        json["flatness_bounds"].as_u64().unwrap(),
+        json["split_proofs"].as_u64().unwrap(),
+    );
+    assert_eq!(bounds + proofs, leaves + (leaves - patches) / 3);
+    assert!(
+        proofs > 0,
+        "blub has vertices: some cells split on the proof"
+    );
     assert!(json["triangles"].as_u64() > search_tris.as_u64());
     assert!(json["flatness_bounds"].as_u64() < search_bounds.as_u64());
     assert!(json["guaranteed_error"].as_f64().unwrap() <= tol);

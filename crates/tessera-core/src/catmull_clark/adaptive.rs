@@ -76,8 +76,8 @@ pub const MIN_TOLERANCE_REL: f64 = 1e-6;
 pub enum FirstSplit {
     /// The `ku × kv` of [`first_splits`] with the fewest leaves (the default): on the
     /// shipped detailed models 5–49% fewer triangles than midpoint splits alone at the
-    /// same tolerance, for 1.1–2.4× the flatness bounds at 3e-3 of the diagonal and 3–7×
-    /// at 5e-4 (README, Results).
+    /// same tolerance, for 1.0–2.3× the flatness bounds at 3e-3 of the diagonal and
+    /// 2.6–6.6× at 5e-4 (README, Results).
     #[default]
     Search,
     /// Midpoint splits from the whole patch, as in the paper: one tree per patch, so
