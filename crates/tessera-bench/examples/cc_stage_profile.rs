@@ -2,11 +2,12 @@
 //! A/B runs of two builds and for `perf record -p PID`.
 //!
 //! ```sh
-//! cargo run --release -p tessera-bench --example cc_stage_profile -- catmark_rook 5e-4 5
+//! cargo run --release -p tessera-bench --example cc_stage_profile -- catmark_rook 5e-4 5 search
 //! ```
 //! Arguments: an OpenSubdiv shape's name (default catmark_rook), the tolerance relative
-//! to the diagonal (default 5e-4) and the number of runs (default 5). Prints the stage's
-//! minimum and median time (record, submit, wait).
+//! to the diagonal (default 5e-4), the number of runs (default 5) and the first split
+//! (`search`, the default, or `midpoint`). Prints the stage's minimum and median time
+//! (record, submit, wait).
 
 use tessera_core::catmull_clark::{
     CcParams, FirstSplit, PatchMesh, SurfaceModel, MAX_DEPTH, TREE_DEPTH,
@@ -20,13 +21,18 @@ fn main() {
     let name = args.next().unwrap_or_else(|| "catmark_rook".into());
     let rel: f64 = args.next().map_or(5e-4, |s| s.parse().expect("tolerance"));
     let runs: usize = args.next().map_or(5, |s| s.parse().expect("runs"));
+    let first_split = match args.next().as_deref() {
+        None | Some("search") => FirstSplit::Search,
+        Some("midpoint") => FirstSplit::Midpoint,
+        Some(other) => panic!("first split: search or midpoint, not {other}"),
+    };
     let path = std::path::Path::new("assets/opensubdiv").join(format!("{name}.obj"));
     let control = load_control_mesh(&path).expect("mesh");
     let model = SurfaceModel::new(PatchMesh::new(&control).expect("valid"), TREE_DEPTH);
     let params = CcParams {
         tolerance: rel * control.bbox_diag(),
         max_depth: MAX_DEPTH,
-        first_split: FirstSplit::Search,
+        first_split,
     };
     let gpu = Gpu::new().expect("a wgpu adapter");
     let mut stage = CcStage::new(&gpu.device, &model, &params).expect("stage");
