@@ -1,50 +1,20 @@
 //! What choosing each patch's first split by the points it adds (rather than by its
 //! leaves) would save: the adaptive tessellation's triangles are `2V − 2χ` whatever the
 //! triangulation (V the vertex count), so only the marked points count. Every first
-//! split of [`first_splits`] is marked for every patch (the same trees as the CPU
-//! reference: `flatness_bound` on the same grid), then each patch in turn takes the
-//! trial that adds the fewest points not already marked by the others, until nothing
-//! changes (coordinate descent from the reference's choice, fewest leaves).
+//! split of [`first_splits`] is marked for every patch (`split_leaves`: the CPU
+//! reference's own marking), then each patch in turn takes the trial that adds the
+//! fewest points not already marked by the others, until nothing changes (coordinate
+//! descent from the reference's choice, fewest leaves).
 //!
 //! `cargo run --release -p tessera-core --example cc_shared_points -- assets/catmull_clark/spot_control_mesh.obj 3e-3`
 //!
 //! Arguments: the mesh and a tolerance relative to the control mesh's diagonal.
 use std::collections::HashMap;
 use std::path::Path;
-use tessera_core::catmull_clark::adaptive::{first_splits, flatness_bound, CcParams, FirstSplit};
+use tessera_core::catmull_clark::adaptive::{first_splits, split_leaves, CcParams, FirstSplit};
 use tessera_core::catmull_clark::keys::point_key;
 use tessera_core::catmull_clark::{PatchMesh, SurfaceModel, MAX_DEPTH, TREE_DEPTH};
 use tessera_core::io::load_control_mesh;
-
-/// Marks cell `[i, i + w] × [j, j + h]` (in units of `1 / grid`) of patch `p` as the
-/// reference does; pushes the leaves.
-fn mark(
-    model: &SurfaceModel,
-    p: usize,
-    c: [u32; 4],
-    left: u32,
-    params: &CcParams,
-    out: &mut Vec<[u32; 4]>,
-) {
-    let [i, j, w, h] = c;
-    let t = |x: u32| x as f64 / params.grid() as f64;
-    let bound = flatness_bound(model, p, [t(i), t(i + w), t(j), t(j + h)]);
-    if bound <= params.tolerance || left == 0 {
-        out.push(c);
-        return;
-    }
-    let (w, h) = (w / 2, h / 2);
-    for (di, dj) in [(0, 0), (1, 0), (1, 1), (0, 1)] {
-        mark(
-            model,
-            p,
-            [i + di * w, j + dj * h, w, h],
-            left - 1,
-            params,
-            out,
-        );
-    }
-}
 
 fn main() {
     let mut args = std::env::args().skip(1);
@@ -68,13 +38,8 @@ fn main() {
     for p in model.mesh.surface_patches() {
         let per = splits
             .iter()
-            .map(|&(ku, kv)| {
-                let (w, h) = (grid / ku, grid / kv);
-                let mut leaves = Vec::new();
-                for c in 0..ku * kv {
-                    let cell = [(c % ku) * w, (c / ku) * h, w, h];
-                    mark(&model, p, cell, MAX_DEPTH, &params, &mut leaves);
-                }
+            .map(|&split| {
+                let leaves = split_leaves(&model, &params, p, split);
                 let mut keys: Vec<u64> = leaves
                     .iter()
                     .flat_map(|&[i, j, w, h]| [(i, j), (i + w, j), (i + w, j + h), (i, j + h)])

@@ -361,6 +361,42 @@ fn tessellate_with_splits(
     Ok(out)
 }
 
+/// The cells of first split `ku × kv` on a grid of `n` units per patch side.
+fn base_cells(n: u32, (ku, kv): (u32, u32)) -> impl Iterator<Item = Cell> {
+    let (w, h) = (n / ku, n / kv);
+    (0..ku * kv).map(move |c| Cell {
+        i: (c % ku) * w,
+        j: (c / ku) * h,
+        w,
+        h,
+    })
+}
+
+/// The leaves of patch `p` under the first split `ku × kv`, each `[i, j, w, h]` (the
+/// cell `[i, i + w] × [j, j + h]` in units of `1 / params.grid()`), marked as step 1
+/// marks every trial: for tools that compare first splits
+/// (`examples/cc_shared_points.rs`).
+pub fn split_leaves(
+    model: &SurfaceModel,
+    params: &CcParams,
+    p: usize,
+    split: (u32, u32),
+) -> Vec<[u32; 4]> {
+    let mut eval = Evaluator::new(model, params);
+    let mut leaves = Vec::new();
+    for cell in base_cells(eval.n, split) {
+        mark(
+            &mut eval,
+            p,
+            cell,
+            params.max_depth,
+            params.tolerance,
+            &mut |c, _| leaves.push([c.i, c.j, c.w, c.h]),
+        );
+    }
+    leaves
+}
+
 /// What step 1 found: every leaf, and the first split each patch chose.
 struct Marking {
     leaves: Vec<(usize, Cell)>,
@@ -383,15 +419,6 @@ fn mark_patches(eval: &mut Evaluator, params: &CcParams, splits: &[(u32, u32)]) 
         max_bound: 0.0,
     };
     for p in mesh.surface_patches() {
-        let base_cells = |(ku, kv): (u32, u32)| {
-            let (w, h) = (n / ku, n / kv);
-            (0..ku * kv).map(move |c| Cell {
-                i: (c % ku) * w,
-                j: (c / ku) * h,
-                w,
-                h,
-            })
-        };
         // Square splits first, then near-square rectangles, each only if it could still
         // beat the best so far (a split into ku·kv cells has at least that many leaves).
         // The leaves of the best so far are kept, so it is not marked a second time.
@@ -403,7 +430,7 @@ fn mark_patches(eval: &mut Evaluator, params: &CcParams, splits: &[(u32, u32)]) 
                 continue;
             }
             trial_leaves.clear();
-            for cell in base_cells(split) {
+            for cell in base_cells(n, split) {
                 mark(
                     eval,
                     p,
