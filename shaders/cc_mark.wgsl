@@ -15,12 +15,69 @@ fn cc_corner(p: u32, i: u32, j: u32) -> vec3f {
     return cc_eval(CcPoint(p, cc_grid_fixed(i), cc_grid_fixed(j))).position;
 }
 
+// The workgroup's cells in the order its invocations take them: those whose bound walks
+// the chain of pieces at an extraordinary vertex last, so that they share SIMD groups.
+// A CPU device runs every lane of a group for as many steps as its longest walk (some
+// 50 nodes against 1 to 3 elsewhere); interleaved, one cell at a vertex in each group of
+// 8 lanes made its 7 neighbours wait for it. Only the schedule changes: each cell's
+// flag lands at its own index and the per-trial counters are sums and maxima.
+var<workgroup> wg_order: array<u32, 64>;
+var<workgroup> wg_front: atomic<u32>;
+var<workgroup> wg_back: atomic<u32>;
+
+// Whether the cell touches a corner of its patch whose quadrant is not one Bézier piece
+// (the patch's quadtree goes on there toward an extraordinary vertex).
+fn cc_long_walk(cell: CcCell) -> bool {
+    if cell.patch_id == CC_NO_NEIGHBOUR {
+        return false;
+    }
+    let root = cc_nodes[cc_roots[cell.patch_id]];
+    if (root.kind & CC_NODE_KIND_MASK) != CC_NODE_SPLIT {
+        return false;
+    }
+    let quadrants = cc_splits[root.index];
+    let n = cc_params.grid;
+    let size = cc_cell_size(cell);
+    let left = cell.i == 0u;
+    let right = cell.i + size.x == n;
+    let bottom = cell.j == 0u;
+    let top = cell.j + size.y == n;
+    // Patch corner k lies in quadrant k.
+    let at = array<bool, 4>(left && bottom, right && bottom, right && top, left && top);
+    var long = false;
+    for (var k = 0u; k < 4u; k++) {
+        long = long || (at[k] && (cc_nodes[quadrants[k]].kind & CC_NODE_KIND_MASK) != CC_NODE_BEZIER);
+    }
+    return long;
+}
+
 @compute @workgroup_size(64)
-fn main(@builtin(global_invocation_id) gid: vec3u, @builtin(num_workgroups) groups: vec3u) {
-    let c = cc_invocation(gid, groups);
-    if c >= cc_state.count || c >= arrayLength(&cells_in) || c >= arrayLength(&flags) {
+fn main(@builtin(global_invocation_id) gid: vec3u, @builtin(local_invocation_index) lid: u32,
+    @builtin(num_workgroups) groups: vec3u) {
+    if lid == 0u {
+        atomicStore(&wg_front, 0u);
+        atomicStore(&wg_back, 0u);
+    }
+    workgroupBarrier();
+    let mine = cc_invocation(gid, groups);
+    if mine < cc_state.count && mine < arrayLength(&cells_in) && mine < arrayLength(&flags) {
+        var slot = 0u;
+        if cc_long_walk(cells_in[mine]) {
+            slot = 63u - atomicAdd(&wg_back, 1u);
+        } else {
+            slot = atomicAdd(&wg_front, 1u);
+        }
+        wg_order[slot] = mine;
+    }
+    workgroupBarrier();
+    if lid >= atomicLoad(&wg_front) && lid < 64u - atomicLoad(&wg_back) {
         return;
     }
+    mark_cell(wg_order[lid]);
+}
+
+// The cell at index c of the list.
+fn mark_cell(c: u32) {
     let cell = cells_in[c];
     // A cell of a trial dropped by the search (see cc_split.wgsl): nothing to test.
     if cell.patch_id == CC_NO_NEIGHBOUR {
