@@ -309,7 +309,7 @@ fn the_polygon_kernel_matches_its_twin() {
                 at += 1 + gpu_polys.side_counts[l][s] as usize;
                 id
             });
-            kernel.emit(leaf, corner_ids, &mut twin);
+            kernel.emit(leaf, corner_ids, gpu_polys.side_counts[l], &mut twin);
             assert_eq!(
                 twin[start..],
                 gpu_polys.verts[start..twin.len()],

@@ -808,7 +808,12 @@ mod tests {
                 };
                 let counts = kernel.count(&leaf);
                 let mut twin = Vec::new();
-                kernel.emit(&leaf, cell.corners().map(|c| id_of[&key(p, c)]), &mut twin);
+                kernel.emit(
+                    &leaf,
+                    cell.corners().map(|c| id_of[&key(p, c)]),
+                    counts,
+                    &mut twin,
+                );
                 let reference: Vec<[u32; 4]> = poly
                     .iter()
                     .map(|&(a, b)| [id_of[&key(p, (a, b))], a, b, 0])

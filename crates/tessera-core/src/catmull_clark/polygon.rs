@@ -244,15 +244,24 @@ impl<'a> PolygonKernel<'a> {
 
     /// Entry point `emit`: the leaf's polygon, corner 0, the points of side 0 in order,
     /// corner 1, ...; `corner_ids` are the corners' vertices (the kernel reads them in
-    /// `ids`, items `4 · leaf + corner`).
-    pub fn emit(&self, cell: &CcCell, corner_ids: [u32; 4], out: &mut Vec<PolyVert>) {
+    /// `ids`, items `4 · leaf + corner`), `counts` what [`count`](Self::count) found on
+    /// each side (a side without points is not walked again).
+    pub fn emit(
+        &self,
+        cell: &CcCell,
+        corner_ids: [u32; 4],
+        counts: [u32; 4],
+        out: &mut Vec<PolyVert>,
+    ) {
         let mut walk = self.walk(cell);
         for s in 0..4 {
             let (i, j) = cell_corner(self.grid, cell, s);
             out.push([corner_ids[s as usize], i, j, 0]);
-            walk.found.clear();
-            walk.side_walk(cell, s);
-            out.extend_from_slice(&walk.found);
+            if counts[s as usize] > 0 {
+                walk.found.clear();
+                walk.side_walk(cell, s);
+                out.extend_from_slice(&walk.found);
+            }
         }
     }
 }
