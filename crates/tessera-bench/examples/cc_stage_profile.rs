@@ -7,7 +7,7 @@
 //! Arguments: an OpenSubdiv shape's name (default catmark_rook), the tolerance relative
 //! to the diagonal (default 5e-4), the number of runs (default 5) and the first split
 //! (`search`, the default, or `midpoint`). Prints the stage's minimum and median time
-//! (record, submit, wait).
+//! (record, submit, wait), and how many leaves have no marked point on their sides.
 
 use tessera_core::catmull_clark::{
     CcParams, FirstSplit, PatchMesh, SurfaceModel, MAX_DEPTH, TREE_DEPTH,
@@ -45,6 +45,21 @@ fn main() {
         stage.run_blocking(&gpu.device, &gpu.queue).expect("run");
         totals.push(t.elapsed().as_secs_f64() * 1e3);
     }
+    // Leaves whose sides hold no marked point: `cc_polygon`'s emit walks none of their
+    // sides again.
+    let status = stage.run_blocking(&gpu.device, &gpu.queue).expect("run");
+    let polygons = stage
+        .read_polygons(&gpu.device, &gpu.queue, &status)
+        .expect("polygons");
+    let plain = polygons
+        .side_counts
+        .iter()
+        .filter(|c| c.iter().all(|&k| k == 0))
+        .count();
+    println!(
+        "leaves without side points {plain} of {}",
+        polygons.side_counts.len()
+    );
     gpu.check().expect("no wgpu errors");
     totals.sort_by(f64::total_cmp);
     println!(
