@@ -7,6 +7,7 @@
 
 #include "shared/cc_tess.wgsl"
 #include "shared/cc_bound.wgsl"
+#include "shared/lane_order.wgsl"
 
 @group(0) @binding(53) var<storage, read> cells_in: array<CcCell>;
 @group(0) @binding(54) var<storage, read_write> flags: array<u32>;
@@ -14,16 +15,6 @@
 fn cc_corner(p: u32, i: u32, j: u32) -> vec3f {
     return cc_eval(CcPoint(p, cc_grid_fixed(i), cc_grid_fixed(j))).position;
 }
-
-// The workgroup's cells in the order its invocations take them: those whose bound walks
-// the chain of pieces at an extraordinary vertex last, so that they share SIMD groups.
-// A CPU device runs every lane of a group for as many steps as its longest walk (some
-// 50 nodes against 1 to 3 elsewhere); interleaved, one cell at a vertex in each group of
-// 8 lanes made its 7 neighbours wait for it. Only the schedule changes: each cell's
-// flag lands at its own index and the per-trial counters are sums and maxima.
-var<workgroup> wg_order: array<u32, 64>;
-var<workgroup> wg_front: atomic<u32>;
-var<workgroup> wg_back: atomic<u32>;
 
 // Whether the cell touches a corner of its patch whose quadrant is not one Bézier piece
 // (the patch's quadtree goes on there toward an extraordinary vertex).
@@ -51,29 +42,19 @@ fn cc_long_walk(cell: CcCell) -> bool {
     return long;
 }
 
+// The cells whose bound walks the chain of pieces at an extraordinary vertex (some 50
+// nodes against 1 to 3 elsewhere) run last in their workgroup, together
+// (`shared/lane_order.wgsl`): interleaved, one such cell in each group of 8 lanes made
+// its 7 neighbours wait for it on a CPU device.
 @compute @workgroup_size(64)
 fn main(@builtin(global_invocation_id) gid: vec3u, @builtin(local_invocation_index) lid: u32,
     @builtin(num_workgroups) groups: vec3u) {
-    if lid == 0u {
-        atomicStore(&wg_front, 0u);
-        atomicStore(&wg_back, 0u);
-    }
-    workgroupBarrier();
     let mine = cc_invocation(gid, groups);
-    if mine < cc_state.count && mine < arrayLength(&cells_in) && mine < arrayLength(&flags) {
-        var slot = 0u;
-        if cc_long_walk(cells_in[mine]) {
-            slot = 63u - atomicAdd(&wg_back, 1u);
-        } else {
-            slot = atomicAdd(&wg_front, 1u);
-        }
-        wg_order[slot] = mine;
+    let valid = mine < cc_state.count && mine < arrayLength(&cells_in) && mine < arrayLength(&flags);
+    let c = lane_order(lid, valid, mine, valid && cc_long_walk(cells_in[mine]));
+    if c != LANE_NONE {
+        mark_cell(c);
     }
-    workgroupBarrier();
-    if lid >= atomicLoad(&wg_front) && lid < 64u - atomicLoad(&wg_back) {
-        return;
-    }
-    mark_cell(wg_order[lid]);
 }
 
 // The cell at index c of the list.

@@ -15,6 +15,7 @@
 #include "shared/cc_tess.wgsl"
 #include "shared/cc_poly.wgsl"
 #include "shared/cc_hash_key.wgsl"
+#include "shared/lane_order.wgsl"
 
 struct CcHashSlotView {
     key_hi: u32,
@@ -224,36 +225,18 @@ fn count(@builtin(global_invocation_id) gid: vec3u, @builtin(num_workgroups) gro
     poly_offsets[l] = 4u + counts.x + counts.y + counts.z + counts.w;
 }
 
-// The workgroup's leaves in the order the invocations of `emit` take them: those with
-// points on their sides last. About nine leaves in ten have none and walk no side, so
+// Leaves with points on their sides run last in their workgroup
+// (`shared/lane_order.wgsl`): about nine leaves in ten have none and walk no side, so
 // grouped they need not wait, lane by lane, for the walks of the others.
-var<workgroup> wg_leaf: array<u32, 64>;
-var<workgroup> wg_front: atomic<u32>;
-var<workgroup> wg_back: atomic<u32>;
-
 @compute @workgroup_size(64)
 fn emit(@builtin(global_invocation_id) gid: vec3u, @builtin(local_invocation_index) lid: u32,
     @builtin(num_workgroups) groups: vec3u) {
-    if lid == 0u {
-        atomicStore(&wg_front, 0u);
-        atomicStore(&wg_back, 0u);
-    }
-    workgroupBarrier();
     let mine = cc_invocation(gid, groups);
-    if leaf_in_range(mine) {
-        var slot = 0u;
-        if any(cc_side_counts(mine) != vec4u(0u)) {
-            slot = 63u - atomicAdd(&wg_back, 1u);
-        } else {
-            slot = atomicAdd(&wg_front, 1u);
-        }
-        wg_leaf[slot] = mine;
+    let valid = leaf_in_range(mine);
+    let l = lane_order(lid, valid, mine, valid && any(cc_side_counts(mine) != vec4u(0u)));
+    if l != LANE_NONE {
+        emit_leaf(l);
     }
-    workgroupBarrier();
-    if lid >= atomicLoad(&wg_front) && lid < 64u - atomicLoad(&wg_back) {
-        return;
-    }
-    emit_leaf(wg_leaf[lid]);
 }
 
 fn emit_leaf(l: u32) {

@@ -60,6 +60,10 @@ pub const SOURCES: &[(&str, &str)] = &[
         include_str!("../../../shaders/shared/cc_poly.wgsl"),
     ),
     (
+        "shared/lane_order.wgsl",
+        include_str!("../../../shaders/shared/lane_order.wgsl"),
+    ),
+    (
         "cc_roots.wgsl",
         include_str!("../../../shaders/cc_roots.wgsl"),
     ),

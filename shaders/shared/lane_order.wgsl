@@ -1,0 +1,35 @@
+// The order in which a workgroup's invocations take its items: those flagged `last` run
+// after the others, together. A CPU device (lavapipe) runs each group of 8 lanes for as
+// long as its slowest lane, so grouping the slow items spares the fast ones the wait.
+// Only the schedule changes: callers write each result at its item's own index.
+
+var<workgroup> lane_items: array<u32, 64>;
+var<workgroup> lane_front: atomic<u32>;
+var<workgroup> lane_back: atomic<u32>;
+
+const LANE_NONE: u32 = 0xffffffffu;
+
+// Called by every invocation of a workgroup of 64, in uniform control flow: places item
+// `mine` (if `valid`) first or last; returns the item invocation `lid` takes, or
+// LANE_NONE.
+fn lane_order(lid: u32, valid: bool, mine: u32, last: bool) -> u32 {
+    if lid == 0u {
+        atomicStore(&lane_front, 0u);
+        atomicStore(&lane_back, 0u);
+    }
+    workgroupBarrier();
+    if valid {
+        var slot = 0u;
+        if last {
+            slot = 63u - atomicAdd(&lane_back, 1u);
+        } else {
+            slot = atomicAdd(&lane_front, 1u);
+        }
+        lane_items[slot] = mine;
+    }
+    workgroupBarrier();
+    if lid >= atomicLoad(&lane_front) && lid < 64u - atomicLoad(&lane_back) {
+        return LANE_NONE;
+    }
+    return lane_items[lid];
+}
