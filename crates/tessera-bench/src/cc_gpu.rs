@@ -214,13 +214,13 @@ pub fn run(assets: &Path, out_dir: &Path, quick: bool, model_filter: Option<&str
     // First, in a fresh process: measured after the models' runs it read 2–3× more with
     // the search on this machine (cause not found).
     let cube = load_control_mesh(&assets.join("opensubdiv/catmark_cube.obj")).expect("cube");
-    let diag = cube.bbox_diag();
+    let cube_diag = cube.bbox_diag();
     let cube = SurfaceModel::new(PatchMesh::new(&cube).expect("valid"), TREE_DEPTH);
     let overhead: Vec<Overhead> = [FirstSplit::Search, FirstSplit::Midpoint]
         .into_iter()
         .map(|first_split| {
             let params = CcParams {
-                tolerance: diag,
+                tolerance: cube_diag,
                 max_depth: MAX_DEPTH,
                 first_split,
             };
