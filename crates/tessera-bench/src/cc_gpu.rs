@@ -20,7 +20,7 @@ use tessera_core::catmull_clark::{
 };
 use tessera_core::io::load_control_mesh;
 use tessera_core::measure::measure_error;
-use tessera_wgpu::catmull_clark::{CcStage, CcUniformStage};
+use tessera_wgpu::catmull_clark::{CcStage, CcStatus, CcUniformStage};
 use tessera_wgpu::headless::Gpu;
 use tessera_wgpu::wgpu;
 
@@ -148,39 +148,36 @@ fn gpu_phases(gpu: &Gpu, stage: &CcStage) -> Vec<(String, f64)> {
     phases
 }
 
-/// Median time of the recorded stage run to completion (after a first run that grew the
-/// buffers), the mesh, the phases and the bounds per leaf.
+/// A stage run to completion once (growing its buffers), then timed: the stage, what
+/// the run needed and the median time of the recorded run.
+fn timed_stage(
+    gpu: &Gpu,
+    model: &SurfaceModel,
+    params: &CcParams,
+    repeats: usize,
+) -> (CcStage, CcStatus, f64) {
+    let mut stage = CcStage::new(&gpu.device, model, params).expect("stage");
+    let status = stage.run_blocking(&gpu.device, &gpu.queue).expect("run");
+    let ms = gpu_median_ms(gpu, repeats, |e| stage.prepare(&gpu.device, &gpu.queue, e));
+    gpu.check().expect("no wgpu errors");
+    (stage, status, ms)
+}
+
+/// [`timed_stage`], with the mesh, the phases and the bounds per leaf.
 fn gpu_time(
     gpu: &Gpu,
     model: &SurfaceModel,
     params: &CcParams,
     repeats: usize,
 ) -> (f64, tessera_core::Mesh, Vec<(String, f64)>, f64) {
-    let mut stage = CcStage::new(&gpu.device, model, params).expect("stage");
-    let status = stage.run_blocking(&gpu.device, &gpu.queue).expect("run");
+    let (stage, status, ms) = timed_stage(gpu, model, params, repeats);
     let mesh = stage
         .read_mesh(&gpu.device, &gpu.queue, &status)
         .expect("mesh");
-    let ms = gpu_median_ms(gpu, repeats, |e| stage.prepare(&gpu.device, &gpu.queue, e));
     let phases = gpu_phases(gpu, &stage);
     gpu.check().expect("no wgpu errors");
     let bounds_per_leaf = status.state.bounds as f64 / status.state.leaves.max(1) as f64;
     (ms, mesh, phases, bounds_per_leaf)
-}
-
-/// Median time of the recorded stage run to completion (after a first run that grew the
-/// buffers), its triangles and its unmet leaves.
-fn gpu_time_only(
-    gpu: &Gpu,
-    model: &SurfaceModel,
-    params: &CcParams,
-    repeats: usize,
-) -> (f64, usize, u32) {
-    let mut stage = CcStage::new(&gpu.device, model, params).expect("stage");
-    let status = stage.run_blocking(&gpu.device, &gpu.queue).expect("run");
-    let ms = gpu_median_ms(gpu, repeats, |e| stage.prepare(&gpu.device, &gpu.queue, e));
-    gpu.check().expect("no wgpu errors");
-    (ms, status.indices as usize / 3, status.state.unmet)
 }
 
 /// Median time of the GPU uniform stage's run to completion at `n` segments (after a
@@ -224,11 +221,11 @@ pub fn run(assets: &Path, out_dir: &Path, quick: bool, model_filter: Option<&str
                 max_depth: MAX_DEPTH,
                 first_split,
             };
-            let (gpu_ms, triangles, _) = gpu_time_only(&gpu, &cube, &params, repeats.max(5));
+            let (_, status, gpu_ms) = timed_stage(&gpu, &cube, &params, repeats.max(5));
             Overhead {
                 first_split,
                 patches: cube.mesh.surface_patches().count(),
-                triangles,
+                triangles: status.indices as usize / 3,
                 gpu_ms,
             }
         })
@@ -340,7 +337,8 @@ pub fn run(assets: &Path, out_dir: &Path, quick: bool, model_filter: Option<&str
                     max_depth: MAX_DEPTH,
                     first_split,
                 };
-                let (ms, tris, unmet) = gpu_time_only(&gpu, &model, &params, repeats);
+                let (_, status, ms) = timed_stage(&gpu, &model, &params, repeats);
+                let (tris, unmet) = (status.indices as usize / 3, status.state.unmet);
                 eprintln!(
                     "cc gpu scaling {} {rel:e} {first_split:?}: {tris} tris, gpu {ms:.1} ms",
                     coarse.model
