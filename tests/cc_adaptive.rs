@@ -24,6 +24,7 @@ fn adaptive(model: &SurfaceModel, tolerance: f64) -> CcTessellation {
             tolerance,
             max_depth: 10,
             first_split: Default::default(),
+            leaf_bound: Default::default(),
         },
     )
     .unwrap()

@@ -33,6 +33,7 @@ fn main() {
         tolerance: rel * control.bbox_diag(),
         max_depth: MAX_DEPTH,
         first_split,
+        leaf_bound: Default::default(),
     };
     let gpu = Gpu::new().expect("a wgpu adapter");
     let mut stage = CcStage::new(&gpu.device, &model, &params).expect("stage");

@@ -95,6 +95,7 @@ pub fn run(assets: &Path, out_dir: &Path, quick: bool) {
                 tolerance,
                 max_depth: MAX_DEPTH,
                 first_split: Default::default(),
+                leaf_bound: Default::default(),
             };
             let (ms, out) = crate::median_time(repeats, || {
                 tessellate_adaptive(&model, &params).expect("adaptive")
@@ -112,6 +113,7 @@ pub fn run(assets: &Path, out_dir: &Path, quick: bool) {
             let ut_tol = uniform_at(m).0;
             let midpoint = CcParams {
                 first_split: FirstSplit::Midpoint,
+                leaf_bound: Default::default(),
                 ..params
             };
             let (midpoint_ms, paper) = crate::median_time(repeats, || {

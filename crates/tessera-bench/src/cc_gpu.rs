@@ -220,6 +220,7 @@ pub fn run(assets: &Path, out_dir: &Path, quick: bool, model_filter: Option<&str
                 tolerance: cube_diag,
                 max_depth: MAX_DEPTH,
                 first_split,
+                leaf_bound: Default::default(),
             };
             let (_, status, gpu_ms) = timed_stage(&gpu, &cube, &params, repeats.max(5));
             Overhead {
@@ -253,6 +254,7 @@ pub fn run(assets: &Path, out_dir: &Path, quick: bool, model_filter: Option<&str
                 tolerance: rel * diag,
                 max_depth: MAX_DEPTH,
                 first_split,
+                leaf_bound: Default::default(),
             };
             let (gpu_ms, mesh, phases, gpu_bounds_per_leaf) =
                 gpu_time(&gpu, &model, &params, repeats);
@@ -336,6 +338,7 @@ pub fn run(assets: &Path, out_dir: &Path, quick: bool, model_filter: Option<&str
                     tolerance: rel * diag,
                     max_depth: MAX_DEPTH,
                     first_split,
+                    leaf_bound: Default::default(),
                 };
                 let (_, status, ms) = timed_stage(&gpu, &model, &params, repeats);
                 let (tris, unmet) = (status.indices as usize / 3, status.state.unmet);

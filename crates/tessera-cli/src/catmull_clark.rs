@@ -35,6 +35,8 @@ struct Stats {
     max_depth: Option<u32>,
     /// Adaptive: how each patch was first split.
     first_split: Option<tessera_core::catmull_clark::FirstSplit>,
+    /// Adaptive: which bound accepts a leaf.
+    leaf_bound: Option<tessera_core::catmull_clark::LeafBound>,
     segments: Option<u32>,
     triangles: usize,
     vertices: usize,
@@ -53,6 +55,9 @@ struct Stats {
     flatness_bounds: Option<u64>,
     /// Adaptive: cells at a vertex split on the split proof alone, without a bound.
     split_proofs: Option<u64>,
+    /// Adaptive with `--leaf-bound triangles`: distance bounds to a cell's own
+    /// triangles computed.
+    triangle_bounds: Option<u64>,
     warnings: Vec<String>,
     timings_ms: Timings,
     #[serde(flatten)]
@@ -86,10 +91,20 @@ pub fn tessellate(args: TessellateArgs) -> Result<(), Error> {
         )
         .into());
     }
-    if method == Method::Uniform && args.first_split.is_some() {
-        return Err(CoreError::Param("--first-split is for --method adaptive".into()).into());
+    if method == Method::Uniform && (args.first_split.is_some() || args.leaf_bound.is_some()) {
+        return Err(CoreError::Param(
+            "--first-split and --leaf-bound are for --method adaptive".into(),
+        )
+        .into());
     }
     let first_split = args.first_split.unwrap_or_default().into();
+    let leaf_bound = args.leaf_bound.unwrap_or_default().into();
+    if on_gpu && leaf_bound != tessera_core::catmull_clark::LeafBound::Flatness {
+        return Err(CoreError::Param(
+            "--leaf-bound triangles runs on the CPU only (--backend cpu)".into(),
+        )
+        .into());
+    }
     if method == Method::Adaptive && (args.level.is_some() || args.segments.is_some()) {
         return Err(
             CoreError::Param("--level and --segments are for --method uniform".into()).into(),
@@ -157,6 +172,7 @@ pub fn tessellate(args: TessellateArgs) -> Result<(), Error> {
                 tolerance,
                 max_depth,
                 first_split,
+                leaf_bound,
             };
             params.validate(&model)?;
             if on_gpu {
@@ -205,6 +221,7 @@ pub fn tessellate(args: TessellateArgs) -> Result<(), Error> {
         tolerance,
         max_depth: tolerance.map(|_| max_depth),
         first_split: tolerance.map(|_| first_split),
+        leaf_bound: tolerance.map(|_| leaf_bound),
         segments,
         triangles: out.mesh.triangle_count(),
         vertices: out.mesh.vertices.len(),
@@ -217,6 +234,7 @@ pub fn tessellate(args: TessellateArgs) -> Result<(), Error> {
         unmet: tolerance.map(|_| out.unmet),
         flatness_bounds: tolerance.map(|_| out.bounds),
         split_proofs: tolerance.map(|_| out.proven),
+        triangle_bounds: tolerance.map(|_| out.triangle_bounds),
         warnings,
         timings_ms: timings,
         error,
@@ -324,6 +342,7 @@ pub fn run_gpu(
         max_bound: status.max_bound() as f64,
         bounds: status.state.bounds as u64,
         proven: status.state.proven as u64,
+        triangle_bounds: 0,
     })
 }
 
@@ -348,5 +367,6 @@ pub fn run_gpu_uniform(
         max_bound: 0.0,
         bounds: 0,
         proven: 0,
+        triangle_bounds: 0,
     })
 }

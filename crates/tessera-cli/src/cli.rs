@@ -56,6 +56,27 @@ impl From<FirstSplit> for tessera_core::catmull_clark::FirstSplit {
     }
 }
 
+/// Which bound accepts a leaf of the adaptive Catmull-Clark method.
+#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum LeafBound {
+    /// The flatness bound, which holds for any triangulation of the leaf's polygon: every
+    /// cell decided alone, as the GPU decides them.
+    #[default]
+    Flatness,
+    /// Also the distance to the cell's own triangles, checked again against the points
+    /// its neighbours add: fewer triangles, more time, CPU only.
+    Triangles,
+}
+
+impl From<LeafBound> for tessera_core::catmull_clark::LeafBound {
+    fn from(b: LeafBound) -> Self {
+        match b {
+            LeafBound::Flatness => Self::Flatness,
+            LeafBound::Triangles => Self::Triangles,
+        }
+    }
+}
+
 #[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Backend {
     /// The CPU reference (the kernels' twins).
@@ -99,6 +120,10 @@ pub struct TessellateArgs {
     /// Catmull-Clark adaptive: how each patch is first split (default search).
     #[arg(long, value_enum)]
     pub first_split: Option<FirstSplit>,
+    /// Catmull-Clark adaptive: which bound accepts a leaf (default flatness; triangles
+    /// is CPU only).
+    #[arg(long, value_enum)]
+    pub leaf_bound: Option<LeafBound>,
     /// Catmull-Clark: cut the mesh along its non-manifold edges (three faces or more) and
     /// tessellate each sheet of faces with its own boundary there, as OpenSubdiv does;
     /// without it such edges are an error.

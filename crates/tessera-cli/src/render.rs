@@ -123,6 +123,7 @@ pub fn render(args: RenderArgs) -> Result<(), Error> {
             tolerance: rel * control.bbox_diag(),
             max_depth: args.max_depth.unwrap_or(MAX_DEPTH),
             first_split: args.first_split.unwrap_or_default().into(),
+            leaf_bound: Default::default(),
         };
         params.validate(&model)?;
         let gpu = crate::gpu::open(&mut timings)?;

@@ -194,10 +194,11 @@ fn tessellate(args: TessellateArgs) -> Result<(), Error> {
         || args.tolerance_rel.is_some()
         || args.level.is_some()
         || args.first_split.is_some()
+        || args.leaf_bound.is_some()
         || args.split_non_manifold
     {
         return Err(CoreError::Param(
-            "--tolerance, --tolerance-rel, --level, --first-split and --split-non-manifold are Catmull-Clark options; Bézier inputs take --threshold and --segments".into(),
+            "--tolerance, --tolerance-rel, --level, --first-split, --leaf-bound and --split-non-manifold are Catmull-Clark options; Bézier inputs take --threshold and --segments".into(),
         )
         .into());
     }

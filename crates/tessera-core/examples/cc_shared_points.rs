@@ -30,6 +30,7 @@ fn main() {
         tolerance: rel * control.bbox_diag(),
         max_depth: MAX_DEPTH,
         first_split: FirstSplit::Search,
+        leaf_bound: Default::default(),
     };
     let grid = params.grid();
     let splits: Vec<(u32, u32)> = first_splits().collect();

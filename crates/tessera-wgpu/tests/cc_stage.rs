@@ -127,6 +127,7 @@ fn gpu_adaptive_matches_the_cpu_reference() {
             tolerance: rel * s,
             max_depth: 6,
             first_split: Default::default(),
+            leaf_bound: Default::default(),
         };
         let cpu = tessellate_adaptive(&model, &params).expect("cpu");
         let (mesh, status) = run(&gpu, &model, &params, None);
@@ -168,6 +169,7 @@ fn gpu_adaptive_matches_the_cpu_reference() {
         tolerance: 3e-4 * size(&model),
         max_depth: 1,
         first_split: Default::default(),
+        leaf_bound: Default::default(),
     };
     let cpu = tessellate_adaptive(&model, &params).expect("cpu");
     let (mesh, status) = run(&gpu, &model, &params, None);
@@ -194,6 +196,7 @@ fn gpu_midpoint_splits_match_the_cpu_reference() {
             tolerance: rel * size(&model),
             max_depth: 6,
             first_split: FirstSplit::Midpoint,
+            leaf_bound: Default::default(),
         };
         let cpu = tessellate_adaptive(&model, &params).expect("cpu");
         let (mesh, status) = run(&gpu, &model, &params, None);
@@ -210,6 +213,7 @@ fn gpu_midpoint_splits_match_the_cpu_reference() {
             &model,
             &CcParams {
                 first_split: FirstSplit::Search,
+                leaf_bound: Default::default(),
                 ..params
             },
         )
@@ -225,6 +229,7 @@ fn gpu_midpoint_splits_match_the_cpu_reference() {
             &model,
             &CcParams {
                 first_split: FirstSplit::Search,
+                leaf_bound: Default::default(),
                 ..params
             },
         )
@@ -258,6 +263,7 @@ fn the_polygon_kernel_matches_its_twin() {
             tolerance: rel * size(&model),
             max_depth: 6,
             first_split: Default::default(),
+            leaf_bound: Default::default(),
         };
         let mut stage = CcStage::new(&gpu.device, &model, &params).expect("stage");
         let status = stage.run_blocking(&gpu.device, &gpu.queue).expect("run");
@@ -336,6 +342,7 @@ fn tiny_capacities_grow_to_the_same_mesh_and_runs_are_byte_identical() {
         tolerance: 2e-3 * size(&model),
         max_depth: 5,
         first_split: Default::default(),
+        leaf_bound: Default::default(),
     };
     let tiny = CcCapacities {
         cells: 1,
@@ -410,6 +417,7 @@ fn moved_control_points_retessellate_in_place() {
         tolerance: 3e-3 * size(&model),
         max_depth: 5,
         first_split: Default::default(),
+        leaf_bound: Default::default(),
     };
     let mut stage = CcStage::new(&gpu.device, &model, &params).expect("stage");
     stage.run_blocking(&gpu.device, &gpu.queue).expect("run");
@@ -504,6 +512,7 @@ fn a_model_larger_than_the_device_allows_is_an_error_not_a_wgpu_failure() {
         tolerance: 3e-3 * size(&model),
         max_depth: 5,
         first_split: Default::default(),
+        leaf_bound: Default::default(),
     };
     for result in [
         CcStage::new(&gpu.device, &model, &params).map(|_| ()),

@@ -463,6 +463,26 @@ struct WalkFrame {
     todo: u32,
 }
 
+/// What a walk over the pieces of a box feeds: every Bézier piece inside it, and the
+/// innermost square at a vertex as a ball.
+pub trait PieceSink {
+    /// A Bézier piece over `rect` (box coordinates) on the box sides `sides`, its net
+    /// `shape + offset` relative to the box's first corner.
+    fn piece(&mut self, shape: &Net, offset: DVec3, rect: [f64; 4], sides: u32);
+    /// The innermost square at a vertex: within `radius` of `limit` (relative to the
+    /// box's first corner).
+    fn vertex(&mut self, limit: DVec3, radius: f64, rect: [f64; 4], sides: u32);
+}
+
+impl PieceSink for BoundSum {
+    fn piece(&mut self, shape: &Net, offset: DVec3, rect: [f64; 4], sides: u32) {
+        BoundSum::piece(self, shape, offset, rect, sides)
+    }
+    fn vertex(&mut self, limit: DVec3, radius: f64, rect: [f64; 4], sides: u32) {
+        BoundSum::vertex(self, limit, radius, rect, sides)
+    }
+}
+
 /// The flatness bound of the box `bx = [u0, u1, v0, v1]` (walk units) of a patch whose
 /// corner positions are `corners`.
 ///
@@ -470,8 +490,28 @@ struct WalkFrame {
 /// SIMD device that masks rather than branches, each place the loop body sums a piece
 /// costs a piece on every step, whatever the node.
 pub fn box_bound(surface: &PatchSurface, bx: [u32; 4], corners: [DVec3; 4]) -> f64 {
-    // The ball at a vertex enters the bound as is: stop at a node 64 times smaller than
-    // the box whose ball is below 1e-4 of the cell.
+    let mut sum = BoundSum {
+        // A patch without a vertex is one Bézier piece.
+        track_dev: !matches!(surface.nodes[0], Node::Bezier(_)),
+        ..BoundSum::new(corners)
+    };
+    if walk_pieces(surface, bx, corners, &mut sum) {
+        sum.finish()
+    } else {
+        f64::INFINITY
+    }
+}
+
+/// Feeds every piece of the box `bx` (walk units) to `sink`, relative to `corners[0]`;
+/// false where the walk ran out of stack (then nothing can be concluded).
+pub fn walk_pieces<S: PieceSink>(
+    surface: &PatchSurface,
+    bx: [u32; 4],
+    corners: [DVec3; 4],
+    sink: &mut S,
+) -> bool {
+    // The ball at a vertex enters as is: stop at a node 64 times smaller than the box
+    // whose ball is below 1e-4 of the cell.
     let size = (corners[2] - corners[0])
         .length()
         .max((corners[3] - corners[1]).length());
@@ -480,11 +520,7 @@ pub fn box_bound(surface: &PatchSurface, bx: [u32; 4], corners: [DVec3; 4]) -> f
         bx,
         max_ball: 1e-4 * size,
         origin: corners[0],
-        sum: BoundSum {
-            // A patch without a vertex is one Bézier piece.
-            track_dev: !matches!(surface.nodes[0], Node::Bezier(_)),
-            ..BoundSum::new(corners)
-        },
+        sum: sink,
         stack: Vec::with_capacity(WALK_STACK),
         overflow: false,
     };
@@ -505,7 +541,7 @@ pub fn box_bound(surface: &PatchSurface, bx: [u32; 4], corners: [DVec3; 4]) -> f
             walk.stack.pop();
         }
         if walk.overflow {
-            return f64::INFINITY;
+            return false;
         }
         let Some(top) = walk.stack.last_mut() else {
             break;
@@ -514,20 +550,20 @@ pub fn box_bound(surface: &PatchSurface, bx: [u32; 4], corners: [DVec3; 4]) -> f
         top.todo &= top.todo - 1;
         e = walk.child(c);
     }
-    walk.sum.finish()
+    true
 }
 
-struct Walk<'a> {
+struct Walk<'a, S> {
     surface: &'a PatchSurface,
     bx: [u32; 4],
     max_ball: f64,
     origin: DVec3,
-    sum: BoundSum,
+    sum: &'a mut S,
     stack: Vec<WalkFrame>,
     overflow: bool,
 }
 
-impl Walk<'_> {
+impl<S: PieceSink> Walk<'_, S> {
     /// Visits a node: a piece is summed, a split node whose ball is small enough enters
     /// as its vertex, any other split node goes on the path.
     fn visit(&mut self, e: WalkEntry) {

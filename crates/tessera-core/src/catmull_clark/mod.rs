@@ -12,7 +12,12 @@
 //! use tessera_core::catmull_clark::{load_surface, tessellate_adaptive, CcParams};
 //! # let cube = concat!(env!("CARGO_MANIFEST_DIR"), "/../../assets/opensubdiv/catmark_cube.obj");
 //! let model = load_surface(std::path::Path::new(cube))?;
-//! let params = CcParams { tolerance: 1e-3, max_depth: 8, first_split: Default::default() };
+//! let params = CcParams {
+//!     tolerance: 1e-3,
+//!     max_depth: 8,
+//!     first_split: Default::default(),
+//!     leaf_bound: Default::default(),
+//! };
 //! let out = tessellate_adaptive(&model, &params)?;
 //! assert_eq!(out.unmet, 0);
 //! assert!(out.max_bound <= 1e-3);
@@ -31,13 +36,16 @@ pub mod patch;
 pub mod polygon;
 pub mod refine;
 pub mod topology;
+pub mod triangle_bound;
 pub mod triangulate;
 pub mod uniform;
 pub mod vertex_hash;
 
 use std::path::Path;
 
-pub use adaptive::{first_splits, tessellate_adaptive, CcParams, CcTessellation, FirstSplit};
+pub use adaptive::{
+    first_splits, tessellate_adaptive, CcParams, CcTessellation, FirstSplit, LeafBound,
+};
 pub use control_mesh::{BoundaryRule, ControlMesh};
 pub use patch::{PatchSurface, SurfaceModel, SurfacePoint};
 pub use topology::PatchMesh;

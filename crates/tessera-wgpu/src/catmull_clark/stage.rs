@@ -33,7 +33,12 @@
 //! # fn main() -> Result<(), Box<dyn std::error::Error>> {
 //! let gpu = Gpu::new()?;
 //! let model = load_surface(std::path::Path::new("assets/opensubdiv/catmark_car.obj"))?;
-//! let params = CcParams { tolerance: 1e-2, max_depth: 8, first_split: Default::default() };
+//! let params = CcParams {
+//!     tolerance: 1e-2,
+//!     max_depth: 8,
+//!     first_split: Default::default(),
+//!     leaf_bound: Default::default(),
+//! };
 //! let mut stage = CcStage::new(&gpu.device, &model, &params)?;
 //! // Once (and after set_params): run to completion, growing buffers that were too small.
 //! let status = stage.run_blocking(&gpu.device, &gpu.queue)?;
@@ -47,7 +52,7 @@
 //! ```
 
 use tessera_core::catmull_clark::gpu_model::{patch_topology, CcGpuModel};
-use tessera_core::catmull_clark::{CcParams, SurfaceModel};
+use tessera_core::catmull_clark::{CcParams, LeafBound, SurfaceModel};
 use tessera_core::gpu_types::{
     CcCell, CcHashStatus, CcPoint, CcState, CcTessParams, OutVertex, CC_SEARCH_ROUNDS, CC_TRIALS,
 };
@@ -294,6 +299,7 @@ impl CcStage {
         caps: CcCapacities,
     ) -> Result<Self> {
         params.validate(model)?;
+        gpu_leaf_bound(params)?;
         let kernels = CcKernels::new(device);
         let gpu_model = CcGpuModel::new(model);
         let model_buffers = CcModelBuffers::new(device, &gpu_model)?;
@@ -371,6 +377,7 @@ impl CcStage {
             ))
             .into());
         }
+        gpu_leaf_bound(params)?;
         self.params = *params;
         let p = tess_params(self.patch_count, params, self.buffers.caps);
         queue.write_buffer(&self.buffers.params, 0, bytemuck::bytes_of(&p));
@@ -747,6 +754,19 @@ fn state_word(offset: usize) -> u32 {
 
 fn status_size() -> u64 {
     (std::mem::size_of::<CcState>() + std::mem::size_of::<CcHashStatus>() + 4) as u64
+}
+
+/// The stage decides every cell alone, by the flatness bound: the triangle bound's
+/// check of each leaf against its neighbours' points is not on the GPU.
+fn gpu_leaf_bound(params: &CcParams) -> Result<()> {
+    if params.leaf_bound != LeafBound::Flatness {
+        return Err(tessera_core::Error::Param(format!(
+            "the GPU stage runs the flatness leaf bound only, not `{}` (a CPU option)",
+            params.leaf_bound.name()
+        ))
+        .into());
+    }
+    Ok(())
 }
 
 fn tess_params(patch_count: u32, params: &CcParams, caps: CcCapacities) -> CcTessParams {
