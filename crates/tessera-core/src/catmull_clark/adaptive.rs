@@ -44,6 +44,7 @@ use super::triangle_bound::triangles_bound;
 use super::triangulate::{triangulate, zip_start, PolyVertex};
 use crate::error::{Error, Result};
 use crate::gpu_types::OutVertex;
+use crate::measure::closest_point_on_triangle;
 use crate::mesh::Mesh;
 
 /// The largest first split of a patch along each side (`ku × kv` cells).
@@ -279,7 +280,8 @@ pub fn flatness_bound(model: &SurfaceModel, p: usize, b: [f64; 4]) -> f64 {
     box_bound(&model.patches[p], bx, corners)
 }
 
-/// Recursive marking of one cell; `leaf` receives each leaf and its bound.
+/// Recursive marking of one cell; `leaf` receives each leaf, its bound and, for a leaf
+/// kept by its own triangles (`exact`), the splits it had left.
 fn mark(
     eval: &mut Evaluator,
     p: usize,
@@ -310,40 +312,19 @@ fn mark(
         eval.bounds += 1;
         box_bound(&eval.model.patches[p], bx, corners)
     };
-    if bound <= tolerance || splits_left == 0 {
+    if bound <= tolerance {
         leaf(cell, bound, None);
         return;
     }
     if exact {
-        let quad = corners.map(|c| c.as_vec3().as_dvec3());
-        let s = zip_start(
-            (quad[0] - quad[2]).length_squared(),
-            (quad[1] - quad[3]).length_squared(),
-        );
-        let triangles = [
-            [quad[(s + 3) % 4], quad[s], quad[s + 1]],
-            [quad[s + 1], quad[s + 2], quad[(s + 3) % 4]],
-        ];
-        // The centre and side midpoints (the children's corners, needed if it splits)
-        // are surface points: one farther than ε from both triangles fails the cell.
-        let (w, h) = (cell.w / 2, cell.h / 2);
-        let far = [(w, h), (w, 0), (2 * w, h), (w, 2 * h), (0, h)]
-            .iter()
-            .any(|&(a, b)| {
-                let x = eval.get(p, cell.i + a, cell.j + b).position;
-                triangles.iter().all(|t| {
-                    (x - crate::measure::closest_point_on_triangle(x, t[0], t[1], t[2])).length()
-                        > tolerance
-                })
-            });
-        if !far {
-            eval.triangle_bounds += 1;
-            let b = triangles_bound(&eval.model.patches[p], bx, corners, &triangles, tolerance);
-            if b <= tolerance {
-                leaf(cell, b, Some(splits_left));
-                return;
-            }
+        if let Some(b) = own_triangles_bound(eval, p, cell, bx, corners, tolerance) {
+            leaf(cell, b, Some(splits_left));
+            return;
         }
+    }
+    if splits_left == 0 {
+        leaf(cell, bound, None);
+        return;
     }
     let (w, h) = (cell.w / 2, cell.h / 2);
     for c in 0..4 {
@@ -356,6 +337,45 @@ fn mark(
         };
         mark(eval, p, child, splits_left - 1, tolerance, exact, leaf);
     }
+}
+
+/// The distance bound from the surface over `cell` to its own two triangles (the zip's
+/// diagonal, on the output's single-precision corners), where it is at most the
+/// tolerance.
+fn own_triangles_bound(
+    eval: &mut Evaluator,
+    p: usize,
+    cell: Cell,
+    bx: [u32; 4],
+    corners: [DVec3; 4],
+    tolerance: f64,
+) -> Option<f64> {
+    let quad = corners.map(|c| c.as_vec3().as_dvec3());
+    let s = zip_start(
+        (quad[0] - quad[2]).length_squared(),
+        (quad[1] - quad[3]).length_squared(),
+    );
+    let triangles = [
+        [quad[(s + 3) % 4], quad[s], quad[s + 1]],
+        [quad[s + 1], quad[s + 2], quad[(s + 3) % 4]],
+    ];
+    // The centre and side midpoints (the children's corners, needed if it splits) are
+    // surface points: one farther than ε from both triangles fails the cell at once.
+    let (w, h) = (cell.w / 2, cell.h / 2);
+    let far = [(w, h), (w, 0), (2 * w, h), (w, 2 * h), (0, h)]
+        .iter()
+        .any(|&(a, b)| {
+            let x = eval.get(p, cell.i + a, cell.j + b).position;
+            triangles
+                .iter()
+                .all(|t| (x - closest_point_on_triangle(x, t[0], t[1], t[2])).length() > tolerance)
+        });
+    if far {
+        return None;
+    }
+    eval.triangle_bounds += 1;
+    let b = triangles_bound(&eval.model.patches[p], bx, corners, &triangles, tolerance);
+    (b <= tolerance).then_some(b)
 }
 
 /// Adaptive tessellation of every (non-hole) patch to within `params.tolerance`.

@@ -73,7 +73,9 @@ impl Triangle {
         let (ab, ac) = (t[1] - t[0], t[2] - t[0]);
         let cross = ab.cross(ac);
         let (len, blen) = (cross.length(), ab.length());
-        let thin = !(len > 1e-12 * ab.length_squared().max(ac.length_squared())) || blen == 0.0;
+        let thin = blen == 0.0
+            || len.is_nan()
+            || len <= 1e-12 * ab.length_squared().max(ac.length_squared());
         let normal = if thin { DVec3::Z } else { cross / len };
         let x = if thin { DVec3::X } else { ab / blen };
         let y = normal.cross(x);
