@@ -8,8 +8,8 @@ use std::path::Path;
 
 use serde::Serialize;
 use tessera_core::catmull_clark::{
-    surface_samples, tessellate_adaptive, tessellate_uniform, CcParams, FirstSplit, PatchMesh,
-    SurfaceModel, MAX_DEPTH, TREE_DEPTH,
+    surface_samples, tessellate_adaptive, tessellate_uniform, CcParams, FirstSplit, LeafBound,
+    PatchMesh, SurfaceModel, MAX_DEPTH, TREE_DEPTH,
 };
 use tessera_core::io::load_control_mesh;
 use tessera_core::measure::{measure_error, ErrorStats};
@@ -45,6 +45,12 @@ struct Row {
     midpoint_triangles: usize,
     midpoint_time_ms: f64,
     midpoint_ratio_to_uniform: f64,
+    /// The CPU's leaf bound for a cell's own triangles ([`LeafBound::Triangles`], the
+    /// search's first splits) at the same tolerance, likewise.
+    own_triangles: usize,
+    own_max_error: f64,
+    own_time_ms: f64,
+    own_ratio_to_uniform: f64,
 }
 
 /// (file, detailed)
@@ -125,6 +131,18 @@ pub fn run(assets: &Path, out_dir: &Path, quick: bool) {
                 k += 1;
             }
             let paper_triangles = paper.mesh.triangle_count();
+            let own_params = CcParams {
+                leaf_bound: LeafBound::Triangles,
+                ..params
+            };
+            let (own_ms, own) = crate::median_time(repeats, || {
+                tessellate_adaptive(&model, &own_params).expect("own triangles")
+            });
+            let own_error = measure_error(&samples, &own.mesh).max_error;
+            let mut j = 1;
+            while uniform_at(j).1.max_error > own_error && j < 256 {
+                j += 1;
+            }
             let row = Row {
                 model: format!(
                     "{}{}",
@@ -151,15 +169,21 @@ pub fn run(assets: &Path, out_dir: &Path, quick: bool) {
                 midpoint_triangles: paper_triangles,
                 midpoint_time_ms: midpoint_ms,
                 midpoint_ratio_to_uniform: paper_triangles as f64 / uniform_at(k).0 as f64,
+                own_triangles: own.mesh.triangle_count(),
+                own_max_error: own_error,
+                own_time_ms: own_ms,
+                own_ratio_to_uniform: own.mesh.triangle_count() as f64 / uniform_at(j).0 as f64,
             };
             eprintln!(
-                "cc {} {rel:e}: {} tris (max {:.3e}), uniform n={n} {} tris (max {:.3e}): {:.3}×",
+                "cc {} {rel:e}: {} tris (max {:.3e}), uniform n={n} {} tris (max {:.3e}): {:.3}×; own triangles {} ({:.3}×)",
                 row.model,
                 row.triangles,
                 row.max_error,
                 row.uniform_triangles,
                 row.uniform_max_error,
-                row.ratio_to_uniform
+                row.ratio_to_uniform,
+                row.own_triangles,
+                row.own_ratio_to_uniform
             );
             rows.push(row);
         }
@@ -169,11 +193,11 @@ pub fn run(assets: &Path, out_dir: &Path, quick: bool) {
 
 fn table(rows: &[Row]) -> String {
     let mut s = String::from(
-        "| model | patches | ε (of diagonal) | adaptive tris | guaranteed bound (model units) | measured max (model units) | mean | time ms | bounds per leaf | uniform n | uniform tris | uniform max | **ratio** | ratio at ε | midpoint (paper) tris | midpoint ms | midpoint ratio |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
+        "| model | patches | ε (of diagonal) | adaptive tris | guaranteed bound (model units) | measured max (model units) | mean | time ms | bounds per leaf | uniform n | uniform tris | uniform max | **ratio** | ratio at ε | midpoint (paper) tris | midpoint ms | midpoint ratio | own-triangles tris | own max | own ms | **own ratio** |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
     );
     for r in rows {
         s += &format!(
-            "| {}{} | {} | {:.0e} | {} | {:.2e} | {:.2e} | {:.2e} | {:.1} | {:.2} | {} | {} | {:.2e} | **{:.2}** | {:.2} | {} | {:.1} | {:.2} |\n",
+            "| {}{} | {} | {:.0e} | {} | {:.2e} | {:.2e} | {:.2e} | {:.1} | {:.2} | {} | {} | {:.2e} | **{:.2}** | {:.2} | {} | {:.1} | {:.2} | {} | {:.2e} | {:.1} | **{:.2}** |\n",
             r.model,
             if r.detailed { "" } else { " (simple)" },
             r.patches,
@@ -191,7 +215,11 @@ fn table(rows: &[Row]) -> String {
             r.ratio_at_tolerance,
             r.midpoint_triangles,
             r.midpoint_time_ms,
-            r.midpoint_ratio_to_uniform
+            r.midpoint_ratio_to_uniform,
+            r.own_triangles,
+            r.own_max_error,
+            r.own_time_ms,
+            r.own_ratio_to_uniform
         );
     }
     s
