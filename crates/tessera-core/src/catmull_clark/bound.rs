@@ -56,8 +56,9 @@
 //! [`CORNER_DEPTH`](super::CORNER_DEPTH) levels deep) inherit from it which sides of the
 //! box they lie on. Down the chain, a square 64 times smaller than the box whose ball
 //! (around the vertex, holding the surface over it) is below 1e-4 of the cell ends the
-//! walk there, as that ball. Each piece is fed to [`BoundSum`], which keeps every running maximum
-//! the two bounds need. Points are taken relative to the box's first corner, so that
+//! walk there, as that ball. Each piece is fed to a [`PieceSink`]: here [`BoundSum`], which
+//! keeps every running maximum the two bounds need (the distance bound to known
+//! triangles of [`super::triangle_bound`] walks the same way). Points are taken relative to the box's first corner, so that
 //! single precision keeps the shape of small cells.
 //!
 //! This is the CPU twin of `shaders/shared/cc_bound.wgsl`, in double precision. Both add

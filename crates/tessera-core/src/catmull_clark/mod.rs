@@ -4,8 +4,9 @@
 //! Layers, as in OpenSubdiv: [`control_mesh`] (the input) and [`topology`] (validation,
 //! the first subdivision step, patches; "Far"); [`refine`] and [`local`] (the
 //! subdivision rules, one-rings), [`bicubic`] and [`patch`] (exact evaluation; "Bfr");
-//! then the tessellators [`adaptive`] and [`uniform`], with [`keys`] (canonical point
-//! keys) and [`triangulate`]; [`gpu_model`], [`gpu_uniform`], [`polygon`] and
+//! then the tessellators [`adaptive`] and [`uniform`], with [`bound`] (the flatness bound),
+//! [`triangle_bound`] (the distance to known triangles, CPU only), [`keys`] (canonical
+//! point keys) and [`triangulate`]; [`gpu_model`], [`gpu_uniform`], [`polygon`] and
 //! [`vertex_hash`] are the CPU twins of the GPU kernels' data and of kernels.
 //!
 //! ```
