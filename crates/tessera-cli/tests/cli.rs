@@ -230,7 +230,12 @@ fn bad_parameters_fail_cleanly() {
         (
             &cube,
             &["--method", "uniform", "--first-split", "midpoint"],
-            "--first-split is for --method adaptive",
+            "--first-split and --leaf-bound are for --method adaptive",
+        ),
+        (
+            &cube,
+            &["--method", "uniform", "--leaf-bound", "triangles"],
+            "--first-split and --leaf-bound are for --method adaptive",
         ),
         (
             &cube,
@@ -254,6 +259,23 @@ fn bad_parameters_fail_cleanly() {
         ),
         (Path::new("/nonexistent/teapot"), &[], "/nonexistent/teapot"),
     ];
+    // The own-triangles leaf bound is a CPU option: refused on the GPU before any
+    // device is opened.
+    let out = tmp("bad_leaf_bound.ply");
+    let _ = std::fs::remove_file(&out);
+    let r = tessera()
+        .arg("tessellate")
+        .arg(&cube)
+        .args(["--leaf-bound", "triangles", "--backend", "gpu", "-o"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&r.stderr);
+    assert_eq!(r.status.code(), Some(1), "{stderr}");
+    assert!(
+        stderr.contains("--leaf-bound triangles runs on the CPU only") && !out.exists(),
+        "{stderr}"
+    );
     let out = tmp("bad_param.ply");
     for (input, args, expect) in cases {
         let _ = std::fs::remove_file(&out);
