@@ -2,7 +2,7 @@
 //! the output is watertight, and the bound of a cell is never below its true error.
 
 use glam::DVec3;
-use tessera_core::catmull_clark::adaptive::flatness_bound;
+use tessera_core::catmull_clark::adaptive::{flatness_bound, triangle_distance_bound};
 use tessera_core::catmull_clark::bound::split_proof;
 use tessera_core::catmull_clark::triangulate::{self, PolyVertex};
 use tessera_core::catmull_clark::{
@@ -496,34 +496,6 @@ fn gpu_uniform_twin_makes_the_uniform_reference_mesh() {
     }
 }
 
-/// The triangle-distance bound of box `b = [u0, u1, v0, v1]` of patch `p` to `tris`,
-/// refined until it is at most `target` (infinite where it cannot show that).
-fn triangles_bound(
-    model: &SurfaceModel,
-    p: usize,
-    b: [f64; 4],
-    tris: &[[DVec3; 3]],
-    target: f64,
-) -> f64 {
-    use tessera_core::catmull_clark::bound::WALK_ONE;
-    let bx = b.map(|t| (t * WALK_ONE as f64).round() as u32);
-    let t = |x: u32| x as f64 / WALK_ONE as f64;
-    let corners = [
-        (bx[0], bx[2]),
-        (bx[1], bx[2]),
-        (bx[1], bx[3]),
-        (bx[0], bx[3]),
-    ]
-    .map(|(u, v)| model.eval(p, t(u), t(v)).position);
-    tessera_core::catmull_clark::triangle_bound::triangles_bound(
-        &model.patches[p],
-        bx,
-        corners,
-        tris,
-        target,
-    )
-}
-
 #[test]
 fn the_triangle_bound_is_above_the_true_distance_and_tends_to_it() {
     // Cells anywhere, the extraordinary corners and the boundary included, under three
@@ -577,12 +549,12 @@ fn the_triangle_bound_is_above_the_true_distance_and_tends_to_it() {
                             truth = truth.max(d);
                         }
                     }
-                    let coarse = triangles_bound(&model, p, b, &tris, f64::INFINITY);
+                    let coarse = triangle_distance_bound(&model, p, b, &tris, f64::INFINITY);
                     assert!(
                         coarse >= truth * (1.0 - 1e-9),
                         "{name} {p} {b:?}: {coarse} < {truth}"
                     );
-                    let fine = triangles_bound(&model, p, b, &tris, 1.5 * truth);
+                    let fine = triangle_distance_bound(&model, p, b, &tris, 1.5 * truth);
                     assert!(
                         fine >= truth * (1.0 - 1e-9),
                         "{name} {p} {b:?}: {fine} < {truth}"

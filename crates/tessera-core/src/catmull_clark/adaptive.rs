@@ -281,6 +281,27 @@ impl<'a> Evaluator<'a> {
 /// bound on the distance between the surface and any triangulation of the box's
 /// polygon ([`super::bound`]). The box is snapped to the walk grid (`1 / WALK_ONE`).
 pub fn flatness_bound(model: &SurfaceModel, p: usize, b: [f64; 4]) -> f64 {
+    let (bx, corners) = snapped_box(model, p, b);
+    box_bound(&model.patches[p], bx, corners)
+}
+
+/// The distance bound from the surface over the box `[u0, u1] × [v0, v1]` of patch `p`
+/// to the nearest of `triangles`, refined toward `target`
+/// ([`triangle_bound::triangles_bound`](super::triangle_bound::triangles_bound)); the box
+/// is snapped as in [`flatness_bound`].
+pub fn triangle_distance_bound(
+    model: &SurfaceModel,
+    p: usize,
+    b: [f64; 4],
+    triangles: &[[DVec3; 3]],
+    target: f64,
+) -> f64 {
+    let (bx, corners) = snapped_box(model, p, b);
+    triangles_bound(&model.patches[p], bx, corners, triangles, target)
+}
+
+/// The box in walk units and its corner positions.
+fn snapped_box(model: &SurfaceModel, p: usize, b: [f64; 4]) -> ([u32; 4], [DVec3; 4]) {
     let bx = b.map(|t| (t.clamp(0.0, 1.0) * WALK_ONE as f64).round() as u32);
     let t = |x: u32| x as f64 / WALK_ONE as f64;
     let corners = [
@@ -290,7 +311,7 @@ pub fn flatness_bound(model: &SurfaceModel, p: usize, b: [f64; 4]) -> f64 {
         (bx[0], bx[3]),
     ]
     .map(|(u, v)| model.eval(p, t(u), t(v)).position);
-    box_bound(&model.patches[p], bx, corners)
+    (bx, corners)
 }
 
 /// Recursive marking of one cell; `leaf` receives each leaf, its bound and, for a leaf
