@@ -26,7 +26,7 @@ fn flat_test_keeps_the_error_near_its_threshold() {
         let samples = bezier_surface_samples(&model, 24);
         for th in [0.04f32, 0.01] {
             let t = tessellate_adaptive(&prep, &params(EdgeTest::Flat, th)).unwrap();
-            let e = measure_error(&samples, &t.mesh);
+            let e = measure_error(&samples, &t.mesh, model.bbox_diag());
             assert!(
                 e.max_error <= 1.25 * th as f64,
                 "{name} th={th}: max error {} ({} triangles)",
@@ -48,7 +48,7 @@ fn refinement_is_monotone_in_the_threshold() {
         let mut last: Option<(usize, f64)> = None;
         for th in [0.08f32, 0.04, 0.02] {
             let t = tessellate_adaptive(&prep, &params(test, th)).unwrap();
-            let e = measure_error(&samples, &t.mesh);
+            let e = measure_error(&samples, &t.mesh, model.bbox_diag());
             if let Some((tris, err)) = last {
                 assert!(t.mesh.triangle_count() > tris, "{test:?} th={th}");
                 assert!(

@@ -11,6 +11,7 @@ use tessera_core::catmull_clark::{
 };
 use tessera_core::measure::{closest_point_on_triangle, measure_error};
 use tessera_core::watertight::check_watertight;
+use tessera_core::Tolerance;
 use tessera_tests::{cc_model, control_mesh, fan};
 
 fn diag(rel: &str) -> f64 {
@@ -21,7 +22,7 @@ fn adaptive(model: &SurfaceModel, tolerance: f64) -> CcTessellation {
     tessellate_adaptive(
         model,
         &CcParams {
-            tolerance,
+            tolerance: Tolerance::Absolute(tolerance),
             max_depth: 10,
             first_split: Default::default(),
             leaf_bound: Default::default(),
@@ -63,7 +64,7 @@ fn measured_error_never_exceeds_the_tolerance() {
             let out = adaptive(model, tol);
             assert_eq!(out.unmet, 0, "{name} {rel}");
             assert!(out.max_bound <= tol, "{name} {rel}");
-            let e = measure_error(&samples, &out.mesh);
+            let e = measure_error(&samples, &out.mesh, model.mesh.control_diag);
             assert!(
                 e.max_error <= tol,
                 "{name} at {rel}: measured {} > {tol}",
@@ -126,7 +127,7 @@ fn every_shipped_control_mesh_meets_its_tolerance() {
                             let tol = rel * control.bbox_diag();
                             let out = adaptive(&model, tol);
                             assert_eq!(out.unmet, 0, "{name} at {rel}");
-                            let e = measure_error(&samples, &out.mesh);
+                            let e = measure_error(&samples, &out.mesh, model.mesh.control_diag);
                             assert!(
                                 e.max_error <= tol,
                                 "{name} at {rel}: measured {} > {tol}",
@@ -607,7 +608,7 @@ fn own_triangles_leaf_bound_meets_the_tolerance_with_fewer_triangles() {
         for rel in [1e-2, 3e-3] {
             let tol = rel * size;
             let params = |leaf_bound| CcParams {
-                tolerance: tol,
+                tolerance: Tolerance::Absolute(tol),
                 max_depth: 10,
                 first_split: Default::default(),
                 leaf_bound,
@@ -617,7 +618,7 @@ fn own_triangles_leaf_bound_meets_the_tolerance_with_fewer_triangles() {
             assert_eq!(own.unmet, 0, "{name} {rel}");
             assert!(own.max_bound <= tol, "{name} {rel}");
             triangle_bounds += own.triangle_bounds;
-            let e = measure_error(&samples, &own.mesh);
+            let e = measure_error(&samples, &own.mesh, model.mesh.control_diag);
             assert!(
                 e.max_error <= tol,
                 "{name} at {rel}: measured {} > {tol}",

@@ -11,7 +11,7 @@ fn a_plane_is_measured_exactly() {
     let prep = PreparedBezier::new(&model);
     let t = tessellate_uniform(&model, &prep, 2).unwrap();
     let samples = bezier_surface_samples(&model, 33);
-    let e = measure_error(&samples, &t.mesh);
+    let e = measure_error(&samples, &t.mesh, model.bbox_diag());
     assert!(e.max_error < 1e-6, "{e:?}");
     // The same mesh lifted by δ: every sample is δ away.
     let mut lifted = t.mesh.clone();
@@ -19,11 +19,14 @@ fn a_plane_is_measured_exactly() {
         .vertices
         .iter_mut()
         .for_each(|v| v.position[2] += 0.125);
-    let e = measure_error(&samples, &lifted);
+    let e = measure_error(&samples, &lifted, model.bbox_diag());
     for x in [e.max_error, e.mean_error, e.p99_error] {
         assert!((x - 0.125).abs() < 1e-6, "{e:?}");
     }
-    assert!((e.bbox_diag - 2f64.sqrt()).abs() < 1e-9);
+    // The control box and the sampled surface's box, reported apart.
+    assert!((e.bbox_diag - 2f64.sqrt()).abs() < 1e-6, "{e:?}");
+    assert!((e.surface_bbox_diag - 2f64.sqrt()).abs() < 1e-9, "{e:?}");
+    assert!((e.max_error_rel - 0.125 / e.bbox_diag).abs() < 1e-9, "{e:?}");
 }
 
 #[test]
@@ -35,7 +38,7 @@ fn parabolic_cylinder_error_is_the_analytic_sagitta() {
     let prep = PreparedBezier::new(&model);
     for n in [2u32, 4, 8] {
         let t = tessellate_uniform(&model, &prep, n).unwrap();
-        let e = measure_error(&bezier_surface_samples(&model, 65), &t.mesh);
+        let e = measure_error(&bezier_surface_samples(&model, 65), &t.mesh, model.bbox_diag());
         let h = 1.0 / n as f64;
         let expected = h * h / (4.0 * (1.0 + h * h).sqrt());
         assert!(
@@ -102,7 +105,7 @@ fn bvh_agrees_with_brute_force_on_the_teapot() {
         );
         brute.push(d);
     }
-    let e = measure_error(&samples, &t.mesh);
+    let e = measure_error(&samples, &t.mesh, model.bbox_diag());
     let max = brute.iter().cloned().fold(0.0, f64::max);
     let mean = brute.iter().sum::<f64>() / brute.len() as f64;
     assert!(

@@ -23,8 +23,10 @@ pub mod io;
 pub mod measure;
 pub mod mesh;
 pub mod scan;
+pub mod tolerance;
 pub mod watertight;
 pub mod weld;
 
 pub use error::{Error, Result};
 pub use mesh::Mesh;
+pub use tolerance::Tolerance;

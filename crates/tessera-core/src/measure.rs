@@ -1,4 +1,4 @@
-//! Error against the true surface (SPEC §3): the distance from a dense sampling of the
+//! Error against the true surface: the distance from a dense sampling of the
 //! exact surface to the output triangles (one-sided Hausdorff), with exact point–triangle
 //! distances found through a bounding-volume hierarchy. Double precision throughout.
 
@@ -17,7 +17,7 @@ pub const MAX_SAMPLES_PER_SIDE: usize = 1024;
 pub const MAX_SAMPLES: u64 = 1 << 26;
 
 /// Refuses a sampling of `per_side`² points on each of `patches` patches that is
-/// coarser than SPEC §3's 32 per side or larger than the limits above.
+/// coarser than 32 per side or larger than the limits above.
 pub fn check_sampling(per_side: usize, patches: usize) -> crate::Result<()> {
     if !(32..=MAX_SAMPLES_PER_SIDE).contains(&per_side) {
         return Err(crate::Error::Param(format!(
@@ -39,10 +39,14 @@ pub struct ErrorStats {
     pub max_error: f64,
     pub mean_error: f64,
     pub p99_error: f64,
-    /// Diagonal of the bounding box of the surface samples.
+    /// Diagonal of the bounding box of the input's control points: the box a relative
+    /// tolerance is a fraction of ([`crate::Tolerance`]).
     pub bbox_diag: f64,
     /// `max_error / bbox_diag`.
     pub max_error_rel: f64,
+    /// Diagonal of the bounding box of the surface samples (the measured surface's box,
+    /// inside the control points' hull).
+    pub surface_bbox_diag: f64,
     pub samples: usize,
     /// Index of the sample with the largest error.
     pub worst_sample: usize,
@@ -64,14 +68,18 @@ pub fn bezier_surface_samples(model: &BezierModel, n: usize) -> Vec<DVec3> {
     out
 }
 
-/// Distance statistics from `samples` to `mesh`. Runs on all cores.
-pub fn measure_error(samples: &[DVec3], mesh: &Mesh) -> ErrorStats {
+/// Distance statistics from `samples` to `mesh`, relative to `bbox_diag` (the diagonal
+/// of the control points' box). Runs on all cores.
+pub fn measure_error(samples: &[DVec3], mesh: &Mesh, bbox_diag: f64) -> ErrorStats {
     let tris: Vec<[DVec3; 3]> = mesh
         .triangles()
         .map(|t| t.map(|i| DVec3::from(mesh.vertices[i as usize].position.map(f64::from))))
         .collect();
     if samples.is_empty() || tris.is_empty() {
-        return ErrorStats::default();
+        return ErrorStats {
+            bbox_diag,
+            ..Default::default()
+        };
     }
     let bvh = TriangleBvh::new(tris);
     let threads = std::thread::available_parallelism()
@@ -96,7 +104,7 @@ pub fn measure_error(samples: &[DVec3], mesh: &Mesh) -> ErrorStats {
         (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
         |(lo, hi), &p| (lo.min(p), hi.max(p)),
     );
-    let bbox_diag = (hi - lo).length();
+    let surface_bbox_diag = (hi - lo).length();
     let mean = dist.iter().sum::<f64>() / dist.len() as f64;
     let mut sorted = dist.clone();
     sorted.sort_by(f64::total_cmp);
@@ -113,6 +121,7 @@ pub fn measure_error(samples: &[DVec3], mesh: &Mesh) -> ErrorStats {
         } else {
             0.0
         },
+        surface_bbox_diag,
         samples: samples.len(),
         worst_sample,
     }

@@ -54,6 +54,13 @@ impl BezierModel {
         Self::from_nets(points, nets)
     }
 
+    /// Diagonal of the control points' bounding box: what relative thresholds and
+    /// errors are fractions of.
+    pub fn bbox_diag(&self) -> f64 {
+        let (lo, hi) = self.bounds();
+        f64::from((hi - lo).length())
+    }
+
     /// Builds a model from welded control nets.
     pub fn from_nets(points: Vec<Vec3>, nets: Vec<[u32; 16]>) -> Self {
         let patches = nets

@@ -58,6 +58,7 @@ use super::triangle_bound::triangles_bound;
 use super::triangulate::{triangulate, zip_start, PolyVertex};
 use crate::error::{Error, Result};
 use crate::gpu_types::OutVertex;
+use crate::tolerance::Tolerance;
 use crate::measure::closest_point_on_triangle;
 use crate::mesh::Mesh;
 
@@ -158,7 +159,7 @@ impl LeafBound {
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 pub struct CcParams {
     /// ε: the largest distance allowed between the output and the limit surface.
-    pub tolerance: f64,
+    pub tolerance: Tolerance,
     /// At most this many midpoint splits after the first split (≤ the model's depth).
     pub max_depth: u32,
     /// How each patch is first split.
@@ -174,20 +175,21 @@ impl CcParams {
         BASE_GRID << self.max_depth
     }
 
+    /// ε in model units for `model` (a relative tolerance is a fraction of the control
+    /// points' box, [`PatchMesh::control_diag`](super::PatchMesh::control_diag)).
+    pub fn epsilon(&self, model: &SurfaceModel) -> f64 {
+        self.tolerance.resolve(model.mesh.control_diag)
+    }
+
     /// Checks the tolerance (positive, and at least [`MIN_TOLERANCE_REL`] of the
     /// bounding-box diagonal of the refined control points) and the depth.
     pub fn validate(&self, model: &SurfaceModel) -> Result<()> {
-        if !(self.tolerance.is_finite() && self.tolerance > 0.0) {
-            return Err(Error::Param(format!(
-                "tolerance must be a positive number, got {}",
-                self.tolerance
-            )));
-        }
+        self.tolerance.validate()?;
+        let eps = self.epsilon(model);
         let size = model.mesh.bbox_diag();
-        if self.tolerance < MIN_TOLERANCE_REL * size {
+        if eps < MIN_TOLERANCE_REL * size {
             return Err(Error::Param(format!(
-                "tolerance {:e} is below {MIN_TOLERANCE_REL:e} of the surface's size ({size:e}): finer than single-precision output can hold",
-                self.tolerance
+                "tolerance {eps:e} is below {MIN_TOLERANCE_REL:e} of the surface's size ({size:e}): finer than single-precision output can hold"
             )));
         }
         if self.max_depth > model.depth.min(super::MAX_DEPTH) {
@@ -252,6 +254,8 @@ struct Evaluator<'a> {
     /// Triangle-distance bounds computed so far.
     triangle_bounds: u64,
     points: HashMap<u64, (SurfacePoint, usize, u32, u32)>,
+    /// ε in model units.
+    eps: f64,
 }
 
 impl<'a> Evaluator<'a> {
@@ -260,6 +264,7 @@ impl<'a> Evaluator<'a> {
         Evaluator {
             model,
             n: params.grid(),
+            eps: params.epsilon(model),
             bounds: 0,
             proven: 0,
             triangle_bounds: 0,
@@ -430,7 +435,7 @@ fn tessellate_with_splits(
     let mut out = CcTessellation::default();
     // 1. Adaptive marking. 2. Base-quadrilateral replacement.
     let mut marking = mark_patches(&mut eval, params, splits);
-    let polygons = settle_exact_leaves(&mut eval, params, &mut marking);
+    let polygons = settle_exact_leaves(&mut eval, &mut marking);
     out.unmet = marking.unmet;
     out.bounds = eval.bounds;
     out.proven = eval.proven;
@@ -494,32 +499,6 @@ fn base_cells(n: u32, (ku, kv): (u32, u32)) -> impl Iterator<Item = Cell> {
     })
 }
 
-/// The leaves of patch `p` under the first split `ku × kv`, each `[i, j, w, h]` (the
-/// cell `[i, i + w] × [j, j + h]` in units of `1 / params.grid()`), marked as step 1
-/// marks every trial: for tools that compare first splits
-/// (`examples/cc_shared_points.rs`).
-pub fn split_leaves(
-    model: &SurfaceModel,
-    params: &CcParams,
-    p: usize,
-    split: (u32, u32),
-) -> Vec<[u32; 4]> {
-    let mut eval = Evaluator::new(model, params);
-    let mut leaves = Vec::new();
-    for cell in base_cells(eval.n, split) {
-        mark(
-            &mut eval,
-            p,
-            cell,
-            params.max_depth,
-            params.tolerance,
-            false,
-            &mut |c, _, _| leaves.push([c.i, c.j, c.w, c.h]),
-        );
-    }
-    leaves
-}
-
 /// What step 1 found: every leaf, and the first split each patch chose.
 struct Marking {
     leaves: Vec<(usize, Cell)>,
@@ -536,6 +515,7 @@ struct Marking {
 /// Step 1, adaptive marking: the first split ku×kv of each patch is the one with the
 /// fewest leaves.
 fn mark_patches(eval: &mut Evaluator, params: &CcParams, splits: &[(u32, u32)]) -> Marking {
+    let eps = eval.eps;
     let (n, model) = (eval.n, eval.model);
     let mesh = &model.mesh;
     let exact = params.leaf_bound == LeafBound::Triangles;
@@ -564,7 +544,7 @@ fn mark_patches(eval: &mut Evaluator, params: &CcParams, splits: &[(u32, u32)]) 
                     p,
                     cell,
                     params.max_depth,
-                    params.tolerance,
+                    eps,
                     exact,
                     &mut |c, bound, e| trial_leaves.push((c, bound, e)),
                 );
@@ -579,7 +559,7 @@ fn mark_patches(eval: &mut Evaluator, params: &CcParams, splits: &[(u32, u32)]) 
             }
         }
         for (c, bound, e) in best_leaves {
-            if bound > params.tolerance {
+            if bound > eps {
                 out.unmet += 1;
             }
             out.max_bound = out.max_bound.max(bound);
@@ -597,9 +577,9 @@ fn mark_patches(eval: &mut Evaluator, params: &CcParams, splits: &[(u32, u32)]) 
 /// not matter. Returns the leaves' polygons.
 fn settle_exact_leaves(
     eval: &mut Evaluator,
-    params: &CcParams,
     marking: &mut Marking,
 ) -> Vec<Polygon> {
+    let eps = eval.eps;
     let (n, mesh) = (eval.n, &eval.model.mesh);
     loop {
         let polygons = leaf_polygons(mesh, &marking.leaves, n);
@@ -640,9 +620,9 @@ fn settle_exact_leaves(
                 bx,
                 quad,
                 &triangles,
-                params.tolerance,
+                eps,
             );
-            if b <= params.tolerance {
+            if b <= eps {
                 marking.bounds[k].0 = b;
             } else {
                 failed.push(k);
@@ -665,10 +645,10 @@ fn settle_exact_leaves(
                     p,
                     cell,
                     splits_left,
-                    params.tolerance,
+                    eps,
                     false,
                     &mut |c, b, _| {
-                        if b > params.tolerance {
+                        if b > eps {
                             marking.unmet += 1;
                         }
                         leaves.push((p, c));
@@ -870,7 +850,7 @@ mod tests {
             let model = SurfaceModel::new(PatchMesh::new(&control).expect("valid"), TREE_DEPTH);
             for rel in [1e-2, 2e-3, 5e-4, 2e-4] {
                 let params = CcParams {
-                    tolerance: rel * control.bbox_diag(),
+                    tolerance: Tolerance::Absolute(rel * control.bbox_diag()),
                     max_depth: 4,
                     first_split: Default::default(),
                     leaf_bound: Default::default(),
@@ -901,7 +881,7 @@ mod tests {
         let model = crate::catmull_clark::load_surface(Path::new(cube)).expect("cube");
         let patches = model.mesh.patch_count() as u64;
         let coarse = CcParams {
-            tolerance: 10.0,
+            tolerance: Tolerance::Absolute(10.0),
             max_depth: 4,
             first_split: Default::default(),
             leaf_bound: Default::default(),
@@ -912,7 +892,7 @@ mod tests {
         let fine = tessellate_adaptive(
             &model,
             &CcParams {
-                tolerance: 1e-3,
+                tolerance: Tolerance::Absolute(1e-3),
                 ..coarse
             },
         )
@@ -942,7 +922,7 @@ mod tests {
         ] {
             let model = crate::catmull_clark::load_surface(&assets.join(name)).expect(name);
             let search = CcParams {
-                tolerance: rel * model.mesh.bbox_diag(),
+                tolerance: Tolerance::Relative(rel),
                 max_depth: 6,
                 first_split: FirstSplit::Search,
                 leaf_bound: Default::default(),
@@ -960,7 +940,7 @@ mod tests {
             assert_eq!(tested, leaves + (leaves - patches) / 3, "{name}");
             assert!(paper.proven > 0, "{name}: no cell split on the proof");
             assert_eq!((paper.unmet, ours.unmet), (0, 0), "{name}");
-            assert!(paper.max_bound <= midpoint.tolerance, "{name}");
+            assert!(paper.max_bound <= midpoint.epsilon(&model), "{name}");
             assert!(ours.leaves < paper.leaves, "{name}: {} leaves", ours.leaves);
             assert!(ours.bounds > paper.bounds, "{name}");
             let mut eval = Evaluator::new(&model, &midpoint);
@@ -995,7 +975,7 @@ mod tests {
             let mesh = &model.mesh;
             let size = mesh.bbox_diag();
             let params = CcParams {
-                tolerance: rel * size,
+                tolerance: Tolerance::Absolute(rel * size),
                 max_depth: 6,
                 first_split: Default::default(),
                 leaf_bound: Default::default(),

@@ -10,11 +10,11 @@
 //! [`vertex_hash`] are the CPU twins of the GPU kernels' data and of kernels.
 //!
 //! ```
-//! use tessera_core::catmull_clark::{load_surface, tessellate_adaptive, CcParams};
+//! use tessera_core::{catmull_clark::{load_surface, tessellate_adaptive, CcParams}, Tolerance};
 //! # let cube = concat!(env!("CARGO_MANIFEST_DIR"), "/../../assets/opensubdiv/catmark_cube.obj");
 //! let model = load_surface(std::path::Path::new(cube))?;
 //! let params = CcParams {
-//!     tolerance: 1e-3,
+//!     tolerance: Tolerance::Absolute(1e-3),
 //!     max_depth: 8,
 //!     first_split: Default::default(),
 //!     leaf_bound: Default::default(),

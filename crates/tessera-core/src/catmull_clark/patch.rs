@@ -263,6 +263,15 @@ impl SurfaceModel {
         }
     }
 
+    /// The same surface with the control points moved to `positions` (same topology):
+    /// every patch is built again, to the same depth.
+    pub fn with_control_points(&self, positions: &[DVec3]) -> crate::Result<Self> {
+        Ok(SurfaceModel::new(
+            self.mesh.with_control_points(positions)?,
+            self.depth,
+        ))
+    }
+
     /// Bytes of the quadtrees as the GPU reads them ([`super::gpu_model::CcGpuModel`]):
     /// a root per patch (4 B), a node per node (8 B), and a Bézier net (192 B), a split's
     /// four children (16 B, plus 32 B for its ball on a chain at a vertex) or a corner

@@ -55,6 +55,15 @@ pub struct PatchMesh {
     pub edge_uses: Vec<u8>,
     /// Control vertices no face uses (ignored).
     pub unreferenced_vertices: usize,
+    /// The control faces, kept so that moved control points refine to the same quads
+    /// ([`PatchMesh::with_control_points`]).
+    pub control_faces: Vec<Vec<u32>>,
+    /// Control vertices, unreferenced ones included.
+    pub control_vertices: usize,
+    /// Diagonal of the bounding box of the control points that faces use, as loaded:
+    /// what a relative tolerance is a fraction of ([`crate::Tolerance`]). Moving the
+    /// points keeps it.
+    pub control_diag: f64,
 }
 
 impl PatchMesh {
@@ -118,6 +127,36 @@ impl PatchMesh {
             quad_edges,
             edge_uses,
             unreferenced_vertices,
+            control_faces: mesh.faces.clone(),
+            control_vertices: mesh.positions.len(),
+            control_diag: mesh.bbox_diag(),
+        })
+    }
+
+    /// The same topology with the control points moved to `positions` (one per control
+    /// vertex, in the input's order): only the first-level points are computed again.
+    /// [`control_diag`](Self::control_diag) stays as loaded.
+    pub fn with_control_points(&self, positions: &[DVec3]) -> Result<PatchMesh> {
+        if positions.len() != self.control_vertices {
+            return Err(Error::Param(format!(
+                "{} control points given, the mesh has {}",
+                positions.len(),
+                self.control_vertices
+            )));
+        }
+        if let Some(i) = positions.iter().position(|p| {
+            !p.is_finite() || p.abs().max_element() > crate::io::MAX_COORDINATE
+        }) {
+            return Err(Error::Param(format!(
+                "control point {i} is {}: coordinates must be finite and within ±{:e}",
+                positions[i],
+                crate::io::MAX_COORDINATE
+            )));
+        }
+        let level1 = refine(positions, &self.control_faces, self.boundary);
+        Ok(PatchMesh {
+            points: level1.points,
+            ..self.clone()
         })
     }
 
