@@ -10,7 +10,7 @@ fn main() -> ExitCode {
         Some("test") => test(&args[1..]),
         Some("bench") => bench(&args[1..]),
         _ => {
-            eprintln!("usage: cargo xtask test [-- <cargo test args>]\n       cargo xtask bench [--quick]");
+            eprintln!("usage: cargo xtask test [-- <cargo test args>]\n       cargo xtask bench [--quick] [--only PART] | --assemble-only");
             return ExitCode::from(2);
         }
     };
@@ -116,46 +116,210 @@ fn test(extra: &[String]) -> Result<(), String> {
     run(&mut t)
 }
 
+/// The tables of `bench/RESULTS.md`, in this order: file stem, heading, what it measures.
+/// Any other `bench/*.md` follows under its file name.
+const TABLES: &[(&str, &str, &str)] = &[
+    (
+        "bezier_gpu",
+        "Bézier: the GPU stage against the CPU reference",
+        "Map4p at five thresholds on 1, 32 and 1024 patches (copies of the teapot side by \
+         side); the stage and the CPU reference timed in turns.",
+    ),
+    (
+        "bezier_cpu",
+        "Bézier: adaptive against uniform at equal measured error (CPU)",
+        "The teapot and the teacup, every edge test at two depths, against the fewest \
+         uniform triangles with a measured max error at or under each row's.",
+    ),
+    (
+        "catmull_clark_cpu",
+        "Catmull-Clark: adaptive against uniform at equal measured error (CPU)",
+        "Per model and tolerance ε (a fraction of the bounding-box diagonal): the adaptive \
+         mesh, its guaranteed bound and measured error (32×32 exact samples per patch), \
+         then the smallest uniform grid n × n per patch whose measured max error is at or \
+         under the adaptive one and the ratio of triangle counts (`ratio at ε`: against \
+         the grid at or under ε itself); then the paper's midpoint subdivision and the \
+         own-triangles leaf bound at the same ε, each against uniform the same way.",
+    ),
+    (
+        "catmull_clark_gpu",
+        "Catmull-Clark: the GPU stages against the CPU and uniform peers",
+        "Per model, tolerance and first split: the adaptive stage on the GPU, the CPU \
+         reference, and the uniform tessellation (CPU and GPU) at the smallest grid whose \
+         measured max error is at or under the GPU output's; then where the GPU time \
+         goes, the script's fixed cost with every list empty, and the scaling from 3e-3 \
+         to the first tolerance with 10× the triangles.",
+    ),
+];
+
+/// `cargo xtask bench [ARGS]` runs the bench (ARGS go to `tessera-bench`: `--quick`,
+/// `--only gpu|cpu|cc|ccgpu`, ...), which writes `bench/NAME.{json,md}`, then assembles
+/// `bench/RESULTS.md`; `cargo xtask bench --assemble-only` only assembles it.
 fn bench(extra: &[String]) -> Result<(), String> {
     let out = root().join("bench");
-    run(cargo()
-        .args(["run", "--release", "--locked", "-p", "tessera-bench", "--"])
-        .arg("--out")
-        .arg(&out)
-        .args(extra))?;
-    // Paste the tables into the README between their markers.
-    let readme_path = root().join("README.md");
-    let mut readme =
-        std::fs::read_to_string(&readme_path).map_err(|e| format!("README.md: {e}"))?;
-    for entry in std::fs::read_dir(&out)
-        .map_err(|e| format!("{}: {e}", out.display()))?
+    let assemble_only = extra.iter().any(|a| a == "--assemble-only");
+    if !assemble_only {
+        run(cargo()
+            .args(["run", "--release", "--locked", "-p", "tessera-bench", "--"])
+            .arg("--out")
+            .arg(&out)
+            .args(extra))?;
+    }
+    let command = std::iter::once("cargo xtask bench")
+        .chain(extra.iter().map(String::as_str))
+        .collect::<Vec<_>>()
+        .join(" ");
+    let results = assemble_results(&out, &command)?;
+    eprintln!("xtask: results in {}", results.display());
+    Ok(())
+}
+
+/// Writes `dir/RESULTS.md`: a header (this host, the command, each table's date and
+/// adapter), then every `dir/*.md` table as the bench wrote it, in the order of
+/// [`TABLES`]. A run with `--only` rewrites some tables; the others stay as their last
+/// run left them, under that run's date. `*_subset.md` (partial runs, not committed) and
+/// the tables of other devices (subfolders, linked from the header) are left out.
+fn assemble_results(dir: &Path, command: &str) -> Result<PathBuf, String> {
+    let read = |p: &Path| std::fs::read_to_string(p).map_err(|e| format!("{}: {e}", p.display()));
+    let mut stems: Vec<String> = std::fs::read_dir(dir)
+        .map_err(|e| format!("{}: {e}", dir.display()))?
         .flatten()
-    {
-        let path = entry.path();
-        if path.extension().is_none_or(|e| e != "md") {
-            continue;
-        }
-        let name = path
-            .file_stem()
-            .unwrap_or_default()
-            .to_string_lossy()
-            .to_string();
-        let table =
-            std::fs::read_to_string(&path).map_err(|e| format!("{}: {e}", path.display()))?;
-        let (start, end) = (
-            format!("<!-- bench:{name}:start -->"),
-            format!("<!-- bench:{name}:end -->"),
+        .map(|e| e.path())
+        .filter(|p| p.extension().is_some_and(|e| e == "md"))
+        .filter_map(|p| Some(p.file_stem()?.to_string_lossy().into_owned()))
+        .filter(|s| s != "RESULTS" && s != "README" && !s.ends_with("_subset"))
+        .collect();
+    let rank = |s: &str| TABLES.iter().position(|t| t.0 == s).unwrap_or(TABLES.len());
+    stems.sort_by(|a, b| (rank(a), a).cmp(&(rank(b), b)));
+
+    let cpu = std::fs::read_to_string("/proc/cpuinfo")
+        .ok()
+        .and_then(|c| {
+            c.lines()
+                .find(|l| l.starts_with("model name"))
+                .and_then(|l| l.split_once(':'))
+                .map(|(_, v)| v.trim().to_string())
+        })
+        .unwrap_or_else(|| std::env::consts::ARCH.to_string());
+    let cores = std::thread::available_parallelism().map_or(0, |n| n.get());
+    let mut md = format!(
+        "# Bench results\n\n\
+         Written by `cargo xtask bench`, which runs the bench and then assembles this file from \
+         the tables it wrote in `bench/` (`cargo xtask bench --assemble-only` assembles it \
+         alone). Do not edit it by hand. A run with `--only` rewrites some of the tables; \
+         each table below keeps the date of the run that last wrote it. CPU times are one \
+         thread of the host.\n\n\
+         This file: `{command}` on {}, host {cpu}, {cores} cores ({} {}).\n\n\
+         | table | written | adapter |\n|---|---|---|\n",
+        today(),
+        std::env::consts::OS,
+        std::env::consts::ARCH,
+    );
+    for stem in &stems {
+        let title = TABLES
+            .iter()
+            .find(|t| t.0 == *stem)
+            .map_or(stem.as_str(), |t| t.1);
+        let adapter = read(&dir.join(format!("{stem}.json")))
+            .ok()
+            .and_then(|j| json_string(&j, "adapter").or_else(|| json_string(&j, "device")))
+            .unwrap_or_else(|| "CPU only".into());
+        md += &format!(
+            "| [{title}](#{}) | {} | {adapter} |\n",
+            anchor(title),
+            written(&dir.join(format!("{stem}.md")))
         );
-        if let (Some(a), Some(b)) = (readme.find(&start), readme.find(&end)) {
-            readme = format!(
-                "{}{start}\n{}\n{}",
-                &readme[..a],
-                table.trim_end(),
-                &readme[b..]
-            );
+    }
+    let mut others: Vec<PathBuf> = std::fs::read_dir(dir)
+        .map_err(|e| format!("{}: {e}", dir.display()))?
+        .flatten()
+        .map(|e| e.path())
+        .filter(|p| p.join("README.md").is_file())
+        .collect();
+    others.sort();
+    if !others.is_empty() {
+        md += "\nOther devices (not rewritten by `cargo xtask bench`):\n\n";
+        for d in &others {
+            let name = d.file_name().unwrap_or_default().to_string_lossy();
+            let readme = d.join("README.md");
+            let heading = read(&readme)?
+                .lines()
+                .next()
+                .unwrap_or_default()
+                .trim_start_matches('#')
+                .trim()
+                .to_string();
+            md += &format!("- [`{name}/`]({name}/README.md): {heading}\n");
         }
     }
-    std::fs::write(&readme_path, readme).map_err(|e| format!("README.md: {e}"))?;
-    eprintln!("xtask: results in {} and README.md", out.display());
-    Ok(())
+    for stem in &stems {
+        let (title, about) = TABLES
+            .iter()
+            .find(|t| t.0 == *stem)
+            .map_or((stem.as_str(), ""), |t| (t.1, t.2));
+        let path = dir.join(format!("{stem}.md"));
+        md += &format!(
+            "\n## {title}\n\n`bench/{stem}.md`, written {}. {about}\n\n{}\n",
+            written(&path),
+            read(&path)?.trim()
+        );
+    }
+    let results = dir.join("RESULTS.md");
+    std::fs::write(&results, md).map_err(|e| format!("{}: {e}", results.display()))?;
+    Ok(results)
+}
+
+/// The first string value of `"key"` in a JSON text (enough for the bench's flat files).
+fn json_string(json: &str, key: &str) -> Option<String> {
+    let rest = &json[json.find(&format!("\"{key}\""))? + key.len() + 2..];
+    let rest = &rest[rest.find('"')? + 1..];
+    Some(rest[..rest.find('"')?].to_string())
+}
+
+/// GitHub's anchor for a heading: lower case, spaces to dashes, punctuation dropped.
+fn anchor(title: &str) -> String {
+    title
+        .to_lowercase()
+        .chars()
+        .filter_map(|c| match c {
+            ' ' => Some('-'),
+            c if c.is_alphanumeric() || c == '-' || c == '_' => Some(c),
+            _ => None,
+        })
+        .collect()
+}
+
+/// When a file was last written: its last commit's date if it is committed unchanged,
+/// else its modification date.
+fn written(path: &Path) -> String {
+    let out = |c: &mut Command| {
+        c.current_dir(root())
+            .output()
+            .ok()
+            .filter(|o| o.status.success())
+            .map(|o| String::from_utf8_lossy(&o.stdout).trim().to_string())
+    };
+    let unchanged = out(Command::new("git")
+        .args(["status", "--porcelain", "--"])
+        .arg(path))
+    .is_some_and(|s| s.is_empty());
+    let committed = out(Command::new("git")
+        .args(["log", "-1", "--format=%cs", "--"])
+        .arg(path))
+    .filter(|d| !d.is_empty());
+    match committed {
+        Some(date) if unchanged => date,
+        _ => out(Command::new("date").args(["-u", "+%F", "-r"]).arg(path))
+            .unwrap_or_else(|| "(date unknown)".into()),
+    }
+}
+
+/// Today's date, UTC.
+fn today() -> String {
+    Command::new("date")
+        .args(["-u", "+%F"])
+        .output()
+        .ok()
+        .map(|o| String::from_utf8_lossy(&o.stdout).trim().to_string())
+        .unwrap_or_default()
 }
