@@ -25,7 +25,7 @@ fn main(@builtin(global_invocation_id) gid: vec3u, @builtin(num_workgroups) grou
     var next = params.coarse_vertices + counts[e];
     let end = params.coarse_vertices + counts[e + 1u];
     // Words are read only while points remain: most coarse edges have none, and each
-    // read is a loop over the lanes on a CPU device (half of this kernel read all eight).
+    // read is a loop over the lanes on a CPU device.
     for (var w = 0u; w < EDGE_BIT_WORDS && next < end; w++) {
         var bits = textureLoad(scratch, scratch_texel(edge_set_word(e) + w)).x;
         while bits != 0u {

@@ -5,8 +5,8 @@
 
 // A workgroup scans a block of WORKGROUP × PER_LANE values, each lane PER_LANE
 // consecutive ones serially. Few lanes and few barriers: a CPU device runs a workgroup
-// as fibers of a few lanes and switches every fiber at every barrier, which made the
-// 17 barriers of a 256-lane Hillis–Steele scan most of the scan's time on lavapipe.
+// as fibers of a few lanes and switches every fiber at every barrier, so a wide
+// Hillis–Steele scan with a barrier per step spends its time switching.
 const WORKGROUP: u32 = 64u;
 const PER_LANE: u32 = 8u;
 const BLOCK: u32 = WORKGROUP * PER_LANE;

@@ -190,7 +190,8 @@ fn cc_halved_grid_range(c0: vec4f, c1: vec4f, c2: vec4f, c3: vec4f) -> vec2f {
 
 // Whether the piece keeps the slab bound's conditions; its heights and side bands
 // summed. No early exit: loops of fixed length without one are unrolled by the
-// compiler, so that every array index is a constant (a lavapipe lane loop otherwise).
+// compiler, so that every array index is a constant (on a CPU device an index that is
+// not is a loop over the lanes).
 // Where the piece fails, bs_slab turns false for good and the sums are never read.
 fn cc_slab_piece(sides: u32) -> bool {
     // The heights of the net split at u = v = 1/2 (twin of `halved_grid_range`).

@@ -1,4 +1,4 @@
-// Displacement-map reads and the map edge tests (SPEC §1, paper Eq. 1–3).
+// Displacement-map reads and the map edge tests (Espino et al. 2005, Eq. 1–3).
 // Twin of `tessera_core::bezier::{prepare::map_read, edge_tests}`.
 // Reads `maps: texture_storage_2d<rgba16float, read>`, the map atlas (declared by the
 // kernel): per patch a tile of MAP_CELLS × MAP_CELLS texels, texel (i, j) the corners of
@@ -6,9 +6,8 @@
 // params.map_scale (`tessera_core::gpu_types::MapAtlas`).
 // A read-only storage texture, not a sampled one: in these kernels a CPU device
 // (llvmpipe) fetches a sampled texel in a called function that loads the mip level's
-// row stride and offset lane by lane, even for the constant level 0 (22% of the
-// stage's samples under `perf` at 1024 patches); an image has one level. (In the
-// straight-line loop of `cargo xtask bench --only probe` the two read alike.)
+// row stride and offset lane by lane, even for the constant level 0; an image has one
+// level.
 
 // The cell of a bilinear read at (u, v), clamped to the patch, and where in it.
 struct MapCell {
@@ -36,9 +35,8 @@ fn map_bilinear(row0: vec2f, row1: vec2f, f: vec2f) -> f32 {
 fn map_read(p: u32, u: f32, v: f32) -> f32 {
     let cell = map_cell(u, v);
     let tile = vec2u(p % MAP_ATLAS_TILES_PER_ROW, p / MAP_ATLAS_TILES_PER_ROW) * (MAP_RES - 1u);
-    // The cell's four corners in one fetch, where two fetches of pairs (rows j and
-    // j + 1) took the decision kernels 25-30% longer and four storage reads were each a
-    // scalar loop over the lanes on a CPU device. Scaling by a power of two is exact: the
+    // The cell's four corners in one fetch, rather than two fetches of pairs (rows j and
+    // j + 1) or four storage reads, each a scalar loop over the lanes on a CPU device. Scaling by a power of two is exact: the
     // values are the CPU's bit for bit.
     let corners = textureLoad(maps, tile + cell.ij) * params.map_scale;
     return map_bilinear(corners.xy, corners.zw, cell.f);

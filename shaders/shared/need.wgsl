@@ -4,7 +4,7 @@
 
 // The edge test (TEST_MAP2P .. TEST_FLAT), fixed when the pipeline is created: a CPU
 // device runs both sides of every branch under a mask, so choosing the test at run time
-// made every decision pay for all four (edge_decide took 2.3x as long on lavapipe).
+// would make every decision pay for all four.
 override EDGE_TEST: u32;
 
 fn canonical_order(l: Lattice, a: vec2u, b: vec2u) -> array<vec2u, 2> {

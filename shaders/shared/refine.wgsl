@@ -7,8 +7,8 @@
 // `fn inner_rank(ctx: TriCtx, i: u32) -> u32`.
 
 // A side's set, loaded once per coarse triangle (`EdgeSet` is in coarse.wgsl) as eight
-// texel fetches: from a storage buffer, its two vec4 loads were loops over the lanes
-// with an insert per word, 70% of the root kernel.
+// texel fetches: a storage-buffer load at a per-lane address is a loop over the lanes
+// on a CPU device, with an insert per word.
 fn edge_set(e: u32) -> EdgeSet {
     let w = edge_set_word(e);
     return EdgeSet(
@@ -113,8 +113,8 @@ fn scratch_bit(base: u32, i: u32) -> bool {
 
 // Whether lattice point p is a vertex, given the points marked so far (twin of
 // `TriContext::exists`). One storage read whatever the place, its word chosen by
-// `select`: a masked device runs every branch, and each read is a loop over the lanes
-// (a read for the pole word and one for the points word cost tri_emit 8-10% more).
+// `select`: a masked device runs every branch, and each read is a loop over the lanes,
+// so a read for the pole word and one for the points word would both be paid.
 fn exists(c: TriCtx, p: vec2u) -> bool {
     let pl = place(c.l, p);
     let pole = pl.kind == PLACE_SIDE && side_collapsed(c, pl.k);
