@@ -1,4 +1,4 @@
-//! Command-line arguments (SPEC §4).
+//! Command-line arguments of `tessera` (reference: `docs/cli.md`).
 
 use std::path::PathBuf;
 

@@ -109,14 +109,13 @@ impl MapHalves {
 /// Patch `p`'s tile, `MAP_CELLS` × `MAP_CELLS` texels, is at column
 /// `p % MAP_ATLAS_TILES_PER_ROW`, row `p / MAP_ATLAS_TILES_PER_ROW`.
 ///
-/// A bilinear read is then one texel fetch, where a storage buffer took four reads: on a
+/// A bilinear read is then one texel fetch, where a storage buffer takes four reads: on a
 /// CPU device (lavapipe) a read at a per-lane address is a scalar loop over the lanes
-/// whatever its width, and the decision kernels spend most of their time in map reads.
-/// An atlas of pairs (`d[i, j], d[i+1, j]`, two fetches per read) took the decision
-/// kernels 25-30% longer. Cells in half precision take 1800 bytes per patch of device
-/// memory; what is uploaded is the maps themselves ([`MapHalves`], 512 bytes per patch),
-/// and the atlas is built from them on the device ([`MapAtlas::from_halves`] is the
-/// kernel's twin). The maps are rounded to half precision when prepared
+/// whatever its width, and the decision kernels spend most of their time in map reads
+/// (an atlas of pairs, `d[i, j], d[i+1, j]`, would take two fetches). Cells in half
+/// precision take 1800 bytes per patch of device memory; what is uploaded is the maps
+/// themselves ([`MapHalves`], 512 bytes per patch), and the atlas is built from them on
+/// the device ([`MapAtlas::from_halves`] is the kernel's twin). The maps are rounded to half precision when prepared
 /// ([`crate::bezier::prepare::quantize_maps`]), so the texels hold their values exactly
 /// and the reads stay bit-identical to the CPU twin ([`crate::bezier::prepare::map_read`]).
 #[derive(Clone, Debug, PartialEq)]
@@ -197,9 +196,9 @@ pub const NET_TEXTURE_PATCHES_PER_ROW: u32 = 256;
 /// [`NET_TEXTURE_PATCHES_PER_ROW`] patches per texel row, each patch 12 texels holding
 /// its [`GpuPatch::cp`] in order (a row of the net, four points `x y z`, is three
 /// texels). On a CPU device (lavapipe) a storage read at a per-lane address is a scalar
-/// loop over the lanes for each 32-bit word, and the 48 words of a net made the vertex
-/// kernel spend five sixths of its time reading them; a texel fetch is vectorised.
-/// Same bytes as the storage buffer it replaces (192 per patch).
+/// loop over the lanes for each 32-bit word, and a net is 48 words, which would make
+/// reading it most of the vertex kernel's work; a texel fetch is vectorised.
+/// The same 192 bytes per patch as a storage buffer would hold.
 #[derive(Clone, Debug, PartialEq)]
 pub struct NetTexture {
     pub width: u32,
@@ -667,8 +666,8 @@ pub struct CcCell {
 pub const CC_TRIALS: u32 = 18;
 /// Rounds of the first-split search (trials grouped by `ku · kv`: 1, 2–4, 5–9, 10–16,
 /// then 20–64 together). Each round costs a pass over every level even when no patch
-/// needs it (~10 ms on lavapipe), and the large splits are rarely tried, so they share
-/// the last round.
+/// needs it (a fixed cost in dispatches), and the large splits are rarely tried, so they
+/// share the last round.
 pub const CC_SEARCH_ROUNDS: u32 = 5;
 /// No patch across an edge (an open boundary or a hole).
 pub const CC_NO_NEIGHBOUR: u32 = u32::MAX;

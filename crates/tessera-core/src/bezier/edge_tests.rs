@@ -1,4 +1,4 @@
-//! Edge tests (paper §2.2, SPEC §1) and the recursive bisection they drive.
+//! Edge tests (Espino et al. 2005, §2.2) and the recursive bisection they drive.
 //! CPU twin of `shaders/shared/map.wgsl`.
 //!
 //! A segment from `(u1, v1)` to `(u2, v2)` in a patch's parameter space is split at its
@@ -101,7 +101,7 @@ pub fn map_test(
     map_test_with(test, th, [uv1, uv2], ends, false, d)
 }
 
-/// The map test (SPEC §1, paper Eq. 1–3) on the segment `uv[0] → uv[1]`, whose ends have
+/// The map test (the paper's Eq. 1–3) on the segment `uv[0] → uv[1]`, whose ends have
 /// the displacements `ends` (read once by the caller: an end is shared by several
 /// segments), reading the others through `d`; a point where `d` has no value (`None`)
 /// takes no part.
@@ -221,7 +221,7 @@ pub fn subdivide_segment_with(
     }
 }
 
-/// The edge test on the segment `uv1 → uv2` (SPEC §1): the map tests read the map; the
+/// The edge test on the segment `uv1 → uv2` (paper §2.2): the map tests read the map; the
 /// flat test compares the surface midpoint with the chord midpoint (3 evaluations).
 pub fn segment_test(inp: &TestInputs, uv1: [f32; 2], uv2: [f32; 2]) -> (bool, u32) {
     if inp.test == EdgeTest::Flat {

@@ -17,10 +17,10 @@
 //!    clipping without new vertices: no T-junction, no zero-area triangle.
 //!
 //! Why not the paper's rows ("layer strips")? Rows zipped between unequally refined
-//! sides produce long edges that no test has looked at; measured on the teapot, the
-//! error inside strips ran to three times the threshold and kept the max error from
-//! falling as triangles were added. Here every side of every leaf was tested (or is at
-//! the depth limit), which bounds the error inside it.
+//! sides produce long edges that no test has looked at, so the error inside a strip is
+//! not held to the threshold and the max error stops falling as triangles are added.
+//! Here every side of every leaf was tested (or is at the depth limit), which bounds the
+//! error inside it.
 //!
 //! Consistency without communication: inside a coarse triangle, neighbours need not
 //! agree (a point one side makes is a vertex on the other side's polygon). Across coarse
@@ -77,7 +77,7 @@ pub fn lattice_edge_test(inp: &TestInputs, l: &Lattice, a: Lp, b: Lp) -> (bool, 
 /// zero there) this is the map itself, so the paper's tests apply unchanged; deeper it
 /// turns `|d1 − d12|` into the chord deviation `|d12 − (d1 + d2)/2|` instead of the
 /// slope of the surface against the coarse plane, which grows toward coarse vertices
-/// and over-refined them (measured: 2–3× uniform's triangles on the teapot).
+/// and would over-refine them.
 pub fn interior_need(inp: &TestInputs, l: &Lattice, t: [Lp; 3]) -> (bool, u32) {
     let [r, a, b] = t;
     let m = lattice_mid(a, b);
@@ -389,7 +389,8 @@ fn for_each_leaf(ctx: &TriContext, scratch: &TriScratch, mut leaf: impl FnMut([L
 /// holds no point. Its midpoint does not exist (which is why `t` is a leaf), or `t` is
 /// at the deepest level, where the hypotenuse is one lattice step; and the points on a
 /// side exist only where their dyadic parent does (see [`side_points`]). A SIMD device
-/// runs every walk written, so the third one cost the GPU twin a third of its walks.
+/// runs every walk written, so walking the third side would cost the GPU twin as much as
+/// either leg.
 fn leaf_polygon(ctx: &TriContext, scratch: &TriScratch, t: [Lp; 3], out: &mut Vec<Lp>) {
     let [r, a, b] = t;
     out.clear();

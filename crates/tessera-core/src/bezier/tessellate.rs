@@ -88,7 +88,7 @@ pub fn test_inputs<'a>(
 }
 
 /// Stage 1, one work item per coarse edge: recursive bisection. The whole edge is split
-/// by its edge test on the owner patch's map (SPEC §1, as the paper states it: the map
+/// by its edge test on the owner patch's map (as the paper states it: the map
 /// is the displacement from the coarse mesh, which the edge belongs to). Each piece is
 /// then split when the right triangle beside it, on either side, asks to be
 /// ([`interior_need`]: the same tests, on the displacement from that triangle, in each

@@ -18,9 +18,9 @@
 //! paper's `m_ε` argument: that square shrinks to the vertex).
 //!
 //! **Slab (geometric).** A parametric bound also counts how unevenly the parameter runs
-//! over the surface, which costs nothing in distance: near an extraordinary vertex it is
-//! 2–300× the true distance, and even on regular cells of the cube it doubles the
-//! triangle count. The slab bound measures distance only. Take the unit normal `n` of
+//! over the surface, which costs nothing in distance: near an extraordinary vertex it can
+//! be far above the true distance, and even on regular cells it splits cells that are
+//! already flat enough. The slab bound measures distance only. Take the unit normal `n` of
 //! the corners' diagonals and project along it onto the plane `Π ⊥ n`:
 //! - `T`: the surface over the cell lies in a slab `lo ≤ n·x ≤ hi` (control points of
 //!   the pieces, the innermost square as a ball), `T = hi - lo`; so do the polygon's
@@ -227,9 +227,8 @@ impl BoundSum {
     /// off for good, so the sums it still adds are never read.)
     fn slab_piece(&mut self, shape: &Net, net: &Net, sides: u32) -> bool {
         // The heights of the net split at u = v = 1/2: the four halves' control points
-        // hold the surface more tightly than the net's (the bound over whole patches
-        // fell from 1.5 to 1.2 times the sampled error, median on Spot). A height is
-        // linear in the point, so the heights split as the points would.
+        // hold the surface more tightly than the net's. A height is linear in the
+        // point, so the heights split as the points would.
         let (lo, hi) = halved_grid_range(std::array::from_fn(|k| self.normal.dot(net[k])));
         self.lo = self.lo.min(lo);
         self.hi = self.hi.max(hi);
