@@ -22,7 +22,7 @@ use crate::tessellate::{check_measure_args, finish_outputs, measure_and_write, m
 
 /// Default tolerance as a fraction of the bounding-box diagonal.
 pub const DEFAULT_TOLERANCE_REL: f64 = 1e-3;
-/// Default surface samples per patch side for `--measure` (SPEC §3: at least 32).
+/// Default surface samples per patch side for `--measure` (the least allowed).
 pub const DEFAULT_MEASURE_SAMPLES: usize = 32;
 
 #[derive(Serialize)]

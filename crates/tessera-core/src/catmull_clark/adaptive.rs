@@ -14,10 +14,10 @@
 //! split of a patch is `ku × kv` (each ≤ 8, and `|ku - kv| ≤ 1`: squares and the
 //! rectangles next to them) for the pair that gives the fewest leaves (tried in turn,
 //! skipping pairs that cannot win, [`first_splits`]), and every later split is at
-//! midpoints as in the paper. Trying all 64 pairs instead gives the same triangles within ±5% (car, rook,
-//! Spot, bishop at 3e-3 to 3e-4 of the diagonal; fewer on some) for 1.5–3× the bound
-//! evaluations, which are the cost of the method. Parameters are
-//! integers in units of `1 / (840 · 2^max_depth)` (840 = lcm(1..=8)), so keys stay exact.
+//! midpoints as in the paper. Trying all 64 pairs instead gives about the same
+//! triangles for several times the bound evaluations, which are the cost of the
+//! method. Parameters are integers in units of `1 / (840 · 2^max_depth)`
+//! (840 = lcm(1..=8)), so keys stay exact.
 //!
 //! # Flatness test with a guaranteed bound
 //!
@@ -28,8 +28,7 @@
 //! the bound walks many pieces, a cell whose centre and side midpoints (its children's
 //! corners) already show it to be too far from flat is split without computing the
 //! bound ([`bound::split_proof`](super::bound::split_proof), a lower bound on it): the
-//! same decisions, with 57–65% of the walks of the cells that split left out there (car
-//! and rook at 5e-4 of the diagonal).
+//! same decisions, with most of the long walks of the large cells at a vertex left out.
 //!
 //! # The cell's own triangles ([`LeafBound::Triangles`], CPU only)
 //!
@@ -42,8 +41,8 @@
 //! whose polygon got points from finer neighbours is bounded again against the
 //! triangles it really gets; one that fails is marked again below, by the flatness
 //! bound alone. That only adds points, so the rounds end, and the result does not
-//! depend on the order of work; then every leaf is within ε of its own triangles. On
-//! Spot at 3e-3 of the diagonal: 3212 → 2366 triangles (README, Results).
+//! depend on the order of work; then every leaf is within ε of its own triangles, with
+//! fewer triangles than the flatness bound alone makes (`bench/RESULTS.md`).
 
 use std::collections::HashMap;
 
@@ -91,10 +90,9 @@ pub const MIN_TOLERANCE_REL: f64 = 1e-6;
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum FirstSplit {
-    /// The `ku × kv` of [`first_splits`] with the fewest leaves (the default): on the
-    /// shipped detailed models 5–49% fewer triangles than midpoint splits alone at the
-    /// same tolerance, for 1.0–2.3× the flatness bounds at 3e-3 of the diagonal and
-    /// 2.6–6.6× at 5e-4 (README, Results).
+    /// The `ku × kv` of [`first_splits`] with the fewest leaves (the default): fewer
+    /// triangles than midpoint splits alone at the same tolerance, for more flatness
+    /// bounds, more so at fine tolerances (`bench/RESULTS.md`).
     #[default]
     Search,
     /// Midpoint splits from the whole patch, as in the paper: one tree per patch, so
