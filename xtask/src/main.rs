@@ -207,10 +207,10 @@ fn assemble_results(dir: &Path, command: &str) -> Result<PathBuf, String> {
          Written by `cargo xtask bench`, which runs the bench and then assembles this file from \
          the tables it wrote in `bench/` (`cargo xtask bench --assemble-only` assembles it \
          alone). Do not edit it by hand. A run with `--only` rewrites some of the tables; \
-         each table below keeps the date of the run that last wrote it. CPU times are one \
+         each table below keeps the date of the run that last measured it. CPU times are one \
          thread of the host.\n\n\
          This file: `{command}` on {}, host {cpu}, {cores} cores ({} {}).\n\n\
-         | table | written | adapter |\n|---|---|---|\n",
+         | table | measured | adapter |\n|---|---|---|\n",
         today(),
         std::env::consts::OS,
         std::env::consts::ARCH,
@@ -227,7 +227,7 @@ fn assemble_results(dir: &Path, command: &str) -> Result<PathBuf, String> {
         md += &format!(
             "| [{title}](#{}) | {} | {adapter} |\n",
             anchor(title),
-            written(&dir.join(format!("{stem}.md")))
+            measured(dir, stem)
         );
     }
     let mut others: Vec<PathBuf> = std::fs::read_dir(dir)
@@ -259,8 +259,8 @@ fn assemble_results(dir: &Path, command: &str) -> Result<PathBuf, String> {
             .map_or((stem.as_str(), ""), |t| (t.1, t.2));
         let path = dir.join(format!("{stem}.md"));
         md += &format!(
-            "\n## {title}\n\n`bench/{stem}.md`, written {}. {about}\n\n{}\n",
-            written(&path),
+            "\n## {title}\n\n`bench/{stem}.md`, measured {}. {about}\n\n{}\n",
+            measured(dir, stem),
             read(&path)?.trim()
         );
     }
@@ -287,6 +287,17 @@ fn anchor(title: &str) -> String {
             _ => None,
         })
         .collect()
+}
+
+/// When table `stem` was measured: when its numbers (`stem.json`, else the table itself)
+/// were last written, so that a change of wording in the table keeps the run's date.
+fn measured(dir: &Path, stem: &str) -> String {
+    let json = dir.join(format!("{stem}.json"));
+    written(&if json.is_file() {
+        json
+    } else {
+        dir.join(format!("{stem}.md"))
+    })
 }
 
 /// When a file was last written: its last commit's date if it is committed unchanged,
