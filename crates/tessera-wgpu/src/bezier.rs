@@ -5,7 +5,7 @@
 //!
 //! | # | kernel | per | writes |
 //! |---|---|---|---|
-//! | 0 | copy + `bezier_map_cells`, first recording only | — / map cell | the control-net texture (the constructor has no queue); the displacement-map atlas, built from the maps as uploaded |
+//! | 0 | `bezier_map_cells` | map cell | the displacement-map atlas, built from the maps as uploaded (so that moved patches need only their maps written again) |
 //! | 1 | clear + `bezier_edge_decide` | coarse edge | edge bit sets (in the `r32uint` scratch texture, after the triangles' words), edge vertex counts |
 //! | 2 | `bezier_tri_roots` + `bezier_tri_mark` (indirect, over the triangles whose root may split) | coarse triangle | lattice points (bit sets in the scratch texture, cleared by copies of zeros before step 1), inner vertex and triangle counts, emit-order buckets |
 //! | 3 | `scan` (multi-level) | — | offsets of all three counts in one exclusive scan |
@@ -17,21 +17,24 @@
 //! Output sizes are not known in advance, and change with the threshold and depth. The
 //! finish kernel compares what the run needs with the capacities; on overflow no emit
 //! kernel writes anything, the draw has zero indices, and [`BezierStage::read_status`]
-//! reports the sizes needed. [`BezierStage::grow`] then reallocates, and the next run
-//! fits ([`BezierStage::run_blocking`] does both).
+//! reports the sizes needed. The status of each run is read back without blocking, and
+//! the next [`BezierStage::prepare`] that finds it grows the buffers, so the run after
+//! that fits. After loading or a change of parameters, [`BezierStage::run_blocking`]
+//! grows and reruns at once.
 //!
 //! ```no_run
 //! use tessera_core::bezier::{AdaptiveParams, BezierModel, EdgeTest, PreparedBezier};
-//! use tessera_wgpu::{bezier::BezierStage, headless::Gpu};
+//! use tessera_wgpu::{bezier::BezierStage, headless::Gpu, Kernels};
 //! # fn main() -> Result<(), Box<dyn std::error::Error>> {
 //! let gpu = Gpu::new()?;
 //! let model = BezierModel::load(std::path::Path::new("assets/teaset/teapot"))?;
 //! let prepared = PreparedBezier::new(&model);
 //! let params = AdaptiveParams { test: EdgeTest::Map4p, threshold: 0.01, max_depth: 6 };
-//! let mut stage = BezierStage::new(&gpu.device, &prepared, &params)?;
+//! let kernels = Kernels::new(&gpu.device);
+//! let mut stage = BezierStage::new(&gpu.device, &gpu.queue, &kernels, &prepared, &params)?;
 //! // Each frame (or when the threshold changes): record, then submit with your own work.
 //! let mut encoder = gpu.device.create_command_encoder(&Default::default());
-//! stage.prepare(&gpu.device, &gpu.queue, &mut encoder);
+//! stage.prepare(&gpu.device, &gpu.queue, &mut encoder)?;
 //! gpu.queue.submit([encoder.finish()]);
 //! // After loading and after `set_params`: make sure the buffers were large enough
 //! // (grow and rerun if not).
@@ -53,11 +56,12 @@ use tessera_core::Mesh;
 use wgpu::util::DeviceExt;
 
 use crate::error::{Error, Result};
-use crate::headless::{map_read, read_buffer, read_texture};
-use crate::kernel::{check_size, check_upload, storage, storage_texture, Kernel, TextureUpload};
+use crate::readback::{read_buffer, read_texture};
+use crate::kernel::{check_size, check_upload, storage, storage_texture, upload_texture, Kernel};
 use crate::output::MeshBuffers;
 use crate::scan::{PrefixSum, ScanKernels};
-use crate::stage::GrowingStage;
+use crate::stage::{GrowingStage, Passes, RunTimestamps, StatusReadback};
+use crate::Kernels;
 
 /// Limits the stage needs, within what `adapter` offers: large storage buffers for big
 /// models; no more than 8 storage buffers and 4 storage textures per kernel, so WebGPU's
@@ -90,15 +94,14 @@ mod slot {
     pub const MAP_ATLAS_STORE: u32 = 17;
 }
 
-/// The compiled Bézier kernels of one device. Compiling them is the slow part of
-/// creating a stage (seconds on a CPU driver), so stages can share one set. The kernels
-/// that run the edge test are compiled for one test each (see [`TestKernels`]), the
-/// first time a stage uses that test.
+/// The compiled Bézier kernels of one device (part of [`Kernels`]). The kernels that run
+/// the edge test are compiled for one test each (see [`TestKernels`]), the first time a
+/// stage uses that test.
 #[derive(Clone)]
-pub struct BezierKernels(Arc<Pipelines>);
+pub(crate) struct BezierKernels(Arc<Pipelines>);
 
 impl BezierKernels {
-    pub fn new(device: &wgpu::Device) -> Self {
+    pub(crate) fn new(device: &wgpu::Device) -> Self {
         BezierKernels(Arc::new(Pipelines::new(device)))
     }
 
@@ -193,6 +196,7 @@ impl TestKernels {
 /// The steps of the script, in order.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum Step {
+    MapCells,
     EdgeDecide,
     TriMark,
     ScanFinish,
@@ -203,7 +207,8 @@ enum Step {
 }
 
 impl Step {
-    const ALL: [Step; 7] = [
+    const ALL: [Step; 8] = [
+        Step::MapCells,
         Step::EdgeDecide,
         Step::TriMark,
         Step::ScanFinish,
@@ -215,6 +220,7 @@ impl Step {
 
     fn name(self) -> &'static str {
         match self {
+            Step::MapCells => "map_cells",
             Step::EdgeDecide => "edge_decide",
             Step::TriMark => "tri_mark",
             Step::ScanFinish => "scan+finish",
@@ -247,9 +253,9 @@ impl BindGroups {
             (PARAMS, &b.uniform),
             (COUNTS, &b.counts),
             (RECORDS, &b.records),
-            (VERTICES, &b.output.vertices),
-            (INDICES, &b.output.indices),
-            (DRAW_ARGS, &b.output.indirect),
+            (VERTICES, &b.output.vertices()),
+            (INDICES, &b.output.indices()),
+            (DRAW_ARGS, &b.output.indirect()),
             (STATUS, &b.status),
             (TALLY, &b.tally),
         ];
@@ -279,12 +285,12 @@ impl BindGroups {
 pub struct BezierStage {
     /// See [`BezierParams::map_scale`].
     map_scale: f32,
-    /// The texels of the control nets, the patch topology and the curves, until the
-    /// first recording copies them into their textures.
-    texture_uploads: Vec<TextureUpload>,
     /// The maps as uploaded ([`MapHalves`]), bound to the kernel that builds the map
-    /// atlas from them, until the first recording dispatches it.
-    map_cells_pending: Option<wgpu::BindGroup>,
+    /// atlas from them at the start of every run.
+    map_cells: wgpu::BindGroup,
+    /// The parameters last written to their uniform.
+    written: Option<BezierParams>,
+    readback: StatusReadback,
     prepared_layout: tessera_core::bezier::prepare::CoarseLayout,
     params: AdaptiveParams,
     buffers: Buffers,
@@ -310,7 +316,8 @@ struct Buffers {
     scratch: Scratch,
     records: wgpu::Buffer,
     status: wgpu::Buffer,
-    status_readback: wgpu::Buffer,
+    /// The maps as uploaded, the atlas's source.
+    map_halves: wgpu::Buffer,
     /// Atomic counters, zeroed each run: the flat test's evaluations, the emit order's
     /// buckets and the mark kernel's list length ([`tally`]).
     tally: wgpu::Buffer,
@@ -458,39 +465,41 @@ fn upload(device: &wgpu::Device, label: &str, bytes: &[u8]) -> wgpu::Buffer {
 }
 
 impl BezierStage {
-    /// Uploads `prepared` and compiles the kernels, with output capacity estimated from
-    /// the model (grown on demand).
+    /// Uploads `prepared` through `queue`, with output capacity estimated from the model
+    /// (grown on demand), and compiles the Bézier kernels into `kernels` if no stage has.
     pub fn new(
         device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        kernels: &Kernels,
         prepared: &PreparedBezier,
         params: &AdaptiveParams,
     ) -> Result<Self> {
-        params.validate()?;
         let l = prepared.layout;
         Self::with_capacity(
             device,
-            &BezierKernels::new(device),
+            queue,
+            kernels,
             prepared,
             params,
-            4 * l.coarse_vertices,
-            3 * 8 * l.coarse_triangles,
+            (4 * l.coarse_vertices, 3 * 8 * l.coarse_triangles),
         )
     }
 
-    /// As [`BezierStage::new`] with already compiled kernels and explicit initial
-    /// capacities (vertices, indices).
+    /// As [`BezierStage::new`] with explicit initial capacities (vertices, indices), for
+    /// the tests that grow from one-element buffers.
+    #[doc(hidden)]
     pub fn with_capacity(
         device: &wgpu::Device,
-        kernels: &BezierKernels,
+        queue: &wgpu::Queue,
+        kernels: &Kernels,
         prepared: &PreparedBezier,
         params: &AdaptiveParams,
-        vertex_capacity: u32,
-        index_capacity: u32,
+        (vertex_capacity, index_capacity): (u32, u32),
     ) -> Result<Self> {
         params.validate()?;
         let l = prepared.layout;
         let counts_len = l.coarse_edges + 2 * l.coarse_triangles + 1;
-        let pipelines = kernels.clone();
+        let pipelines = kernels.bezier().clone();
         let test_kernels = pipelines.for_params(device, params);
         // The scan's values, then the emit order and each triangle's bucket in it.
         let counts_bytes = 4 * (counts_len as u64 + 2 * l.coarse_triangles as u64);
@@ -512,12 +521,6 @@ impl BezierStage {
                 | wgpu::BufferUsages::INDIRECT
                 | wgpu::BufferUsages::COPY_SRC
                 | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
-        let status_readback = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("tessera bezier status readback"),
-            size: std::mem::size_of::<BezierStatus>() as u64,
-            usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
             mapped_at_creation: false,
         });
         let coarse_records = prepared.coarse_vertex_records();
@@ -548,7 +551,7 @@ impl BezierStage {
             });
         }
         // The atlas is built on the device from the maps as uploaded (`MapHalves`, 512
-        // of its 1800 bytes per patch), by `bezier_map_cells` in the first recording:
+        // of its 1800 bytes per patch), by `bezier_map_cells` at the start of each run:
         // written by it, read by the kernels, a storage texture both ways.
         let map_atlas = storage_texture(
             device,
@@ -564,15 +567,16 @@ impl BezierStage {
             "tessera displacement maps",
             bytemuck::cast_slice(&halves.words),
         );
-        let map_cells_pending = pipelines.0.map_cells.bind_with_textures(
+        let map_cells = pipelines.0.map_cells.bind_with_textures(
             device,
             &[(slot::PARAMS, &uniform), (slot::MAP_HALVES, &map_halves)],
             &[(slot::MAP_ATLAS_STORE, &map_atlas_view)],
         );
         // Smaller than the atlas both ways: its size check covers this one.
         let nets = NetTexture::new(&prepared.patches);
-        let nets_upload = TextureUpload::new(
+        let nets_texture = upload_texture(
             device,
+            queue,
             "tessera control-net texture",
             wgpu::TextureFormat::Rgba32Float,
             (nets.width, nets.height),
@@ -581,8 +585,9 @@ impl BezierStage {
         // Narrower than the atlas and fewer rows (at most 7 texels per patch, 1024 per
         // row, where the atlas has 15 rows per 256 patches): its size check covers it.
         let topology = TopologyTexture::new(&prepared.topo, &prepared.curves);
-        let topology_upload = TextureUpload::new(
+        let topology_texture = upload_texture(
             device,
+            queue,
             "tessera topology texture",
             wgpu::TextureFormat::Rgba32Uint,
             (topology.width, topology.height),
@@ -590,10 +595,10 @@ impl BezierStage {
         );
         let buffers = Buffers {
             uniform,
-            nets: nets_upload.texture.create_view(&Default::default()),
+            nets: nets_texture.create_view(&Default::default()),
             map_atlas: map_atlas_view,
             map_atlas_texture: map_atlas,
-            topology: topology_upload.texture.create_view(&Default::default()),
+            topology: topology_texture.create_view(&Default::default()),
             coarse_records: upload(
                 device,
                 "tessera coarse vertices",
@@ -608,28 +613,39 @@ impl BezierStage {
                 vertex_capacity as u64 * std::mem::size_of::<VertexRecord>() as u64,
             ),
             status,
-            status_readback,
+            map_halves,
             tally: storage(device, "tessera tally", 4 * tally::WORDS as u64),
             output,
         };
-        Ok(BezierStage {
+        let mut stage = BezierStage {
             map_scale: prepared.map_scale,
-            texture_uploads: vec![nets_upload, topology_upload],
-            map_cells_pending: Some(map_cells_pending),
+            map_cells,
+            written: None,
+            readback: StatusReadback::new(
+                "tessera bezier status readback",
+                std::mem::size_of::<BezierStatus>() as u64,
+            ),
             prepared_layout: l,
             params: *params,
             bind_groups: BindGroups::new(device, &pipelines.0, &test_kernels, &buffers),
             test_kernels,
             buffers,
             pipelines,
-        })
+        };
+        stage.write_params(queue);
+        Ok(stage)
     }
 
-    /// Changes the test, threshold or depth; takes effect at the next [`prepare`](Self::prepare).
-    /// A lower threshold or a greater depth can need larger output buffers: check
-    /// [`read_status`](Self::read_status) and [`grow`](Self::grow) (or call
-    /// [`run_blocking`](Self::run_blocking)) after the change, as after loading.
-    pub fn set_params(&mut self, device: &wgpu::Device, params: &AdaptiveParams) -> Result<()> {
+    /// Changes the test, threshold or depth, written through `queue`; takes effect at the
+    /// next [`prepare`](Self::prepare). A lower threshold or a greater depth can need
+    /// larger output buffers: the next `prepare` after the overflowing run grows them (or
+    /// call [`run_blocking`](Self::run_blocking) after the change, as after loading).
+    pub fn set_params(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        params: &AdaptiveParams,
+    ) -> Result<()> {
         params.validate()?;
         let mut rebind = false;
         if params.max_depth != self.params.max_depth {
@@ -647,9 +663,45 @@ impl BezierStage {
         if rebind {
             self.rebind(device);
         }
+        self.write_params(queue);
         Ok(())
     }
 
+    /// New control nets and maps for the same patches (animation): the CPU prepares the
+    /// moved model again ([`PreparedBezier::new`]) and only its nets, coarse vertices
+    /// and maps are written; the next [`prepare`](Self::prepare) tessellates it. A model
+    /// with another layout (patch, edge or triangle counts) is an error.
+    pub fn update_model(&mut self, queue: &wgpu::Queue, prepared: &PreparedBezier) -> Result<()> {
+        if prepared.layout != self.prepared_layout {
+            return Err(tessera_core::Error::Param(
+                "the prepared model's layout changed; make a new stage".into(),
+            )
+            .into());
+        }
+        let nets = NetTexture::new(&prepared.patches);
+        queue.write_texture(
+            self.buffers.nets.texture().as_image_copy(),
+            bytemuck::cast_slice(&nets.texels),
+            wgpu::TexelCopyBufferLayout {
+                offset: 0,
+                bytes_per_row: Some(16 * nets.width),
+                rows_per_image: None,
+            },
+            self.buffers.nets.texture().size(),
+        );
+        queue.write_buffer(
+            &self.buffers.coarse_records,
+            0,
+            bytemuck::cast_slice(&prepared.coarse_vertex_records()),
+        );
+        let halves = MapHalves::new(&prepared.maps, prepared.map_scale);
+        queue.write_buffer(&self.buffers.map_halves, 0, bytemuck::cast_slice(&halves.words));
+        self.map_scale = prepared.map_scale;
+        self.write_params(queue);
+        Ok(())
+    }
+
+    /// The test, threshold and depth of the next runs.
     pub fn params(&self) -> &AdaptiveParams {
         &self.params
     }
@@ -683,8 +735,8 @@ impl BezierStage {
             points_words,
             pole_words,
             inv_lattice: inv_lattice(self.params.max_depth),
-            vertex_capacity: self.buffers.output.vertex_capacity,
-            index_capacity: self.buffers.output.index_capacity,
+            vertex_capacity: self.buffers.output.vertex_capacity(),
+            index_capacity: self.buffers.output.index_capacity(),
             map_scale: self.map_scale,
             scratch_shift: self.buffers.scratch.shift,
             _pad: 0,
@@ -693,38 +745,74 @@ impl BezierStage {
 
     /// Records the whole tessellation into `encoder`: the straight-line script of the
     /// module docs. Nothing is submitted; the output is valid once the caller's
-    /// submission has run. The first call also records the one-time copy of the nets into
-    /// their texture and the kernel that builds the map atlas from the uploaded maps, so
-    /// its encoder must be submitted, not dropped (every later run would read an empty
-    /// atlas).
+    /// submission has run. A status that an earlier run left, read without waiting, grows
+    /// the buffers first if that run overflowed (an error only when the device cannot
+    /// hold what it needed).
     pub fn prepare(
         &mut self,
         device: &wgpu::Device,
-        _queue: &wgpu::Queue,
+        queue: &wgpu::Queue,
         encoder: &mut wgpu::CommandEncoder,
-    ) {
-        self.record_params(device, encoder);
-        for step in Step::ALL {
-            self.record_step(step, encoder);
+    ) -> Result<()> {
+        self.record_run(device, queue, encoder, None)
+    }
+
+    /// As [`prepare`](Self::prepare), writing the run's GPU timestamps into
+    /// `timestamps` (see [`crate::GpuTimer`]).
+    pub fn prepare_timed(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        encoder: &mut wgpu::CommandEncoder,
+        timestamps: RunTimestamps<'_>,
+    ) -> Result<()> {
+        self.record_run(device, queue, encoder, Some(timestamps))
+    }
+
+    fn record_run(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        encoder: &mut wgpu::CommandEncoder,
+        timestamps: Option<RunTimestamps<'_>>,
+    ) -> Result<()> {
+        if let Some(bytes) = self.readback.poll(device) {
+            let status: BezierStatus = bytemuck::pod_read_unaligned(&bytes);
+            self.grow(device, &status)?;
         }
+        self.write_params(queue);
+        let mut passes = Passes::new(timestamps);
+        for step in Step::ALL {
+            self.record_step(step, encoder, &mut passes);
+        }
+        let status = &self.buffers.status;
+        self.readback.record(device, encoder, |encoder, readback| {
+            encoder.copy_buffer_to_buffer(
+                status,
+                0,
+                readback,
+                0,
+                std::mem::size_of::<BezierStatus>() as u64,
+            )
+        });
+        Ok(())
     }
 
     /// Runs the script one step at a time, each on its own submission, and returns the
-    /// wall time of each (ms) for profiling. Slower than [`prepare`](Self::prepare)
-    /// (one wait per step); the output is the same.
+    /// wall time of each (ms): the per-kernel profile of the bench. Slower than
+    /// [`prepare`](Self::prepare) (one wait per step); the output is the same.
+    #[doc(hidden)]
     pub fn profile_kernels(
         &mut self,
         device: &wgpu::Device,
         queue: &wgpu::Queue,
     ) -> Result<Vec<(&'static str, f64)>> {
-        let mut encoder = device.create_command_encoder(&Default::default());
-        self.record_params(device, &mut encoder);
-        queue.submit([encoder.finish()]);
+        self.write_params(queue);
         let mut out = Vec::new();
         for step in Step::ALL {
             let t = std::time::Instant::now();
             let mut encoder = device.create_command_encoder(&Default::default());
-            self.record_step(step, &mut encoder);
+            self.record_step(step, &mut encoder, &mut Passes::new(None));
             queue.submit([encoder.finish()]);
             device
                 .poll(wgpu::PollType::wait_indefinitely())
@@ -734,45 +822,18 @@ impl BezierStage {
         Ok(out)
     }
 
-    /// Copies the parameters into their uniform inside the encoder, not by
-    /// `queue.write_buffer` (which lands before the whole submission): recordings that
-    /// share a submission, with `set_params` between them, each run with their own.
-    /// The first recording also copies the nets into their texture and builds the map
-    /// atlas from the uploaded maps.
-    fn record_params(&mut self, device: &wgpu::Device, encoder: &mut wgpu::CommandEncoder) {
-        for up in self.texture_uploads.drain(..) {
-            up.record(encoder);
-        }
-        let staging = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("tessera bezier params upload"),
-            contents: bytemuck::bytes_of(&self.gpu_params()),
-            usage: wgpu::BufferUsages::COPY_SRC,
-        });
-        encoder.copy_buffer_to_buffer(
-            &staging,
-            0,
-            &self.buffers.uniform,
-            0,
-            std::mem::size_of::<BezierParams>() as u64,
-        );
-        // After the parameters: the kernel reads the patch count from them.
-        if let Some(bind_group) = self.map_cells_pending.take() {
-            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some("map_cells"),
-                timestamp_writes: None,
-            });
-            let cells = (MAP_CELLS * MAP_CELLS) as u32;
-            self.pipelines.0.map_cells.dispatch(
-                &mut pass,
-                &bind_group,
-                self.prepared_layout.patches * cells,
-                WORKGROUP,
-            );
+    /// Writes the parameters (and the capacities they carry) through the queue when they
+    /// changed: they land before the submission that runs the next recording.
+    fn write_params(&mut self, queue: &wgpu::Queue) {
+        let params = self.gpu_params();
+        if self.written != Some(params) {
+            queue.write_buffer(&self.buffers.uniform, 0, bytemuck::bytes_of(&params));
+            self.written = Some(params);
         }
     }
 
     /// Records one step of the script (each in its own compute pass).
-    fn record_step(&self, step: Step, encoder: &mut wgpu::CommandEncoder) {
+    fn record_step(&self, step: Step, encoder: &mut wgpu::CommandEncoder, passes: &mut Passes) {
         let l = self.prepared_layout;
         let b = &self.buffers;
         let bg = &self.bind_groups;
@@ -804,11 +865,13 @@ impl BezierStage {
             _ => {}
         }
         {
-            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some(step.name()),
-                timestamp_writes: None,
-            });
+            let mut pass = passes.begin(encoder, step.name(), step == Step::VertexEval);
             match step {
+                Step::MapCells => {
+                    let cells = (MAP_CELLS * MAP_CELLS) as u32;
+                    p.map_cells
+                        .dispatch(&mut pass, &self.map_cells, l.patches * cells, WORKGROUP);
+                }
                 Step::EdgeDecide => {
                     t.edge_decide
                         .dispatch(&mut pass, &bg.edge_decide, l.coarse_edges, WORKGROUP)
@@ -858,27 +921,19 @@ impl BezierStage {
                 }
             }
         }
-        if step == Step::VertexEval {
-            encoder.copy_buffer_to_buffer(
-                &b.status,
-                0,
-                &b.status_readback,
-                0,
-                std::mem::size_of::<BezierStatus>() as u64,
-            );
-        }
     }
 
-    /// Reads what the last submitted run needed (waits for the GPU).
-    pub fn read_status(&self, device: &wgpu::Device) -> Result<BezierStatus> {
-        let bytes = map_read(device, &self.buffers.status_readback)?;
-        Ok(*bytemuck::from_bytes(&bytes))
+    /// What the last recorded run needed and wrote, once its submission has run (waits
+    /// for the GPU).
+    pub fn read_status(&mut self, device: &wgpu::Device) -> Result<BezierStatus> {
+        let bytes = self.readback.wait_last(device)?;
+        Ok(bytemuck::pod_read_unaligned(&bytes))
     }
 
     /// Grows the output buffers to what `status` says the run needed (with headroom).
     /// Returns whether anything was reallocated, or an error when the device cannot hold
     /// buffers that large (nothing is reallocated then).
-    pub fn grow(&mut self, device: &wgpu::Device, status: &BezierStatus) -> Result<bool> {
+    fn grow(&mut self, device: &wgpu::Device, status: &BezierStatus) -> Result<bool> {
         if status.overflow == 0 {
             return Ok(false);
         }
@@ -889,8 +944,8 @@ impl BezierStage {
                 have
             }
         };
-        let vertices = grow(status.vertices, self.buffers.output.vertex_capacity);
-        let indices = grow(status.indices, self.buffers.output.index_capacity);
+        let vertices = grow(status.vertices, self.buffers.output.vertex_capacity());
+        let indices = grow(status.indices, self.buffers.output.index_capacity());
         check_size(
             device,
             "vertex",
@@ -901,9 +956,10 @@ impl BezierStage {
         self.buffers.records = storage(
             device,
             "tessera vertex records",
-            self.buffers.output.vertex_capacity as u64 * std::mem::size_of::<VertexRecord>() as u64,
+            self.buffers.output.vertex_capacity() as u64 * std::mem::size_of::<VertexRecord>() as u64,
         );
         self.rebind(device);
+        self.readback.new_generation();
         Ok(true)
     }
 
@@ -956,8 +1012,10 @@ impl BezierStage {
         Ok((words, edge_sets))
     }
 
-    /// The intermediate buffers, for comparison with the CPU twins in tests: the map
-    /// atlas, edge bit sets, the scanned counts, and each coarse triangle's scratch words.
+    /// The intermediate buffers, for the tests that compare them with the CPU twins: the
+    /// map atlas, edge bit sets, the scanned counts, and each coarse triangle's scratch
+    /// words.
+    #[doc(hidden)]
     pub fn read_intermediates(
         &self,
         device: &wgpu::Device,
@@ -1000,10 +1058,10 @@ impl GrowingStage for BezierStage {
         device: &wgpu::Device,
         queue: &wgpu::Queue,
         encoder: &mut wgpu::CommandEncoder,
-    ) {
-        self.prepare(device, queue, encoder);
+    ) -> Result<()> {
+        self.prepare(device, queue, encoder)
     }
-    fn status(&self, device: &wgpu::Device) -> Result<BezierStatus> {
+    fn status(&mut self, device: &wgpu::Device) -> Result<BezierStatus> {
         self.read_status(device)
     }
     fn grow_to(&mut self, device: &wgpu::Device, status: &BezierStatus) -> Result<bool> {
@@ -1012,6 +1070,7 @@ impl GrowingStage for BezierStage {
 }
 
 /// What the decision kernels wrote (see [`BezierStage::read_intermediates`]).
+#[doc(hidden)]
 #[non_exhaustive]
 pub struct Intermediates {
     /// The map atlas's texels, row-major, as `bezier_map_cells` built them.

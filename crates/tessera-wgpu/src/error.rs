@@ -5,7 +5,7 @@
 #[non_exhaustive]
 pub enum Error {
     /// No GPU adapter (not even a CPU one such as lavapipe) could be found.
-    #[error("no GPU adapter: {0}")]
+    #[error("no GPU adapter ({0}); install a Vulkan driver: on Debian or Ubuntu, `apt-get install mesa-vulkan-drivers` gives Mesa's lavapipe, which runs on the CPU (`cargo xtask render` installs it)")]
     NoAdapter(String),
     /// The adapter refused the device (limits or features).
     #[error("requesting a device failed: {0}")]
@@ -16,32 +16,46 @@ pub enum Error {
     /// A run needs an output buffer larger than the device allows.
     #[error("the {what} buffer would need {bytes} bytes, over the device's limit of {limit}; raise the threshold or lower the depth")]
     OutputTooLarge {
+        /// Which buffer.
         what: &'static str,
+        /// Bytes it would need.
         bytes: u64,
+        /// The device's limit.
         limit: u64,
     },
     /// The surface's upload (patch data) needs a buffer larger than the device allows.
     #[error("the model's {what} need {bytes} bytes on the GPU, over the device's limit of {limit} per buffer; tessellate it with --backend cpu or split the mesh")]
     ModelTooLarge {
+        /// Which part of the model.
         what: &'static str,
+        /// Bytes it would need.
         bytes: u64,
+        /// The device's limit.
         limit: u64,
     },
     /// The displacement-map atlas of a Bézier model needs a texture larger than the
     /// device allows (256 patches per row of 16×16 texels).
     #[error("the model's {patches} patches need a {width}×{height} displacement-map atlas, over the device's texture limit of {limit}; tessellate it with --backend cpu or split the model")]
     MapAtlasTooLarge {
+        /// Patches of the model.
         patches: u32,
+        /// Texels across the atlas.
         width: u32,
+        /// Texels down the atlas.
         height: u32,
+        /// The device's largest texture side.
         limit: u32,
     },
     /// Part of a model needs a texture larger than the device allows.
     #[error("the model's {what} need a {width}×{height} texture, over the device's texture limit of {limit}; tessellate it with --backend cpu or split the mesh")]
     TextureTooLarge {
+        /// Which part of the model.
         what: &'static str,
+        /// Texels across.
         width: u32,
+        /// Texels down.
         height: u32,
+        /// The device's largest texture side.
         limit: u32,
     },
     /// Waiting for the GPU or mapping a buffer failed.
@@ -52,14 +66,25 @@ pub enum Error {
     Core(#[from] tessera_core::Error),
     /// Writing an image failed.
     #[error("{path}: {msg}")]
-    Image { path: String, msg: String },
+    Image {
+        /// The file.
+        path: String,
+        /// What went wrong.
+        msg: String,
+    },
     /// A render was asked for something the device or the renderer cannot do (an image
     /// size beyond the device's limits, say).
     #[error("rendering: {0}")]
     Render(String),
     /// A snapshot did not match its reference, or the reference is missing.
     #[error("snapshot {name}: {msg}")]
-    Snapshot { name: String, msg: String },
+    Snapshot {
+        /// The snapshot's name.
+        name: String,
+        /// What differed.
+        msg: String,
+    },
 }
 
+/// `Result` with this crate's [`Error`].
 pub type Result<T, E = Error> = std::result::Result<T, E>;

@@ -8,7 +8,8 @@ use glam::Vec3;
 use image::RgbaImage;
 
 use crate::error::{Error, Result};
-use crate::headless::{Gpu, TextureReadback};
+use crate::headless::Gpu;
+use crate::readback::TextureReadback;
 use crate::output::MeshBuffers;
 use crate::render::{Camera, MeshRenderer, RenderOptions};
 

@@ -1,8 +1,6 @@
 //! What every compute stage shares: compiling a kernel with the bindings its entry point
 //! uses, binding buffers by number, and dispatching any number of invocations.
 
-use wgpu::util::DeviceExt;
-
 use crate::error::{Error, Result};
 use crate::shaders;
 
@@ -195,63 +193,32 @@ pub(crate) fn storage_texture(
     })
 }
 
-/// A storage texture, empty, and a buffer holding its texels: the stages' constructors
-/// take no queue, so their first recording copies one into the other
-/// ([`TextureUpload::record`]).
-pub(crate) struct TextureUpload {
-    staging: wgpu::Buffer,
-    pub texture: wgpu::Texture,
-    bytes_per_row: u32,
-}
-
-impl TextureUpload {
-    /// `texels`: the texture's rows, row-major, without padding.
-    pub fn new(
-        device: &wgpu::Device,
-        label: &str,
-        format: wgpu::TextureFormat,
-        (width, height): (u32, u32),
-        texels: &[u8],
-    ) -> Self {
-        let texture = storage_texture(
-            device,
-            label,
-            format,
-            (width, height),
-            wgpu::TextureUsages::COPY_DST,
-        );
-        let row = texels.len() / height as usize;
-        // Buffer-to-texture copies take rows padded to 256 bytes.
-        let bytes_per_row = (row as u32).next_multiple_of(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT);
-        let mut contents = vec![0u8; bytes_per_row as usize * height as usize];
-        for (y, bytes) in texels.chunks(row).enumerate() {
-            contents[y * bytes_per_row as usize..][..bytes.len()].copy_from_slice(bytes);
-        }
-        let staging = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some(label),
-            contents: &contents,
-            usage: wgpu::BufferUsages::COPY_SRC,
-        });
-        TextureUpload {
-            staging,
-            texture,
-            bytes_per_row,
-        }
-    }
-
-    /// Records the copy of the texels into the texture.
-    pub fn record(&self, encoder: &mut wgpu::CommandEncoder) {
-        encoder.copy_buffer_to_texture(
-            wgpu::TexelCopyBufferInfo {
-                buffer: &self.staging,
-                layout: wgpu::TexelCopyBufferLayout {
-                    offset: 0,
-                    bytes_per_row: Some(self.bytes_per_row),
-                    rows_per_image: None,
-                },
-            },
-            self.texture.as_image_copy(),
-            self.texture.size(),
-        );
-    }
+/// A storage texture holding `texels` (its rows, row-major, without padding), written
+/// through the queue: it lands before the next submission.
+pub(crate) fn upload_texture(
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    label: &str,
+    format: wgpu::TextureFormat,
+    (width, height): (u32, u32),
+    texels: &[u8],
+) -> wgpu::Texture {
+    let texture = storage_texture(
+        device,
+        label,
+        format,
+        (width, height),
+        wgpu::TextureUsages::COPY_DST,
+    );
+    queue.write_texture(
+        texture.as_image_copy(),
+        texels,
+        wgpu::TexelCopyBufferLayout {
+            offset: 0,
+            bytes_per_row: Some((texels.len() / height.max(1) as usize) as u32),
+            rows_per_image: None,
+        },
+        texture.size(),
+    );
+    texture
 }

@@ -4,37 +4,75 @@ use tessera_core::gpu_types::{DrawIndexedIndirectArgs, OutVertex};
 use tessera_core::Mesh;
 use wgpu::util::DeviceExt;
 
-/// Vertex buffer ([`OutVertex`]: position, normal, patch `u v`, patch id; 36 bytes),
-/// `u32` index buffer, and one [`DrawIndexedIndirectArgs`] written by the GPU.
+/// Vertex buffer ([`OutVertex`]: position, normal, `u v`, face id; 36 bytes,
+/// [`VERTEX_LAYOUT`](Self::VERTEX_LAYOUT)), `u32` index buffer, and one
+/// [`DrawIndexedIndirectArgs`] written by the GPU.
 ///
-/// Draw with `draw_indexed_indirect(&indirect, 0)`; nothing needs to be read back.
+/// Draw with `draw_indexed_indirect(buffers.indirect(), 0)`; nothing needs to be read
+/// back. A stage reallocates its buffers when they grow: take them from the stage's
+/// `output()` each frame rather than keeping them.
 pub struct MeshBuffers {
-    pub vertices: wgpu::Buffer,
-    pub indices: wgpu::Buffer,
-    pub indirect: wgpu::Buffer,
-    /// Capacity of `vertices`, in vertices.
-    pub vertex_capacity: u32,
-    /// Capacity of `indices`, in indices.
-    pub index_capacity: u32,
+    vertices: wgpu::Buffer,
+    indices: wgpu::Buffer,
+    indirect: wgpu::Buffer,
+    vertex_capacity: u32,
+    index_capacity: u32,
 }
 
 impl MeshBuffers {
-    /// Usages of the three buffers: drawable, writable by compute kernels, copyable.
+    /// The vertices ([`OutVertex`]), bound as vertex buffer 0 with
+    /// [`VERTEX_LAYOUT`](Self::VERTEX_LAYOUT).
+    pub fn vertices(&self) -> &wgpu::Buffer {
+        &self.vertices
+    }
+
+    /// The `u32` indices, three per triangle.
+    pub fn indices(&self) -> &wgpu::Buffer {
+        &self.indices
+    }
+
+    /// One [`DrawIndexedIndirectArgs`]: the argument of `draw_indexed_indirect`.
+    pub fn indirect(&self) -> &wgpu::Buffer {
+        &self.indirect
+    }
+
+    /// Capacity of [`vertices`](Self::vertices), in vertices.
+    pub fn vertex_capacity(&self) -> u32 {
+        self.vertex_capacity
+    }
+
+    /// Capacity of [`indices`](Self::indices), in indices.
+    pub fn index_capacity(&self) -> u32 {
+        self.index_capacity
+    }
+
+    /// Usage of the vertex buffer: drawable, writable by compute kernels, copyable.
     pub const VERTEX_USAGE: wgpu::BufferUsages = wgpu::BufferUsages::VERTEX
         .union(wgpu::BufferUsages::STORAGE)
         .union(wgpu::BufferUsages::COPY_SRC)
         .union(wgpu::BufferUsages::COPY_DST);
+    /// Usage of the index buffer.
     pub const INDEX_USAGE: wgpu::BufferUsages = wgpu::BufferUsages::INDEX
         .union(wgpu::BufferUsages::STORAGE)
         .union(wgpu::BufferUsages::COPY_SRC)
         .union(wgpu::BufferUsages::COPY_DST);
+    /// Usage of the draw-argument buffer.
     pub const INDIRECT_USAGE: wgpu::BufferUsages = wgpu::BufferUsages::INDIRECT
         .union(wgpu::BufferUsages::STORAGE)
         .union(wgpu::BufferUsages::COPY_SRC)
         .union(wgpu::BufferUsages::COPY_DST);
 
-    /// The vertex layout of [`OutVertex`] at shader locations 0 (position), 1 (normal),
-    /// 2 (uv) and 3 (patch).
+    /// Shader location of the position (`vec3<f32>`).
+    pub const POSITION_LOCATION: u32 = 0;
+    /// Shader location of the normal (`vec3<f32>`).
+    pub const NORMAL_LOCATION: u32 = 1;
+    /// Shader location of `u v` on the face (`vec2<f32>`).
+    pub const UV_LOCATION: u32 = 2;
+    /// Shader location of the face id (`u32`): the Bézier patch, or the Catmull-Clark
+    /// patch (a control face's corner after the first subdivision step).
+    pub const FACE_LOCATION: u32 = 3;
+
+    /// The vertex layout of [`OutVertex`] at the locations above.
     pub const VERTEX_LAYOUT: wgpu::VertexBufferLayout<'static> = wgpu::VertexBufferLayout {
         array_stride: std::mem::size_of::<OutVertex>() as u64,
         step_mode: wgpu::VertexStepMode::Vertex,
@@ -45,7 +83,7 @@ impl MeshBuffers {
 
     /// Empty buffers for up to `vertices` vertices and `indices` indices (at least one
     /// of each, so that bindings are never empty).
-    pub fn with_capacity(device: &wgpu::Device, vertices: u32, indices: u32) -> Self {
+    pub(crate) fn with_capacity(device: &wgpu::Device, vertices: u32, indices: u32) -> Self {
         let (vertices, indices) = (vertices.max(1), indices.max(3));
         let buffer = |label, size, usage| {
             device.create_buffer(&wgpu::BufferDescriptor {
@@ -82,8 +120,8 @@ impl MeshBuffers {
         indices: u32,
     ) -> crate::Result<Mesh> {
         let vsize = vertices as u64 * std::mem::size_of::<OutVertex>() as u64;
-        let v = crate::headless::read_buffer(device, queue, &self.vertices, 0, vsize)?;
-        let i = crate::headless::read_buffer(device, queue, &self.indices, 0, indices as u64 * 4)?;
+        let v = crate::readback::read_buffer(device, queue, &self.vertices, 0, vsize)?;
+        let i = crate::readback::read_buffer(device, queue, &self.indices, 0, indices as u64 * 4)?;
         Ok(Mesh {
             vertices: bytemuck::pod_collect_to_vec(&v),
             indices: bytemuck::pod_collect_to_vec(&i),

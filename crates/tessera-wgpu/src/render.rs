@@ -28,14 +28,19 @@ use crate::output::MeshBuffers;
 /// A perspective camera (right-handed, depth 0 at `near` to 1 at `far`, as wgpu expects).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Camera {
+    /// Where the camera is.
     pub eye: Vec3,
+    /// The point it looks at.
     pub target: Vec3,
+    /// Up on the screen.
     pub up: Vec3,
     /// Vertical field of view, radians.
     pub fovy: f32,
     /// Width over height.
     pub aspect: f32,
+    /// Distance of the near clipping plane.
     pub near: f32,
+    /// Distance of the far clipping plane.
     pub far: f32,
 }
 
@@ -48,10 +53,12 @@ impl Camera {
     /// front (−Y), a little from the right (+X) and from above (+Z).
     pub const FRAMING_DIRECTION: Vec3 = Vec3::new(0.5, -1.0, 0.45);
 
+    /// World to view space (`look_at_rh`).
     pub fn view(&self) -> Mat4 {
         Mat4::look_at_rh(self.eye, self.target, self.up)
     }
 
+    /// View to clip space (`perspective_rh`).
     pub fn projection(&self) -> Mat4 {
         Mat4::perspective_rh(self.fovy, self.aspect, self.near, self.far)
     }
@@ -359,13 +366,13 @@ impl MeshRenderer {
     /// buffer 0 and the index buffer of `pass`.
     pub fn draw(&self, pass: &mut wgpu::RenderPass<'_>, mesh: &MeshBuffers) {
         pass.set_bind_group(0, &self.bind_group, &[]);
-        pass.set_vertex_buffer(0, mesh.vertices.slice(..));
-        pass.set_index_buffer(mesh.indices.slice(..), wgpu::IndexFormat::Uint32);
+        pass.set_vertex_buffer(0, mesh.vertices().slice(..));
+        pass.set_index_buffer(mesh.indices().slice(..), wgpu::IndexFormat::Uint32);
         pass.set_pipeline(&self.shaded);
-        pass.draw_indexed_indirect(&mesh.indirect, 0);
+        pass.draw_indexed_indirect(mesh.indirect(), 0);
         if let (Some(wire), true) = (&self.wire, self.wire_enabled.load(Ordering::Relaxed)) {
             pass.set_pipeline(wire);
-            pass.draw_indexed_indirect(&mesh.indirect, 0);
+            pass.draw_indexed_indirect(mesh.indirect(), 0);
         }
     }
 }

@@ -71,7 +71,9 @@ impl Default for Tolerance {
 /// How two images compare.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Comparison {
+    /// Width and height of the expected image.
     pub expected_size: (u32, u32),
+    /// Width and height of the actual image.
     pub actual_size: (u32, u32),
     /// Pixels whose ΔE is above the tolerance's (every pixel when the sizes differ).
     pub differing: u64,
@@ -91,6 +93,7 @@ pub struct Comparison {
 }
 
 impl Comparison {
+    /// Whether both images have the same size.
     pub fn same_size(&self) -> bool {
         self.expected_size == self.actual_size
     }

@@ -1,42 +1,33 @@
 //! The Catmull-Clark stages on the GPU: [`CcStage`] (the adaptive tessellation, module
-//! `stage`), [`CcUniformStage`] (the uniform peer, module `uniform`) and their parts: the patches' quadtrees uploaded
-//! once ([`CcModelBuffers`]), the kernel that evaluates surface points exactly
-//! ([`CcVertexEval`], `shaders/cc_vertex_eval.wgsl`, CPU twin
-//! [`tessera_core::catmull_clark::gpu_model::vertex_eval`]), and the global vertex hash
-//! ([`CcVertexHash`], `shaders/cc_hash_*.wgsl`, twin
-//! [`tessera_core::catmull_clark::vertex_hash`]).
+//! `stage`) and [`CcUniformStage`] (the uniform peer, module `uniform`).
 //!
-//! ```no_run
-//! # fn demo(device: &wgpu::Device, queue: &wgpu::Queue, model: &tessera_core::catmull_clark::SurfaceModel,
-//! #         points: &wgpu::Buffer, counts: &wgpu::Buffer, out: &wgpu::Buffer, n: u32) -> tessera_wgpu::Result<()> {
-//! use tessera_core::catmull_clark::gpu_model::CcGpuModel;
-//! use tessera_wgpu::catmull_clark::{CcModelBuffers, CcVertexEval};
-//! let buffers = CcModelBuffers::new(device, &CcGpuModel::new(model))?;
-//! let eval = CcVertexEval::new(device);
-//! let mut encoder = device.create_command_encoder(&Default::default());
-//! eval.record(device, &mut encoder, &buffers, points, counts, out, n);
-//! queue.submit([encoder.finish()]);
-//! # Ok(())
-//! # }
-//! ```
+//! Their parts are public for the tests that compare each kernel with its CPU twin, and
+//! hidden from the docs: the patches' quadtrees uploaded once ([`CcModelBuffers`]), the
+//! kernel that evaluates surface points exactly ([`CcVertexEval`],
+//! `shaders/cc_vertex_eval.wgsl`, twin [`tessera_core::catmull_clark::gpu_model::vertex_eval`])
+//! and the global vertex hash ([`CcVertexHash`], `shaders/cc_hash_*.wgsl`, twin
+//! [`tessera_core::catmull_clark::vertex_hash`]).
 
 mod stage;
 mod uniform;
 
-pub use stage::{CcCapacities, CcKernels, CcStage, CcStatus};
-pub use uniform::{CcUniformKernels, CcUniformStage};
-
-use std::sync::Mutex;
+#[doc(hidden)]
+pub use stage::{CcCapacities, CcPolygons};
+pub(crate) use stage::CcKernels;
+pub use stage::{CcStage, CcStatus};
+pub(crate) use uniform::CcUniformKernels;
+pub use uniform::{CcUniformStage, UniformParams};
 
 use tessera_core::catmull_clark::gpu_model::CcGpuModel;
 use tessera_core::gpu_types::{CcHashSlot, CcHashStatus, NetTexture};
 use wgpu::util::DeviceExt;
 
 use crate::error::{Error, Result};
-use crate::kernel::{check_size, check_upload, storage, Kernel, TextureUpload};
+use crate::kernel::{check_size, check_upload, storage, upload_texture, Kernel};
 use crate::scan::{PrefixSum, ScanKernels};
 
 /// The flattened quadtrees on the GPU (bindings 20–24 of the Catmull-Clark kernels).
+#[doc(hidden)]
 pub struct CcModelBuffers {
     pub roots: wgpu::Buffer,
     pub nodes: wgpu::Buffer,
@@ -47,9 +38,6 @@ pub struct CcModelBuffers {
     /// on lavapipe).
     pub nets: wgpu::Texture,
     nets_view: wgpu::TextureView,
-    /// The nets' texels, until the first recording copies them in
-    /// ([`record_upload`](Self::record_upload); the constructor has no queue).
-    nets_upload: Mutex<Option<TextureUpload>>,
     pub corners: wgpu::Buffer,
     sizes: [usize; 5],
 }
@@ -69,7 +57,7 @@ impl CcModelBuffers {
     /// Uploads `model`; [`Error::ModelTooLarge`] if one of its arrays is larger than a
     /// storage buffer the device can bind, or its nets than a texture the device can
     /// create (before anything is created).
-    pub fn new(device: &wgpu::Device, model: &CcGpuModel) -> Result<Self> {
+    pub fn new(device: &wgpu::Device, queue: &wgpu::Queue, model: &CcGpuModel) -> Result<Self> {
         let names = [
             "patch roots",
             "quadtree nodes",
@@ -100,8 +88,9 @@ impl CcModelBuffers {
                 usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
             })
         };
-        let nets = TextureUpload::new(
+        let nets = upload_texture(
             device,
+            queue,
             "tessera cc net texture",
             wgpu::TextureFormat::Rgba32Float,
             (width, height),
@@ -111,27 +100,11 @@ impl CcModelBuffers {
             roots: init("tessera cc roots", bytemuck::cast_slice(&model.roots)),
             nodes: init("tessera cc nodes", bytemuck::cast_slice(&model.nodes)),
             splits: init("tessera cc splits", bytemuck::cast_slice(&model.splits)),
-            nets_view: nets.texture.create_view(&Default::default()),
-            nets: nets.texture.clone(),
-            nets_upload: Mutex::new(Some(nets)),
+            nets_view: nets.create_view(&Default::default()),
+            nets,
             corners: init("tessera cc corners", bytemuck::cast_slice(&model.corners)),
             sizes: byte_sizes(model),
         })
-    }
-
-    /// Records the one-time copy of the nets into their texture, if it is still
-    /// pending. Every recording that runs the kernels starts with it (the stages'
-    /// `prepare` and [`CcVertexEval::record`] do); the first such encoder must be
-    /// submitted, not dropped.
-    pub fn record_upload(&self, encoder: &mut wgpu::CommandEncoder) {
-        let pending = self
-            .nets_upload
-            .lock()
-            .unwrap_or_else(|e| e.into_inner())
-            .take();
-        if let Some(upload) = pending {
-            upload.record(encoder);
-        }
     }
 
     /// Re-uploads a model of the same shape (the control points moved, the topology did
@@ -151,12 +124,6 @@ impl CcModelBuffers {
         write(&self.nodes, bytemuck::cast_slice(&model.nodes));
         write(&self.splits, bytemuck::cast_slice(&model.splits));
         write(&self.corners, bytemuck::cast_slice(&model.corners));
-        // The whole texture is written, so a first copy still pending would only put the
-        // old nets back.
-        self.nets_upload
-            .lock()
-            .unwrap_or_else(|e| e.into_inner())
-            .take();
         let texels = NetTexture::new(&model.nets);
         queue.write_texture(
             self.nets.as_image_copy(),
@@ -191,6 +158,7 @@ impl CcModelBuffers {
 }
 
 /// The kernel that evaluates points `(patch, u, v)` into output vertices.
+#[doc(hidden)]
 pub struct CcVertexEval {
     kernel: Kernel,
 }
@@ -218,7 +186,6 @@ impl CcVertexEval {
         out: &wgpu::Buffer,
         max_points: u32,
     ) {
-        model.record_upload(encoder);
         let bind = self.bind(device, model, points, counts, out);
         self.record_bound(encoder, &bind, max_points);
     }
@@ -238,9 +205,7 @@ impl CcVertexEval {
             .bind_with_textures(device, &entries, &model.textures())
     }
 
-    /// [`record`](Self::record) with a bind group made by [`bind`](Self::bind). The
-    /// nets must have been copied into their texture by this or an earlier recording
-    /// ([`CcModelBuffers::record_upload`]; `record` does it).
+    /// [`record`](Self::record) with a bind group made by [`bind`](Self::bind).
     pub fn record_bound(
         &self,
         encoder: &mut wgpu::CommandEncoder,
@@ -272,6 +237,7 @@ impl CcVertexEval {
 }
 
 /// The vertex-hash kernels (`cc_hash_insert.wgsl`, `cc_hash_number.wgsl`) and the scan.
+#[doc(hidden)]
 pub struct CcHashKernels {
     insert: Kernel,
     mark_first: Kernel,
@@ -291,6 +257,7 @@ impl CcHashKernels {
 }
 
 /// Bind groups of the vertex-hash kernels over one set of buffers.
+#[doc(hidden)]
 pub struct CcHashBinds {
     insert: wgpu::BindGroup,
     mark_first: wgpu::BindGroup,
@@ -301,6 +268,7 @@ pub struct CcHashBinds {
 /// keys in order of first occurrence out (twin:
 /// [`tessera_core::catmull_clark::vertex_hash`]). The table overflowing is reported in
 /// the status and fixed by [`grow`](Self::grow) and a rerun, like every other buffer.
+#[doc(hidden)]
 pub struct CcVertexHash {
     /// Slots (a power of two).
     pub capacity: u32,

@@ -24,35 +24,41 @@
 //! until the search is over, so the best split is not marked a second time.
 //!
 //! Capacities: every list, the leaves, polygons, indices and the hash table. Kernels
-//! never write past them; the counters record what the run needed, and
-//! [`CcStage::grow`] reallocates ([`CcStage::run_blocking`] grows and reruns).
+//! never write past them; the counters record what the run needed. Each run's status
+//! is read back without blocking, and the next [`CcStage::prepare`] that finds an
+//! overflow reallocates, so the run after it fits ([`CcStage::run_blocking`] grows and
+//! reruns at once).
 //!
 //! ```no_run
-//! use tessera_core::catmull_clark::{load_surface, CcParams};
-//! use tessera_wgpu::{catmull_clark::CcStage, headless::Gpu};
+//! use tessera_core::{catmull_clark::{load_surface, CcParams}, Tolerance};
+//! use tessera_wgpu::{catmull_clark::CcStage, headless::Gpu, Kernels};
 //! # fn main() -> Result<(), Box<dyn std::error::Error>> {
 //! let gpu = Gpu::new()?;
 //! let model = load_surface(std::path::Path::new("assets/opensubdiv/catmark_car.obj"))?;
 //! let params = CcParams {
-//!     tolerance: 1e-2,
+//!     tolerance: Tolerance::Relative(1e-3),
 //!     max_depth: 8,
 //!     first_split: Default::default(),
 //!     leaf_bound: Default::default(),
 //! };
-//! let mut stage = CcStage::new(&gpu.device, &model, &params)?;
+//! let kernels = Kernels::new(&gpu.device);
+//! let mut stage = CcStage::new(&gpu.device, &gpu.queue, &kernels, &model, &params)?;
 //! // Once (and after set_params): run to completion, growing buffers that were too small.
 //! let status = stage.run_blocking(&gpu.device, &gpu.queue)?;
 //! println!("{} triangles", status.indices / 3);
 //! // Each frame, e.g. after `stage.update_points(...)`: record with your own work.
 //! let mut encoder = gpu.device.create_command_encoder(&Default::default());
-//! stage.prepare(&gpu.device, &gpu.queue, &mut encoder);
+//! stage.prepare(&gpu.device, &gpu.queue, &mut encoder)?;
 //! gpu.queue.submit([encoder.finish()]);
 //! // Draw `stage.output()` with `draw_indexed_indirect`.
 //! # Ok(()) }
 //! ```
 
 use tessera_core::catmull_clark::gpu_model::{patch_topology, CcGpuModel};
-use tessera_core::catmull_clark::{CcParams, LeafBound, SurfaceModel};
+use std::sync::Arc;
+
+use glam::Vec3;
+use tessera_core::catmull_clark::{CcParams, LeafBound, PatchMesh, SurfaceModel};
 use tessera_core::gpu_types::{
     CcCell, CcHashStatus, CcPoint, CcState, CcTessParams, OutVertex, CC_SEARCH_ROUNDS, CC_TRIALS,
 };
@@ -61,11 +67,11 @@ use wgpu::util::DeviceExt;
 
 use super::{CcHashBinds, CcHashKernels, CcModelBuffers, CcVertexEval, CcVertexHash};
 use crate::error::{Error, Result};
-use crate::headless::map_read;
 use crate::kernel::{check_size, storage, Kernel};
 use crate::output::MeshBuffers;
 use crate::scan::{PrefixSum, ScanKernels};
-use crate::stage::GrowingStage;
+use crate::stage::{GrowingStage, Passes, RunTimestamps, StatusReadback};
+use crate::Kernels;
 
 /// Binding numbers of the pipeline's own buffers (`shaders/shared/cc_tess.wgsl`).
 mod slot {
@@ -105,8 +111,8 @@ const ITEM_ARGS: u64 = 24;
 /// ... and [9..12] the search's leaves.
 const SEARCH_LEAF_ARGS: u64 = 36;
 
-/// Every kernel of the stage, compiled once per device.
-pub struct CcKernels {
+/// Every kernel of the stage, compiled once per device (part of [`Kernels`]).
+pub(crate) struct CcKernels {
     roots_count: Kernel,
     roots_emit: Kernel,
     roots_finish: Kernel,
@@ -157,7 +163,7 @@ impl CcKernels {
     }
 }
 
-/// How many of each thing the buffers hold.
+/// How many of each thing the buffers hold (the tests start from tiny ones).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct CcCapacities {
     /// Cells per list (each level's list of cells to test).
@@ -192,13 +198,16 @@ impl CcCapacities {
 /// What a run needed and reported (read back by [`CcStage::read_status`]).
 #[derive(Clone, Copy, Debug, Default)]
 pub struct CcStatus {
+    /// The run's counters: leaves, bounds computed, what each buffer needed, overflow.
     pub state: CcState,
+    /// The vertex hash's counters: distinct vertices, overflow.
     pub hash: CcHashStatus,
     /// Indices written (0 after an overflow).
     pub indices: u32,
 }
 
 impl CcStatus {
+    /// Whether a buffer was too small: the run wrote no triangles.
     pub fn overflowed(&self) -> bool {
         self.state.overflow != 0 || self.hash.overflow != 0
     }
@@ -259,8 +268,12 @@ struct Binds {
 
 /// The adaptive Catmull-Clark tessellation stage of one model.
 pub struct CcStage {
-    kernels: CcKernels,
+    kernels: Arc<CcKernels>,
     model: CcModelBuffers,
+    /// The patches as built, kept to move the control points and to check parameters.
+    patches: PatchMesh,
+    /// Levels of the uploaded quadtrees.
+    depth: u32,
     patch_count: u32,
     params: CcParams,
     topo: wgpu::Buffer,
@@ -269,7 +282,7 @@ pub struct CcStage {
     root_offsets: wgpu::Buffer,
     root_scan: PrefixSum,
     args: wgpu::Buffer,
-    status_readback: wgpu::Buffer,
+    readback: StatusReadback,
     buffers: Buffers,
     binds: Binds,
 }
@@ -281,28 +294,41 @@ fn state_bytes(patches: u32) -> u64 {
 }
 
 impl CcStage {
-    /// Phases [`prepare_timed`](Self::prepare_timed) times: every search round, leaf
+    /// Phases [`profile_phases`](Self::profile_phases) times: every search round, leaf
     /// collection, leaf keys, vertex hash, vertex evaluation, polygons and triangles.
+    #[doc(hidden)]
     pub const TIMED_PHASES: u32 = CC_SEARCH_ROUNDS + 1 + 4;
 
-    /// Uploads `model` and sizes the buffers with a first guess.
-    pub fn new(device: &wgpu::Device, model: &SurfaceModel, params: &CcParams) -> Result<Self> {
+    /// Uploads `model` through `queue`, sizes the buffers with a first guess (grown on
+    /// demand), and compiles the stage's kernels into `kernels` if no stage has. A
+    /// relative tolerance is resolved against the model's control box, now and for the
+    /// stage's lifetime.
+    pub fn new(
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        kernels: &Kernels,
+        model: &SurfaceModel,
+        params: &CcParams,
+    ) -> Result<Self> {
         let caps = CcCapacities::guess(model.mesh.patch_count() as u32);
-        Self::with_capacity(device, model, params, caps)
+        Self::with_capacity(device, queue, kernels, model, params, caps)
     }
 
-    /// As [`new`](Self::new) with given capacities (tests start from tiny ones).
+    /// As [`new`](Self::new) with given capacities (the tests grow from tiny ones).
+    #[doc(hidden)]
     pub fn with_capacity(
         device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        kernels: &Kernels,
         model: &SurfaceModel,
         params: &CcParams,
         caps: CcCapacities,
     ) -> Result<Self> {
         params.validate(model)?;
         gpu_leaf_bound(params)?;
-        let kernels = CcKernels::new(device);
+        let kernels = kernels.cc();
         let gpu_model = CcGpuModel::new(model);
-        let model_buffers = CcModelBuffers::new(device, &gpu_model)?;
+        let model_buffers = CcModelBuffers::new(device, queue, &gpu_model)?;
         let patch_count = model.mesh.patch_count() as u32;
         let topo = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("tessera cc topology"),
@@ -329,13 +355,8 @@ impl CcStage {
                 | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        let status_readback = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("tessera cc status readback"),
-            size: status_size(),
-            usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
-            mapped_at_creation: false,
-        });
-        let buffers = Buffers::new(device, &kernels, (patch_count, &state), params, caps)?;
+        let eps = params.epsilon(model);
+        let buffers = Buffers::new(device, &kernels, (patch_count, &state), (params, eps), caps)?;
         let binds = Binds::new(
             device,
             &kernels,
@@ -346,6 +367,8 @@ impl CcStage {
         Ok(CcStage {
             kernels,
             model: model_buffers,
+            patches: model.mesh.clone(),
+            depth: model.depth,
             patch_count,
             params: *params,
             topo,
@@ -354,47 +377,54 @@ impl CcStage {
             root_offsets,
             root_scan,
             args,
-            status_readback,
+            readback: StatusReadback::new("tessera cc status readback", status_size()),
             buffers,
             binds,
         })
     }
 
-    /// The tolerance, depth and first split of the next runs.
-    pub fn set_params(&mut self, queue: &wgpu::Queue, params: &CcParams) -> Result<()> {
-        if !(params.tolerance.is_finite() && params.tolerance > 0.0) {
-            return Err(tessera_core::Error::Param(format!(
-                "tolerance must be a positive number, got {}",
-                params.tolerance
-            ))
-            .into());
-        }
-        if params.max_depth > tessera_core::catmull_clark::MAX_DEPTH {
-            return Err(tessera_core::Error::Param(format!(
-                "max depth {} out of range 0..={}",
-                params.max_depth,
-                tessera_core::catmull_clark::MAX_DEPTH
-            ))
-            .into());
-        }
+    /// The tolerance, depth and first split of the next runs, written through `queue`.
+    /// A finer tolerance or a greater depth can need larger buffers: the `prepare` after
+    /// the overflowing run grows them (or call [`run_blocking`](Self::run_blocking)).
+    pub fn set_params(
+        &mut self,
+        _device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        params: &CcParams,
+    ) -> Result<()> {
+        params.validate_for(&self.patches, self.depth)?;
         gpu_leaf_bound(params)?;
         self.params = *params;
-        let p = tess_params(self.patch_count, params, self.buffers.caps);
+        let p = tess_params(self.patch_count, (params, self.epsilon()), self.buffers.caps);
         queue.write_buffer(&self.buffers.params, 0, bytemuck::bytes_of(&p));
         Ok(())
     }
 
-    /// New control-point positions for the same topology: the quadtrees are rebuilt on
-    /// the CPU and re-uploaded in place; the next [`prepare`](Self::prepare) tessellates
-    /// the moved surface.
-    pub fn update_points(&self, queue: &wgpu::Queue, model: &SurfaceModel) -> Result<()> {
-        self.model.update(queue, &CcGpuModel::new(model))
+    /// ε in model units: a relative tolerance is a fraction of the control box as loaded.
+    pub fn epsilon(&self) -> f64 {
+        self.params.tolerance.resolve(self.patches.control_diag)
     }
 
+    /// New positions of the control vertices, same topology and order as the mesh the
+    /// stage was made from: the patches are rebuilt on the CPU and written through
+    /// `queue` in place; the next [`prepare`](Self::prepare) tessellates the moved
+    /// surface.
+    pub fn update_points(&mut self, queue: &wgpu::Queue, points: &[Vec3]) -> Result<()> {
+        let points: Vec<_> = points.iter().map(|p| p.as_dvec3()).collect();
+        let patches = self.patches.with_control_points(&points)?;
+        let model = SurfaceModel::new(patches, self.depth);
+        self.model.update(queue, &CcGpuModel::new(&model))?;
+        self.patches = model.mesh;
+        Ok(())
+    }
+
+    /// The tolerance, depth and first split of the next runs.
     pub fn params(&self) -> &CcParams {
         &self.params
     }
 
+    /// What the buffers hold now.
+    #[doc(hidden)]
     pub fn capacities(&self) -> CcCapacities {
         self.buffers.caps
     }
@@ -410,38 +440,66 @@ impl CcStage {
     }
 
     /// Records the whole tessellation into `encoder` (see the module docs), and a copy of
-    /// the counters for [`read_status`](Self::read_status). Submits nothing.
+    /// its counters read back without blocking. Submits nothing. A status an earlier run
+    /// left grows the buffers first if that run overflowed (an error only when the device
+    /// cannot hold what it needed).
     pub fn prepare(
-        &self,
-        _device: &wgpu::Device,
+        &mut self,
+        device: &wgpu::Device,
         _queue: &wgpu::Queue,
         encoder: &mut wgpu::CommandEncoder,
-    ) {
-        self.record(encoder, None);
+    ) -> Result<()> {
+        self.grow_from_readback(device)?;
+        self.record_run(device, encoder, None, None);
+        Ok(())
+    }
+
+    /// As [`prepare`](Self::prepare), writing the run's GPU timestamps into
+    /// `timestamps` (see [`crate::GpuTimer`]).
+    pub fn prepare_timed(
+        &mut self,
+        device: &wgpu::Device,
+        _queue: &wgpu::Queue,
+        encoder: &mut wgpu::CommandEncoder,
+        timestamps: RunTimestamps<'_>,
+    ) -> Result<()> {
+        self.grow_from_readback(device)?;
+        self.record_run(device, encoder, None, Some(timestamps));
+        Ok(())
     }
 
     /// As [`prepare`](Self::prepare), writing a timestamp into `stamps` before the first
-    /// phase and after each (for profiling; the device needs
+    /// phase and after each: the bench's profile. The device needs
     /// `TIMESTAMP_QUERY_INSIDE_ENCODERS`, and `stamps` at least
-    /// [`TIMED_PHASES`](Self::TIMED_PHASES)` + 1` queries). Returns the phase names, one
+    /// [`TIMED_PHASES`](Self::TIMED_PHASES)` + 1` queries. Returns the phase names, one
     /// per timestamp after the first.
-    pub fn prepare_timed(
-        &self,
+    #[doc(hidden)]
+    pub fn profile_phases(
+        &mut self,
+        device: &wgpu::Device,
         encoder: &mut wgpu::CommandEncoder,
         stamps: &wgpu::QuerySet,
     ) -> Vec<String> {
         let mut names = Vec::new();
-        self.record(encoder, Some((stamps, &mut names)));
+        self.record_run(device, encoder, Some((stamps, &mut names)), None);
         names
     }
 
-    fn record(
-        &self,
+    fn grow_from_readback(&mut self, device: &wgpu::Device) -> Result<()> {
+        if let Some(bytes) = self.readback.poll(device) {
+            self.grow(device, &status_from_bytes(&bytes))?;
+        }
+        Ok(())
+    }
+
+    fn record_run(
+        &mut self,
+        device: &wgpu::Device,
         encoder: &mut wgpu::CommandEncoder,
         mut stamps: Option<(&wgpu::QuerySet, &mut Vec<String>)>,
+        timestamps: Option<RunTimestamps<'_>>,
     ) {
-        // The nets' first copy into their texture (`update_points` writes it directly).
-        self.model.record_upload(encoder);
+        let mut passes = Passes::new(timestamps);
         let mut stamp = |encoder: &mut wgpu::CommandEncoder, name: &str| {
             if let Some((set, names)) = stamps.as_mut() {
                 if !name.is_empty() {
@@ -459,10 +517,7 @@ impl CcStage {
         let p = self.patch_count;
         for round in 0..self.params.first_split.search_rounds() {
             {
-                let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                    label: Some("tessera cc marking"),
-                    timestamp_writes: None,
-                });
+                let mut pass = passes.begin(encoder, "tessera cc marking", false);
                 k.roots_count.dispatch(&mut pass, &binds.roots_count, p, 64);
                 self.root_scan.record(&mut pass, &k.scan);
                 k.roots_emit.dispatch(&mut pass, &binds.roots_emit, p, 64);
@@ -539,10 +594,7 @@ impl CcStage {
             .record_indirect(encoder, &binds.eval, &self.args, ITEM_ARGS);
         stamp(encoder, "vertex evaluation");
         {
-            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some("tessera cc polygons"),
-                timestamp_writes: None,
-            });
+            let mut pass = passes.begin(encoder, "tessera cc polygons", true);
             k.polygon_count.dispatch_indirect(
                 &mut pass,
                 &binds.polygon_count,
@@ -560,42 +612,23 @@ impl CcStage {
         stamp(encoder, "polygons and triangles");
         let state_size = std::mem::size_of::<CcState>() as u64;
         let hash_size = std::mem::size_of::<CcHashStatus>() as u64;
-        encoder.copy_buffer_to_buffer(&self.state, 0, &self.status_readback, 0, state_size);
-        encoder.copy_buffer_to_buffer(
-            &b.hash.status,
-            0,
-            &self.status_readback,
-            state_size,
-            hash_size,
-        );
-        encoder.copy_buffer_to_buffer(
-            &b.output.indirect,
-            0,
-            &self.status_readback,
-            state_size + hash_size,
-            4,
-        );
+        let (state, hash, indirect) = (&self.state, &b.hash.status, &b.output.indirect());
+        self.readback.record(device, encoder, |encoder, readback| {
+            encoder.copy_buffer_to_buffer(state, 0, readback, 0, state_size);
+            encoder.copy_buffer_to_buffer(hash, 0, readback, state_size, hash_size);
+            encoder.copy_buffer_to_buffer(indirect, 0, readback, state_size + hash_size, 4);
+        });
     }
 
-    /// What the last submitted run needed (waits for the GPU).
-    pub fn read_status(&self, device: &wgpu::Device) -> Result<CcStatus> {
-        let bytes = map_read(device, &self.status_readback)?;
-        let state_size = std::mem::size_of::<CcState>();
-        let hash_size = std::mem::size_of::<CcHashStatus>();
-        Ok(CcStatus {
-            state: bytemuck::pod_read_unaligned(&bytes[..state_size]),
-            hash: bytemuck::pod_read_unaligned(&bytes[state_size..state_size + hash_size]),
-            indices: u32::from_le_bytes(
-                bytes[state_size + hash_size..state_size + hash_size + 4]
-                    .try_into()
-                    .expect("4 bytes"),
-            ),
-        })
+    /// What the last recorded run needed and wrote, once its submission has run (waits
+    /// for the GPU).
+    pub fn read_status(&mut self, device: &wgpu::Device) -> Result<CcStatus> {
+        Ok(status_from_bytes(&self.readback.wait_last(device)?))
     }
 
     /// After an overflow, reallocates what was too small to what the run needed (with
     /// headroom). Returns whether anything changed; an error if the device cannot hold it.
-    pub fn grow(&mut self, device: &wgpu::Device, status: &CcStatus) -> Result<bool> {
+    fn grow(&mut self, device: &wgpu::Device, status: &CcStatus) -> Result<bool> {
         if !status.overflowed() {
             return Ok(false);
         }
@@ -629,7 +662,7 @@ impl CcStage {
             device,
             &self.kernels,
             (self.patch_count, &self.state),
-            &self.params,
+            (&self.params, self.epsilon()),
             caps,
         )?;
         self.binds = Binds::new(
@@ -646,6 +679,7 @@ impl CcStage {
             &buffers,
         );
         self.buffers = buffers;
+        self.readback.new_generation();
         Ok(true)
     }
 
@@ -697,7 +731,7 @@ impl CcStage {
         completed(status)?;
         let b = &self.buffers;
         let read = |buffer: &wgpu::Buffer, offset: u64, size: u64| {
-            crate::headless::read_buffer(device, queue, buffer, offset, size)
+            crate::readback::read_buffer(device, queue, buffer, offset, size)
         };
         let leaves = status.state.leaves as u64;
         let best: Vec<[u32; 2]> =
@@ -726,10 +760,10 @@ impl GrowingStage for CcStage {
         device: &wgpu::Device,
         queue: &wgpu::Queue,
         encoder: &mut wgpu::CommandEncoder,
-    ) {
-        self.prepare(device, queue, encoder);
+    ) -> Result<()> {
+        self.prepare(device, queue, encoder)
     }
-    fn status(&self, device: &wgpu::Device) -> Result<CcStatus> {
+    fn status(&mut self, device: &wgpu::Device) -> Result<CcStatus> {
         self.read_status(device)
     }
     fn grow_to(&mut self, device: &wgpu::Device, status: &CcStatus) -> Result<bool> {
@@ -769,11 +803,24 @@ fn gpu_leaf_bound(params: &CcParams) -> Result<()> {
     Ok(())
 }
 
-fn tess_params(patch_count: u32, params: &CcParams, caps: CcCapacities) -> CcTessParams {
+/// A run's status from the bytes [`CcStage::record_run`] copies: the state, the hash's
+/// status, the index count.
+fn status_from_bytes(bytes: &[u8]) -> CcStatus {
+    let state_size = std::mem::size_of::<CcState>();
+    let hash_size = std::mem::size_of::<CcHashStatus>();
+    CcStatus {
+        state: bytemuck::pod_read_unaligned(&bytes[..state_size]),
+        hash: bytemuck::pod_read_unaligned(&bytes[state_size..state_size + hash_size]),
+        indices: bytemuck::pod_read_unaligned(&bytes[state_size + hash_size..][..4]),
+    }
+}
+
+/// The kernels' parameters for `params` with ε resolved to `eps`.
+fn tess_params(patch_count: u32, (params, eps): (&CcParams, f64), caps: CcCapacities) -> CcTessParams {
     CcTessParams {
         grid: params.grid(),
         max_depth: params.max_depth,
-        tolerance: params.tolerance as f32,
+        tolerance: eps as f32,
         patch_count,
         cell_capacity: caps.cells,
         leaf_capacity: caps.leaves,
@@ -790,7 +837,7 @@ impl Buffers {
         device: &wgpu::Device,
         kernels: &CcKernels,
         (patch_count, state): (u32, &wgpu::Buffer),
-        params: &CcParams,
+        params: (&CcParams, f64),
         caps: CcCapacities,
     ) -> Result<Self> {
         let caps = CcCapacities {
@@ -925,9 +972,9 @@ impl Binds {
                 (slot::ITEM_POINTS, &b.item_points),
                 (slot::POLY_OFFSETS, &b.poly_offsets),
                 (slot::POLY_VERTS, &b.poly_verts),
-                (slot::VERTICES, &b.output.vertices),
-                (slot::INDICES, &b.output.indices),
-                (slot::DRAW, &b.output.indirect),
+                (slot::VERTICES, &b.output.vertices()),
+                (slot::INDICES, &b.output.indices()),
+                (slot::DRAW, &b.output.indirect()),
                 (slot::KEYS, &b.keys),
                 (slot::TABLE, &b.hash.table),
                 (slot::ITEM_SLOT, &b.hash.item_slot),
@@ -971,7 +1018,7 @@ impl Binds {
                 model,
                 &b.vertex_points,
                 &b.vertex_count,
-                &b.output.vertices,
+                &b.output.vertices(),
             ),
         }
     }

@@ -8,18 +8,20 @@
 //! ```no_run
 //! # fn demo(device: &wgpu::Device, queue: &wgpu::Queue,
 //! #         model: &tessera_core::catmull_clark::SurfaceModel) -> tessera_wgpu::Result<()> {
-//! use tessera_wgpu::catmull_clark::CcUniformStage;
-//! let stage = CcUniformStage::new(device, model, 8)?;
+//! use tessera_wgpu::{catmull_clark::{CcUniformStage, UniformParams}, Kernels};
+//! let kernels = Kernels::new(device);
+//! let mut stage = CcUniformStage::new(device, queue, &kernels, model, &UniformParams { segments: 8 })?;
 //! let mut encoder = device.create_command_encoder(&Default::default());
-//! stage.prepare(device, queue, &mut encoder);
+//! stage.prepare(device, queue, &mut encoder)?;
 //! queue.submit([encoder.finish()]);
-//! // Draw `stage.output()` with `draw_indexed_indirect(&stage.output().indirect, 0)`.
+//! // Draw `stage.output()` with `draw_indexed_indirect(stage.output().indirect(), 0)`.
 //! # Ok(()) }
 //! ```
 
 use tessera_core::catmull_clark::gpu_model::CcGpuModel;
 use tessera_core::catmull_clark::gpu_uniform::{uniform_patches, UniformLayout};
-use tessera_core::catmull_clark::SurfaceModel;
+use glam::Vec3;
+use tessera_core::catmull_clark::{PatchMesh, SurfaceModel};
 use tessera_core::gpu_types::{CcPoint, CcUniformParams, OutVertex};
 use tessera_core::Mesh;
 use wgpu::util::DeviceExt;
@@ -28,6 +30,8 @@ use super::{CcModelBuffers, CcVertexEval};
 use crate::error::{Error, Result};
 use crate::kernel::{check_size, storage, Kernel};
 use crate::output::MeshBuffers;
+use crate::stage::{Passes, RunTimestamps};
+use crate::Kernels;
 
 /// Binding numbers of the uniform kernels (`shaders/shared/cc_uniform.wgsl`).
 mod slot {
@@ -40,8 +44,8 @@ mod slot {
     pub const DRAW: u32 = 76;
 }
 
-/// The compiled kernels of [`CcUniformStage`].
-pub struct CcUniformKernels {
+/// The compiled kernels of [`CcUniformStage`] (part of [`Kernels`]).
+pub(crate) struct CcUniformKernels {
     points: Kernel,
     eval: CcVertexEval,
     cells: Kernel,
@@ -57,11 +61,21 @@ impl CcUniformKernels {
     }
 }
 
+/// What [`CcUniformStage`] tessellates with.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct UniformParams {
+    /// Segments per patch side (`1..=4096`).
+    pub segments: u32,
+}
+
 /// The uniform tessellation stage: the model uploaded once, `n` changeable, output
 /// buffers ready to draw after each [`prepare`](Self::prepare).
 pub struct CcUniformStage {
-    kernels: CcUniformKernels,
+    kernels: std::sync::Arc<CcUniformKernels>,
     model: CcModelBuffers,
+    /// The patches as built, kept to move the control points.
+    patches_cpu: PatchMesh,
+    depth: u32,
     layout: UniformLayout,
     patches: wgpu::Buffer,
     params: CcUniformParams,
@@ -77,12 +91,19 @@ struct Sized {
 }
 
 impl CcUniformStage {
-    /// Uploads `model` and sizes the buffers for `segments` per patch side.
-    pub fn new(device: &wgpu::Device, model: &SurfaceModel, segments: u32) -> Result<Self> {
+    /// Uploads `model` through `queue` and sizes the buffers for `params.segments` per
+    /// patch side; compiles the stage's kernels into `kernels` if no stage has.
+    pub fn new(
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        kernels: &Kernels,
+        model: &SurfaceModel,
+        params: &UniformParams,
+    ) -> Result<Self> {
         let layout = uniform_patches(&model.mesh);
-        let params = layout.params(segments)?;
-        let kernels = CcUniformKernels::new(device);
-        let model_buffers = CcModelBuffers::new(device, &CcGpuModel::new(model))?;
+        let params = layout.params(params.segments)?;
+        let kernels = kernels.cc_uniform();
+        let model_buffers = CcModelBuffers::new(device, queue, &CcGpuModel::new(model))?;
         // Never empty: a model of holes only binds one zeroed patch it never reads.
         let zero = [tessera_core::gpu_types::CcUniformPatch::default()];
         let patches = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
@@ -110,6 +131,8 @@ impl CcUniformStage {
         Ok(CcUniformStage {
             kernels,
             model: model_buffers,
+            patches_cpu: model.mesh.clone(),
+            depth: model.depth,
             layout,
             patches,
             params,
@@ -118,15 +141,15 @@ impl CcUniformStage {
         })
     }
 
-    /// Segments per patch side of the next runs; the output buffers are reallocated
-    /// when the size changes.
-    pub fn set_segments(
+    /// Segments per patch side of the next runs, written through `queue`; the output
+    /// buffers are reallocated when the size changes.
+    pub fn set_params(
         &mut self,
         device: &wgpu::Device,
         queue: &wgpu::Queue,
-        segments: u32,
+        params: &UniformParams,
     ) -> Result<()> {
-        let params = self.layout.params(segments)?;
+        let params = self.layout.params(params.segments)?;
         if params == self.params {
             return Ok(());
         }
@@ -143,13 +166,22 @@ impl CcUniformStage {
         Ok(())
     }
 
-    pub fn segments(&self) -> u32 {
-        self.params.segments
+    /// The parameters of the next runs.
+    pub fn params(&self) -> UniformParams {
+        UniformParams {
+            segments: self.params.segments,
+        }
     }
 
-    /// New control-point positions for the same topology, re-uploaded in place.
-    pub fn update_points(&self, queue: &wgpu::Queue, model: &SurfaceModel) -> Result<()> {
-        self.model.update(queue, &CcGpuModel::new(model))
+    /// New positions of the control vertices (same topology and order): the patches are
+    /// rebuilt on the CPU and written through `queue` in place.
+    pub fn update_points(&mut self, queue: &wgpu::Queue, points: &[Vec3]) -> Result<()> {
+        let points: Vec<_> = points.iter().map(|p| p.as_dvec3()).collect();
+        let patches = self.patches_cpu.with_control_points(&points)?;
+        let model = SurfaceModel::new(patches, self.depth);
+        self.model.update(queue, &CcGpuModel::new(&model))?;
+        self.patches_cpu = model.mesh;
+        Ok(())
     }
 
     /// Vertices and indices every run writes.
@@ -157,6 +189,7 @@ impl CcUniformStage {
         self.params.vertex_count()
     }
 
+    /// Indices every run writes (3 per triangle).
     pub fn index_count(&self) -> u32 {
         self.params.index_count()
     }
@@ -171,22 +204,38 @@ impl CcUniformStage {
         self.model.byte_size() + std::mem::size_of_val(self.layout.patches.as_slice())
     }
 
-    /// Records the three dispatches into `encoder`. Submits nothing.
+    /// Records the three dispatches into `encoder`. Submits nothing; the sizes follow
+    /// from the parameters, so there is nothing to grow and no error.
     pub fn prepare(
-        &self,
+        &mut self,
         _device: &wgpu::Device,
         _queue: &wgpu::Queue,
         encoder: &mut wgpu::CommandEncoder,
-    ) {
-        self.model.record_upload(encoder);
+    ) -> Result<()> {
+        self.record_run(encoder, None);
+        Ok(())
+    }
+
+    /// As [`prepare`](Self::prepare), writing the run's GPU timestamps into
+    /// `timestamps` (see [`crate::GpuTimer`]).
+    pub fn prepare_timed(
+        &mut self,
+        _device: &wgpu::Device,
+        _queue: &wgpu::Queue,
+        encoder: &mut wgpu::CommandEncoder,
+        timestamps: RunTimestamps<'_>,
+    ) -> Result<()> {
+        self.record_run(encoder, Some(timestamps));
+        Ok(())
+    }
+
+    fn record_run(&self, encoder: &mut wgpu::CommandEncoder, timestamps: Option<RunTimestamps<'_>>) {
+        let mut passes = Passes::new(timestamps);
         let p = &self.params;
         let side = p.segments + 1;
         let [points, eval, cells] = &self.sized.binds;
         {
-            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some("tessera cc_uniform_points"),
-                timestamp_writes: None,
-            });
+            let mut pass = passes.begin(encoder, "tessera cc_uniform_points", false);
             // At least one invocation: it writes the vertex count.
             let items = (p.patch_count * side * side).max(1);
             self.kernels.points.dispatch(&mut pass, points, items, 64);
@@ -194,10 +243,7 @@ impl CcUniformStage {
         self.kernels
             .eval
             .record_bound(encoder, eval, self.vertex_count());
-        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-            label: Some("tessera cc_uniform_cells"),
-            timestamp_writes: None,
-        });
+        let mut pass = passes.begin(encoder, "tessera cc_uniform_cells", true);
         let items = (p.patch_count * p.segments * p.segments).max(1);
         self.kernels.cells.dispatch(&mut pass, cells, items, 64);
     }
@@ -257,15 +303,15 @@ impl Sized {
             ),
             kernels
                 .eval
-                .bind(device, model, &points, &counts, &output.vertices),
+                .bind(device, model, &points, &counts, &output.vertices()),
             kernels.cells.bind(
                 device,
                 &entries(
                     shared,
                     &[
-                        (slot::VERTICES, &output.vertices),
-                        (slot::INDICES, &output.indices),
-                        (slot::DRAW, &output.indirect),
+                        (slot::VERTICES, &output.vertices()),
+                        (slot::INDICES, &output.indices()),
+                        (slot::DRAW, &output.indirect()),
                     ],
                 ),
             ),
@@ -285,10 +331,10 @@ impl crate::stage::GrowingStage for CcUniformStage {
         device: &wgpu::Device,
         queue: &wgpu::Queue,
         encoder: &mut wgpu::CommandEncoder,
-    ) {
-        self.prepare(device, queue, encoder);
+    ) -> Result<()> {
+        self.prepare(device, queue, encoder)
     }
-    fn status(&self, device: &wgpu::Device) -> Result<(u32, u32)> {
+    fn status(&mut self, device: &wgpu::Device) -> Result<(u32, u32)> {
         device
             .poll(wgpu::PollType::wait_indefinitely())
             .map_err(|e| Error::Readback(e.to_string()))?;

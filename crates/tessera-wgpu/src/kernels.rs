@@ -1,0 +1,58 @@
+//! The compiled kernels of one device, shared by every stage made on it.
+
+use std::sync::{Arc, OnceLock};
+
+use crate::bezier::BezierKernels;
+use crate::catmull_clark::{CcKernels, CcUniformKernels};
+
+/// The compute pipelines of one device. Compiling them is the slow part of creating a
+/// stage (seconds on a CPU driver), so they are compiled once, each family the first
+/// time a stage needs it, and shared by every stage given this set. Cloning is cheap.
+///
+/// ```no_run
+/// # fn f(device: &wgpu::Device) {
+/// let kernels = tessera_wgpu::Kernels::new(device);
+/// // BezierStage::new(device, queue, &kernels, …), CcStage::new(device, queue, &kernels, …)
+/// # }
+/// ```
+#[derive(Clone)]
+pub struct Kernels(Arc<Inner>);
+
+struct Inner {
+    device: wgpu::Device,
+    bezier: OnceLock<BezierKernels>,
+    cc: OnceLock<Arc<CcKernels>>,
+    cc_uniform: OnceLock<Arc<CcUniformKernels>>,
+}
+
+impl Kernels {
+    /// An empty set for `device`: nothing is compiled until a stage needs it.
+    pub fn new(device: &wgpu::Device) -> Self {
+        Kernels(Arc::new(Inner {
+            device: device.clone(),
+            bezier: OnceLock::new(),
+            cc: OnceLock::new(),
+            cc_uniform: OnceLock::new(),
+        }))
+    }
+
+    pub(crate) fn bezier(&self) -> &BezierKernels {
+        self.0
+            .bezier
+            .get_or_init(|| BezierKernels::new(&self.0.device))
+    }
+
+    pub(crate) fn cc(&self) -> Arc<CcKernels> {
+        self.0
+            .cc
+            .get_or_init(|| Arc::new(CcKernels::new(&self.0.device)))
+            .clone()
+    }
+
+    pub(crate) fn cc_uniform(&self) -> Arc<CcUniformKernels> {
+        self.0
+            .cc_uniform
+            .get_or_init(|| Arc::new(CcUniformKernels::new(&self.0.device)))
+            .clone()
+    }
+}
