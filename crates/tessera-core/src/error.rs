@@ -36,16 +36,33 @@ impl Error {
         Error::Parse {
             file: file.to_path_buf(),
             line,
-            msg: msg.into(),
+            msg: one_line(msg.into()),
         }
     }
 
     pub(crate) fn input(file: &std::path::Path, msg: impl Into<String>) -> Self {
         Error::Input {
             file: file.to_path_buf(),
-            msg: msg.into(),
+            msg: one_line(msg.into()),
         }
     }
+}
+
+/// Control characters escaped (`\n`, `\u{1b}`): a message may quote the file or a
+/// dependency, and must still be one line.
+fn one_line(msg: String) -> String {
+    if !msg.chars().any(char::is_control) {
+        return msg;
+    }
+    let mut out = String::with_capacity(msg.len() + 8);
+    for c in msg.chars() {
+        if c.is_control() {
+            out.extend(c.escape_default());
+        } else {
+            out.push(c);
+        }
+    }
+    out
 }
 
 pub type Result<T, E = Error> = std::result::Result<T, E>;
