@@ -4,6 +4,8 @@ use std::path::PathBuf;
 
 use tessera_core::bezier::BezierModel;
 
+pub mod fuzz;
+
 /// Path of a shipped asset (never `../shared`).
 pub fn asset(rel: &str) -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))

@@ -1,5 +1,6 @@
-//! `cargo xtask test` and `cargo xtask bench`: the project's two entry points for
-//! developers and CI. Only the standard library: it must build fast on a fresh machine.
+//! `cargo xtask test`, `cargo xtask bench` and `cargo xtask fuzz`: the project's entry
+//! points for developers and CI. Only the standard library: it must build fast on a
+//! fresh machine.
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, ExitCode};
@@ -9,8 +10,9 @@ fn main() -> ExitCode {
     let result = match args.first().map(String::as_str) {
         Some("test") => test(&args[1..]),
         Some("bench") => bench(&args[1..]),
+        Some("fuzz") => fuzz(&args[1..]),
         _ => {
-            eprintln!("usage: cargo xtask test [-- <cargo test args>]\n       cargo xtask bench [--quick] [--only PART] | --assemble-only");
+            eprintln!("usage: cargo xtask test [-- <cargo test args>]\n       cargo xtask bench [--quick] [--only PART] | --assemble-only\n       cargo xtask fuzz N [--seed S]");
             return ExitCode::from(2);
         }
     };
@@ -333,4 +335,35 @@ fn today() -> String {
         .ok()
         .map(|o| String::from_utf8_lossy(&o.stdout).trim().to_string())
         .unwrap_or_default()
+}
+
+/// The loaders' mutation fuzz with `N` mutants per loader (and a seed), optimized: the
+/// same test as in `cargo xtask test`, which runs 1000.
+fn fuzz(args: &[String]) -> Result<(), String> {
+    let usage = || "usage: cargo xtask fuzz N [--seed S]".to_string();
+    let mutants: u64 = args
+        .first()
+        .and_then(|n| n.parse().ok())
+        .ok_or_else(usage)?;
+    let mut t = cargo();
+    t.args([
+        "test",
+        "--release",
+        "--locked",
+        "-p",
+        "tessera-tests",
+        "--test",
+        "loader_fuzz",
+        "--",
+        "--nocapture",
+    ])
+    .env("TESSERA_FUZZ_MUTANTS", mutants.to_string());
+    match &args[1..] {
+        [] => {}
+        [flag, seed] if flag == "--seed" => {
+            t.env("TESSERA_FUZZ_SEED", seed);
+        }
+        _ => return Err(usage()),
+    }
+    run(&mut t)
 }
