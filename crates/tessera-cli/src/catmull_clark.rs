@@ -13,8 +13,10 @@ use tessera_core::io::export::MeshFormat;
 use tessera_core::io::load_control_mesh;
 use tessera_core::measure::ErrorStats;
 use tessera_core::Error as CoreError;
-use tessera_wgpu::catmull_clark::{CcStage, CcUniformStage};
+use tessera_core::Tolerance;
+use tessera_wgpu::catmull_clark::{CcStage, CcUniformStage, UniformParams};
 use tessera_wgpu::Error;
+use tessera_wgpu::Kernels;
 
 use crate::cli::{Backend, Method, TessellateArgs};
 use crate::gpu::GpuTimings;
@@ -130,7 +132,6 @@ pub fn tessellate(args: TessellateArgs) -> Result<(), Error> {
         TREE_DEPTH,
     );
     timings.prepare = ms(t);
-    let diag = control.bbox_diag();
     let measure_samples = args.measure_samples.unwrap_or(DEFAULT_MEASURE_SAMPLES);
     check_measure_args(&args, measure_samples, model.mesh.surface_patches().count())?;
 
@@ -155,26 +156,17 @@ pub fn tessellate(args: TessellateArgs) -> Result<(), Error> {
             (out, None, Some(n))
         }
         _ => {
-            let tolerance = match (args.tolerance, args.tolerance_rel) {
-                (Some(t), _) => t,
-                (None, r) => {
-                    let r = r.unwrap_or(DEFAULT_TOLERANCE_REL);
-                    if !(r.is_finite() && r > 0.0) {
-                        return Err(CoreError::Param(format!(
-                            "tolerance must be a positive number, got {r}"
-                        ))
-                        .into());
-                    }
-                    r * diag
-                }
-            };
             let params = CcParams {
-                tolerance,
+                tolerance: match (args.tolerance, args.tolerance_rel) {
+                    (Some(t), _) => Tolerance::Absolute(t),
+                    (None, r) => Tolerance::Relative(r.unwrap_or(DEFAULT_TOLERANCE_REL)),
+                },
                 max_depth,
                 first_split,
                 leaf_bound,
             };
             params.validate(&model)?;
+            let tolerance = params.epsilon(&model);
             if on_gpu {
                 let mut gpu_timings = GpuTimings::default();
                 let out = run_gpu(&model, &params, &mut gpu_timings)?;
@@ -204,6 +196,7 @@ pub fn tessellate(args: TessellateArgs) -> Result<(), Error> {
         &out.mesh,
         args.measure,
         || surface_samples(&model, measure_samples),
+        model.mesh.control_diag,
         args.output.as_deref(),
         &mut timings,
     )?;
@@ -329,8 +322,10 @@ pub fn run_gpu(
     timings: &mut GpuTimings,
 ) -> Result<CcTessellation, Error> {
     let gpu = crate::gpu::open(timings)?;
-    let (stage, status) =
-        crate::gpu::run(&gpu, timings, || CcStage::new(&gpu.device, model, params))?;
+    let kernels = Kernels::new(&gpu.device);
+    let (stage, status) = crate::gpu::run(&gpu, timings, || {
+        CcStage::new(&gpu.device, &gpu.queue, &kernels, model, params)
+    })?;
     let t = Instant::now();
     let mesh = stage.read_mesh(&gpu.device, &gpu.queue, &status)?;
     timings.readback = ms(t);
@@ -353,8 +348,15 @@ pub fn run_gpu_uniform(
     timings: &mut GpuTimings,
 ) -> Result<CcTessellation, Error> {
     let gpu = crate::gpu::open(timings)?;
+    let kernels = Kernels::new(&gpu.device);
     let (stage, _) = crate::gpu::run(&gpu, timings, || {
-        CcUniformStage::new(&gpu.device, model, segments)
+        CcUniformStage::new(
+            &gpu.device,
+            &gpu.queue,
+            &kernels,
+            model,
+            &UniformParams { segments },
+        )
     })?;
     let t = Instant::now();
     let mesh = stage.read_mesh(&gpu.device, &gpu.queue)?;

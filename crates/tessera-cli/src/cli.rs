@@ -98,15 +98,17 @@ pub struct TessellateArgs {
     /// limit surface, in model units (guaranteed, not sampled).
     #[arg(long, conflicts_with = "tolerance_rel")]
     pub tolerance: Option<f64>,
-    /// Catmull-Clark adaptive: the tolerance as a fraction of the bounding-box diagonal
-    /// (default 0.001).
+    /// Catmull-Clark adaptive: the tolerance as a fraction of the diagonal of the control
+    /// points' bounding box (default 0.001). The stats' `bbox_diag` is that diagonal, and
+    /// `max_error_rel` the measured error over it; `surface_bbox_diag` is the measured
+    /// surface's box.
     #[arg(long)]
     pub tolerance_rel: Option<f64>,
     /// Catmull-Clark uniform: 2^LEVEL segments per patch side (same as --segments 2^LEVEL).
     #[arg(long, conflicts_with = "segments")]
     pub level: Option<u32>,
     /// Edge-test threshold in model units (map tests: displacement difference; flat: chord
-    /// deviation). Default: 0.002 of the bounding-box diagonal.
+    /// deviation). Default: 0.002 of the control points' bounding-box diagonal.
     #[arg(long)]
     pub threshold: Option<f32>,
     /// Bézier: levels of recursive edge bisection (at most 2^D segments per coarse edge;
@@ -173,7 +175,7 @@ pub struct RenderArgs {
     #[arg(long)]
     pub segments: Option<u32>,
     /// Catmull-Clark: largest distance to the limit surface, as a fraction of the
-    /// bounding-box diagonal (default 1e-3).
+    /// control points' bounding-box diagonal (default 1e-3).
     #[arg(long)]
     pub tolerance_rel: Option<f64>,
     /// Levels of recursive subdivision (Bézier default 6, Catmull-Clark 10).

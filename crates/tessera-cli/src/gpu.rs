@@ -5,9 +5,66 @@ use std::time::Instant;
 
 use crate::tessellate::ms;
 use serde::Serialize;
+use tessera_core::gpu_types::BezierStatus;
+use tessera_wgpu::bezier::BezierStage;
+use tessera_wgpu::catmull_clark::{CcStage, CcStatus, CcUniformStage};
 use tessera_wgpu::headless::Gpu;
-use tessera_wgpu::stage::{run_blocking, GrowingStage};
 use tessera_wgpu::{wgpu, Result};
+
+/// What the CLI does with any stage: fit the buffers, record a run, read its status.
+pub trait Stage {
+    /// What a run reports.
+    type Status;
+    /// Runs to completion, growing the buffers until the output fits.
+    fn fit(&mut self, gpu: &Gpu) -> Result<Self::Status>;
+    /// Records one run.
+    fn prepare(&mut self, gpu: &Gpu, encoder: &mut wgpu::CommandEncoder) -> Result<()>;
+    /// The last run's status, once submitted.
+    fn status(&mut self, gpu: &Gpu) -> Result<Self::Status>;
+}
+
+impl Stage for BezierStage {
+    type Status = BezierStatus;
+    fn fit(&mut self, gpu: &Gpu) -> Result<BezierStatus> {
+        self.run_blocking(&gpu.device, &gpu.queue)
+    }
+    fn prepare(&mut self, gpu: &Gpu, encoder: &mut wgpu::CommandEncoder) -> Result<()> {
+        BezierStage::prepare(self, &gpu.device, &gpu.queue, encoder)
+    }
+    fn status(&mut self, gpu: &Gpu) -> Result<BezierStatus> {
+        self.read_status(&gpu.device)
+    }
+}
+
+impl Stage for CcStage {
+    type Status = CcStatus;
+    fn fit(&mut self, gpu: &Gpu) -> Result<CcStatus> {
+        self.run_blocking(&gpu.device, &gpu.queue)
+    }
+    fn prepare(&mut self, gpu: &Gpu, encoder: &mut wgpu::CommandEncoder) -> Result<()> {
+        CcStage::prepare(self, &gpu.device, &gpu.queue, encoder)
+    }
+    fn status(&mut self, gpu: &Gpu) -> Result<CcStatus> {
+        self.read_status(&gpu.device)
+    }
+}
+
+/// Its sizes follow from the parameters: it never grows, and its status is its counts.
+impl Stage for CcUniformStage {
+    type Status = ();
+    fn fit(&mut self, gpu: &Gpu) -> Result<()> {
+        let mut encoder = gpu.device.create_command_encoder(&Default::default());
+        Stage::prepare(self, gpu, &mut encoder)?;
+        gpu.queue.submit([encoder.finish()]);
+        gpu.wait()
+    }
+    fn prepare(&mut self, gpu: &Gpu, encoder: &mut wgpu::CommandEncoder) -> Result<()> {
+        CcUniformStage::prepare(self, &gpu.device, &gpu.queue, encoder)
+    }
+    fn status(&mut self, gpu: &Gpu) -> Result<()> {
+        gpu.wait()
+    }
+}
 
 /// Stages of a GPU run, ms. `tessellate` is the tessellation alone.
 #[derive(Serialize, Default, Clone, Copy, Debug)]
@@ -32,7 +89,7 @@ pub fn open(timings: &mut GpuTimings) -> Result<Gpu> {
 }
 
 /// Builds a stage and runs it: once to fit the buffers, once timed.
-pub fn run<S: GrowingStage>(
+pub fn run<S: Stage>(
     gpu: &Gpu,
     timings: &mut GpuTimings,
     build: impl FnOnce() -> Result<S>,
@@ -42,10 +99,10 @@ pub fn run<S: GrowingStage>(
     gpu.check()?;
     timings.pipelines_and_upload = ms(t);
     let t = Instant::now();
-    run_blocking(&mut stage, &gpu.device, &gpu.queue)?;
+    stage.fit(gpu)?;
     timings.first_run = ms(t);
-    timed_run(gpu, timings, |e| stage.record(&gpu.device, &gpu.queue, e))?;
-    let status = stage.status(&gpu.device)?;
+    timed_run(gpu, timings, |e| stage.prepare(gpu, e))?;
+    let status = stage.status(gpu)?;
     gpu.check()?;
     Ok((stage, status))
 }
@@ -54,11 +111,11 @@ pub fn run<S: GrowingStage>(
 fn timed_run(
     gpu: &Gpu,
     timings: &mut GpuTimings,
-    record: impl FnOnce(&mut wgpu::CommandEncoder),
+    record: impl FnOnce(&mut wgpu::CommandEncoder) -> Result<()>,
 ) -> Result<()> {
     let t = Instant::now();
     let mut encoder = gpu.device.create_command_encoder(&Default::default());
-    record(&mut encoder);
+    record(&mut encoder)?;
     gpu.queue.submit([encoder.finish()]);
     gpu.wait()?;
     timings.tessellate = ms(t);

@@ -12,6 +12,7 @@ mod tessellate;
 use clap::Parser;
 
 fn main() -> std::process::ExitCode {
+    quiet_headless_vulkan();
     let args = cli::Cli::parse();
     match tessellate::run(args) {
         Ok(()) => std::process::ExitCode::SUCCESS,
@@ -19,5 +20,16 @@ fn main() -> std::process::ExitCode {
             eprintln!("error: {e}");
             std::process::ExitCode::FAILURE
         }
+    }
+}
+
+/// Without a session (no `XDG_RUNTIME_DIR`), Mesa's device-select Vulkan layer probes for
+/// a Wayland display and libwayland prints an error line per probe; the layer only
+/// reorders adapters, which a headless run does not need. Set before any thread starts.
+fn quiet_headless_vulkan() {
+    if std::env::var_os("XDG_RUNTIME_DIR").is_none()
+        && std::env::var_os("NODEVICE_SELECT").is_none()
+    {
+        std::env::set_var("NODEVICE_SELECT", "1");
     }
 }

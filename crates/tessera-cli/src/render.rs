@@ -7,14 +7,14 @@ use tessera_core::bezier::{AdaptiveParams, EdgeTest, PreparedBezier};
 use tessera_core::Error as CoreError;
 use tessera_wgpu::glam::Vec3;
 use tessera_wgpu::image_out::{render_camera_to_rgba, save_png};
-use tessera_wgpu::render::Camera;
+use tessera_wgpu::{Camera, Kernels};
 use tessera_wgpu::{Error, RenderOptions};
 
 use tessera_core::catmull_clark::{CcParams, SurfaceModel, MAX_DEPTH, TREE_DEPTH};
 use tessera_wgpu::bezier::BezierStage;
-use tessera_wgpu::catmull_clark::{CcStage, CcUniformStage};
+use tessera_wgpu::catmull_clark::{CcStage, CcUniformStage, UniformParams};
 use tessera_wgpu::glam::DVec3;
-use tessera_wgpu::output::MeshBuffers;
+use tessera_wgpu::MeshBuffers;
 
 use crate::cli::{Axis, Method, RenderArgs};
 use crate::gpu::GpuTimings;
@@ -113,31 +113,33 @@ pub fn render(args: RenderArgs) -> Result<(), Error> {
         let rel = args
             .tolerance_rel
             .unwrap_or(crate::catmull_clark::DEFAULT_TOLERANCE_REL);
-        if !(rel.is_finite() && rel > 0.0) {
-            return Err(CoreError::Param(format!(
-                "tolerance must be a positive number, got {rel}"
-            ))
-            .into());
-        }
         let params = CcParams {
-            tolerance: rel * control.bbox_diag(),
+            tolerance: tessera_core::Tolerance::Relative(rel),
             max_depth: args.max_depth.unwrap_or(MAX_DEPTH),
             first_split: args.first_split.unwrap_or_default().into(),
             leaf_bound: Default::default(),
         };
         params.validate(&model)?;
         let gpu = crate::gpu::open(&mut timings)?;
+        let kernels = Kernels::new(&gpu.device);
         let bounds = (lo.as_vec3(), hi.as_vec3());
         if uniform {
             let n = args.segments.unwrap_or(8);
-            let (stage, (vertices, indices)) = crate::gpu::run(&gpu, &mut timings, || {
-                CcUniformStage::new(&gpu.device, &model, n)
+            let (stage, ()) = crate::gpu::run(&gpu, &mut timings, || {
+                CcUniformStage::new(
+                    &gpu.device,
+                    &gpu.queue,
+                    &kernels,
+                    &model,
+                    &UniformParams { segments: n },
+                )
             })?;
+            let counts = (stage.index_count() / 3, stage.vertex_count());
             let output = StageOutput::CcUniform(Box::new(stage));
-            (gpu, output, bounds, "uniform", (indices / 3, vertices))
+            (gpu, output, bounds, "uniform", counts)
         } else {
             let (stage, status) = crate::gpu::run(&gpu, &mut timings, || {
-                CcStage::new(&gpu.device, &model, &params)
+                CcStage::new(&gpu.device, &gpu.queue, &kernels, &model, &params)
             })?;
             let counts = (status.indices / 3, status.vertices());
             let output = StageOutput::Cc(Box::new(stage));
@@ -154,8 +156,9 @@ pub fn render(args: RenderArgs) -> Result<(), Error> {
         };
         params.validate()?;
         let gpu = crate::gpu::open(&mut timings)?;
+        let kernels = Kernels::new(&gpu.device);
         let (stage, status) = crate::gpu::run(&gpu, &mut timings, || {
-            BezierStage::new(&gpu.device, &prep, &params)
+            BezierStage::new(&gpu.device, &gpu.queue, &kernels, &prep, &params)
         })?;
         let counts = (status.indices / 3, status.vertices);
         (

@@ -73,12 +73,13 @@ pub(crate) fn measure_and_write(
     mesh: &tessera_core::Mesh,
     measure: bool,
     samples: impl FnOnce() -> Vec<tessera_wgpu::glam::DVec3>,
+    bbox_diag: f64,
     output: Option<&Path>,
     timings: &mut Timings,
 ) -> Result<(Option<ErrorStats>, Option<StagedFile>), CoreError> {
     let error = if measure {
         let t = Instant::now();
-        let e = measure_error(&samples(), mesh);
+        let e = measure_error(&samples(), mesh, bbox_diag);
         timings.measure = ms(t);
         Some(e)
     } else {
@@ -311,8 +312,9 @@ fn tessellate(args: TessellateArgs) -> Result<(), Error> {
                 );
                 params.threshold = r.threshold;
             }
+            let kernels = tessera_wgpu::Kernels::new(&gpu.device);
             let (stage, status) = crate::gpu::run(gpu, &mut gpu_timings, || {
-                BezierStage::new(&gpu.device, &prep, &params)
+                BezierStage::new(&gpu.device, &gpu.queue, &kernels, &prep, &params)
             })?;
             let t = Instant::now();
             let mesh = stage.read_mesh(&gpu.device, &gpu.queue, &status)?;
@@ -386,6 +388,7 @@ fn tessellate(args: TessellateArgs) -> Result<(), Error> {
         &out.mesh,
         args.measure,
         || bezier_surface_samples(&model, measure_samples),
+        model.bbox_diag(),
         args.output.as_deref(),
         &mut timings,
     )?;

@@ -88,7 +88,7 @@ fn target_triangles_lands_within_two_percent() {
     }
 }
 
-/// The `--stats` JSON, checked for the keys SPEC §4 requires (with `--measure`) and `extra`.
+/// The `--stats` JSON, checked for the keys the CLI reference promises (with `--measure`) and `extra`.
 fn stats_with_spec_keys(stats: &Path, extra: &[&str]) -> serde_json::Value {
     let json: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(stats).unwrap()).unwrap();
@@ -107,6 +107,32 @@ fn stats_with_spec_keys(stats: &Path, extra: &[&str]) -> serde_json::Value {
         assert!(json.get(key).is_some(), "stats lack {key}: {json}");
     }
     json
+}
+
+/// `--tolerance-rel` and the stats' `bbox_diag` speak of one box, the control points':
+/// on the pyramid it is 6.0 long across, where the limit surface's is much smaller.
+#[test]
+fn relative_tolerance_and_stats_use_the_control_points_box() {
+    let input =
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/opensubdiv/catmark_pyramid.obj");
+    let stats = tmp("pyramid.json");
+    run_ok(
+        tessera()
+            .arg("tessellate")
+            .arg(&input)
+            .args(["--tolerance-rel", "1e-3", "--measure", "--stats"])
+            .arg(&stats),
+    );
+    let json = stats_with_spec_keys(&stats, &["surface_bbox_diag", "tolerance"]);
+    let f = |k: &str| json[k].as_f64().unwrap();
+    assert!((f("bbox_diag") - 6.0).abs() < 1e-9, "{json}");
+    assert!(f("surface_bbox_diag") < 0.5 * f("bbox_diag"), "{json}");
+    assert!((f("tolerance") - 6e-3).abs() < 1e-12, "{json}");
+    assert!(
+        (f("max_error_rel") - f("max_error") / f("bbox_diag")).abs() < 1e-12,
+        "{json}"
+    );
+    assert!(f("max_error") <= f("tolerance"), "{json}");
 }
 
 fn expect_failure(content: &[u8], expect: &str) {
@@ -484,8 +510,10 @@ fn same_ply_mesh(actual: &str, expected: &str) -> Result<(), String> {
 #[test]
 fn render_writes_a_png_of_the_requested_size() {
     let png = tmp("teapot.png");
-    run_ok(
+    let out = run_ok(
         tessera()
+            .env_remove("XDG_RUNTIME_DIR")
+            .env_remove("NODEVICE_SELECT")
             .args([
                 "render",
                 teapot().to_str().unwrap(),
@@ -502,6 +530,10 @@ fn render_writes_a_png_of_the_requested_size() {
     let w = u32::from_be_bytes(bytes[16..20].try_into().unwrap());
     let h = u32::from_be_bytes(bytes[20..24].try_into().unwrap());
     assert_eq!((w, h), (96, 64));
+    // A headless render says one line, without the driver's noise.
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!stderr.contains("XDG_RUNTIME_DIR"), "{stderr}");
+    assert_eq!(String::from_utf8_lossy(&out.stdout).lines().count(), 1);
 }
 
 #[test]
