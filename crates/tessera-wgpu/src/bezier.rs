@@ -56,9 +56,9 @@ use tessera_core::Mesh;
 use wgpu::util::DeviceExt;
 
 use crate::error::{Error, Result};
-use crate::readback::{read_buffer, read_texture};
 use crate::kernel::{check_size, check_upload, storage, storage_texture, upload_texture, Kernel};
 use crate::output::MeshBuffers;
+use crate::readback::{read_buffer, read_texture};
 use crate::scan::{PrefixSum, ScanKernels};
 use crate::stage::{GrowingStage, Passes, RunTimestamps, StatusReadback};
 use crate::Kernels;
@@ -695,7 +695,11 @@ impl BezierStage {
             bytemuck::cast_slice(&prepared.coarse_vertex_records()),
         );
         let halves = MapHalves::new(&prepared.maps, prepared.map_scale);
-        queue.write_buffer(&self.buffers.map_halves, 0, bytemuck::cast_slice(&halves.words));
+        queue.write_buffer(
+            &self.buffers.map_halves,
+            0,
+            bytemuck::cast_slice(&halves.words),
+        );
         self.map_scale = prepared.map_scale;
         self.write_params(queue);
         Ok(())
@@ -932,8 +936,10 @@ impl BezierStage {
 
     /// Grows the output buffers to what `status` says the run needed (with headroom).
     /// Returns whether anything was reallocated, or an error when the device cannot hold
-    /// buffers that large (nothing is reallocated then).
-    fn grow(&mut self, device: &wgpu::Device, status: &BezierStatus) -> Result<bool> {
+    /// buffers that large (nothing is reallocated then). Public for the test that asks
+    /// for more than the device holds; `prepare` calls it.
+    #[doc(hidden)]
+    pub fn grow(&mut self, device: &wgpu::Device, status: &BezierStatus) -> Result<bool> {
         if status.overflow == 0 {
             return Ok(false);
         }
@@ -956,7 +962,8 @@ impl BezierStage {
         self.buffers.records = storage(
             device,
             "tessera vertex records",
-            self.buffers.output.vertex_capacity() as u64 * std::mem::size_of::<VertexRecord>() as u64,
+            self.buffers.output.vertex_capacity() as u64
+                * std::mem::size_of::<VertexRecord>() as u64,
         );
         self.rebind(device);
         self.readback.new_generation();

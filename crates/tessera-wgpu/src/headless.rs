@@ -133,4 +133,3 @@ impl Gpu {
         Ok(bytemuck::pod_collect_to_vec(&bytes))
     }
 }
-

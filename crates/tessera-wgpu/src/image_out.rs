@@ -9,8 +9,8 @@ use image::RgbaImage;
 
 use crate::error::{Error, Result};
 use crate::headless::Gpu;
-use crate::readback::TextureReadback;
 use crate::output::MeshBuffers;
+use crate::readback::TextureReadback;
 use crate::render::{Camera, MeshRenderer, RenderOptions};
 
 /// Colour format of the offscreen target: 8-bit sRGB, what PNG files hold.

@@ -62,6 +62,23 @@ impl MeshBuffers {
         .union(wgpu::BufferUsages::COPY_SRC)
         .union(wgpu::BufferUsages::COPY_DST);
 
+    /// Buffers assembled by hand, for the test that draws a buffer without vertex usage
+    /// to see the validation error fail the render.
+    #[doc(hidden)]
+    pub fn from_buffers(
+        vertices: wgpu::Buffer,
+        indices: wgpu::Buffer,
+        indirect: wgpu::Buffer,
+    ) -> Self {
+        MeshBuffers {
+            vertex_capacity: (vertices.size() / std::mem::size_of::<OutVertex>() as u64) as u32,
+            index_capacity: (indices.size() / 4) as u32,
+            vertices,
+            indices,
+            indirect,
+        }
+    }
+
     /// Shader location of the position (`vec3<f32>`).
     pub const POSITION_LOCATION: u32 = 0;
     /// Shader location of the normal (`vec3<f32>`).

@@ -20,6 +20,7 @@ use tessera_core::bezier::{
 use tessera_core::gpu_types::{BezierStatus, MapAtlas, OutVertex, EDGE_BIT_WORDS};
 use tessera_wgpu::bezier::{BezierStage, Intermediates};
 use tessera_wgpu::headless::Gpu;
+use tessera_wgpu::Kernels;
 
 const TIE_REL: f32 = 1e-3;
 
@@ -51,7 +52,7 @@ struct Comparison {
 /// mismatch that is not a tie.
 fn compare_decisions(
     gpu: &Gpu,
-    stage: &BezierStage,
+    stage: &mut BezierStage,
     prep: &PreparedBezier,
     params: &AdaptiveParams,
 ) -> Comparison {
@@ -245,10 +246,20 @@ fn gpu_matches_the_cpu_reference_on_every_shipped_model() {
             // application would, and pipelines compile once).
             let stage = match &mut stage {
                 Some(s) => {
-                    s.set_params(&gpu.device, &params).expect("params");
+                    s.set_params(&gpu.device, &gpu.queue, &params)
+                        .expect("params");
                     s
                 }
-                None => stage.insert(BezierStage::new(&gpu.device, &prep, &params).expect("stage")),
+                None => stage.insert(
+                    BezierStage::new(
+                        &gpu.device,
+                        &gpu.queue,
+                        &Kernels::new(&gpu.device),
+                        &prep,
+                        &params,
+                    )
+                    .expect("stage"),
+                ),
             };
             let t0 = std::time::Instant::now();
             let status = stage.run_blocking(&gpu.device, &gpu.queue).expect("run");
@@ -327,15 +338,15 @@ fn tiny_capacities_overflow_cleanly_then_grow_to_the_same_mesh() {
         threshold: 0.02,
         max_depth: 6,
     };
-    let kernels = tessera_wgpu::bezier::BezierKernels::new(&gpu.device);
+    let kernels = Kernels::new(&gpu.device);
     let l = prep.layout;
     let mut roomy = BezierStage::with_capacity(
         &gpu.device,
+        &gpu.queue,
         &kernels,
         &prep,
         &params,
-        4 * l.coarse_vertices,
-        24 * l.coarse_triangles,
+        (4 * l.coarse_vertices, 24 * l.coarse_triangles),
     )
     .expect("stage");
     let want_status = roomy.run_blocking(&gpu.device, &gpu.queue).expect("run");
@@ -346,10 +357,12 @@ fn tiny_capacities_overflow_cleanly_then_grow_to_the_same_mesh() {
     // The smallest vertex capacity a stage accepts is the coarse vertices (copied in
     // every run); the refined mesh needs more, so both buffers overflow.
     let mut tiny =
-        BezierStage::with_capacity(&gpu.device, &kernels, &prep, &params, 1, 3).expect("stage");
-    assert_eq!(tiny.output().vertex_capacity, l.coarse_vertices);
+        BezierStage::with_capacity(&gpu.device, &gpu.queue, &kernels, &prep, &params, (1, 3))
+            .expect("stage");
+    assert_eq!(tiny.output().vertex_capacity(), l.coarse_vertices);
     let mut encoder = gpu.device.create_command_encoder(&Default::default());
-    tiny.prepare(&gpu.device, &gpu.queue, &mut encoder);
+    tiny.prepare(&gpu.device, &gpu.queue, &mut encoder)
+        .expect("prepare");
     gpu.queue.submit([encoder.finish()]);
     let status = tiny.read_status(&gpu.device).expect("status");
     assert!(status.vertices > l.coarse_vertices);
@@ -358,7 +371,7 @@ fn tiny_capacities_overflow_cleanly_then_grow_to_the_same_mesh() {
         "vertices and indices must both overflow"
     );
     let vertices: Vec<u32> = gpu
-        .read_pod(&tiny.output().vertices, 9 * l.coarse_vertices as usize)
+        .read_pod(tiny.output().vertices(), 9 * l.coarse_vertices as usize)
         .expect("vertices");
     assert!(
         vertices.iter().all(|&w| w == 0),
@@ -371,20 +384,25 @@ fn tiny_capacities_overflow_cleanly_then_grow_to_the_same_mesh() {
     assert_eq!(status.indices, want_status.indices);
     // Nothing was drawn or written: zero indices in the draw, and the 3-index buffer
     // still holds what it was created with (zeros).
-    let args: Vec<u32> = gpu.read_pod(&tiny.output().indirect, 5).expect("args");
+    let args: Vec<u32> = gpu.read_pod(tiny.output().indirect(), 5).expect("args");
     assert_eq!(args[0], 0, "an overflowed run draws nothing");
-    let idx: Vec<u32> = gpu.read_pod(&tiny.output().indices, 3).expect("indices");
+    let idx: Vec<u32> = gpu.read_pod(tiny.output().indices(), 3).expect("indices");
     assert_eq!(idx, [0, 0, 0], "an overflowed run writes no index");
     assert!(tiny.read_mesh(&gpu.device, &gpu.queue, &status).is_err());
 
-    assert!(tiny.grow(&gpu.device, &status).expect("fits the device"));
-    let grown = tiny.run_blocking(&gpu.device, &gpu.queue).expect("rerun");
-    assert_eq!(grown.overflow, 0);
+    // The next frame's `prepare` grows from that status (read back without waiting, or
+    // as read here), so the run it records fits.
+    let mut encoder = gpu.device.create_command_encoder(&Default::default());
+    tiny.prepare(&gpu.device, &gpu.queue, &mut encoder)
+        .expect("grows");
+    gpu.queue.submit([encoder.finish()]);
+    let grown = tiny.read_status(&gpu.device).expect("status");
+    assert_eq!(grown.overflow, 0, "the run after an overflow fits");
     let got = tiny
         .read_mesh(&gpu.device, &gpu.queue, &grown)
         .expect("mesh");
     assert_eq!(got, want, "grown run gives the same mesh");
-    let args: Vec<u32> = gpu.read_pod(&tiny.output().indirect, 5).expect("args");
+    let args: Vec<u32> = gpu.read_pod(tiny.output().indirect(), 5).expect("args");
     assert_eq!(args[0] as usize, want.indices.len());
     assert_eq!(args[1], 1);
     gpu.check().expect("no wgpu validation errors");
@@ -399,13 +417,27 @@ fn an_invalid_threshold_is_an_error_not_a_panic() {
         threshold: f32::NAN,
         max_depth: 6,
     };
-    assert!(BezierStage::new(&gpu.device, &prep, &params).is_err());
+    assert!(BezierStage::new(
+        &gpu.device,
+        &gpu.queue,
+        &Kernels::new(&gpu.device),
+        &prep,
+        &params
+    )
+    .is_err());
     let deep = AdaptiveParams {
         threshold: 0.01,
         max_depth: 99,
         ..params
     };
-    assert!(BezierStage::new(&gpu.device, &prep, &deep).is_err());
+    assert!(BezierStage::new(
+        &gpu.device,
+        &gpu.queue,
+        &Kernels::new(&gpu.device),
+        &prep,
+        &deep
+    )
+    .is_err());
 }
 
 #[test]
@@ -417,10 +449,19 @@ fn changing_the_depth_resizes_the_scratch_and_matches_the_cpu() {
         threshold: 0.004,
         max_depth: 3,
     };
-    let mut stage = BezierStage::new(&gpu.device, &prep, &params).expect("stage");
+    let mut stage = BezierStage::new(
+        &gpu.device,
+        &gpu.queue,
+        &Kernels::new(&gpu.device),
+        &prep,
+        &params,
+    )
+    .expect("stage");
     for depth in [3, 8, 0, 7, 2] {
         params.max_depth = depth;
-        stage.set_params(&gpu.device, &params).expect("params");
+        stage
+            .set_params(&gpu.device, &gpu.queue, &params)
+            .expect("params");
         let status = stage.run_blocking(&gpu.device, &gpu.queue).expect("run");
         let mesh = stage
             .read_mesh(&gpu.device, &gpu.queue, &status)
@@ -440,7 +481,14 @@ fn growing_past_the_device_limits_is_an_error_not_a_wgpu_failure() {
         threshold: 0.01,
         max_depth: 4,
     };
-    let mut stage = BezierStage::new(&gpu.device, &prep, &params).expect("stage");
+    let mut stage = BezierStage::new(
+        &gpu.device,
+        &gpu.queue,
+        &Kernels::new(&gpu.device),
+        &prep,
+        &params,
+    )
+    .expect("stage");
     let impossible = tessera_core::gpu_types::BezierStatus {
         vertices: u32::MAX / 2,
         indices: 3,
@@ -483,7 +531,14 @@ fn gpu_and_cpu_meshes(
     prep: &PreparedBezier,
     params: &AdaptiveParams,
 ) -> (tessera_core::Mesh, tessera_core::Mesh) {
-    let mut stage = BezierStage::new(&gpu.device, prep, params).expect("stage");
+    let mut stage = BezierStage::new(
+        &gpu.device,
+        &gpu.queue,
+        &Kernels::new(&gpu.device),
+        prep,
+        params,
+    )
+    .expect("stage");
     let status = stage.run_blocking(&gpu.device, &gpu.queue).expect("run");
     let mesh = stage
         .read_mesh(&gpu.device, &gpu.queue, &status)
@@ -547,9 +602,15 @@ fn textures_past_the_texture_limit_are_an_error() {
         max_depth: 4,
     };
     // The teapot's 32 patches make an atlas 32 · 15 = 480 texels wide.
-    let err = BezierStage::new(&gpu.device, &model("teapot"), &params)
-        .err()
-        .expect("the atlas does not fit");
+    let err = BezierStage::new(
+        &gpu.device,
+        &gpu.queue,
+        &Kernels::new(&gpu.device),
+        &model("teapot"),
+        &params,
+    )
+    .err()
+    .expect("the atlas does not fit");
     assert!(
         matches!(
             err,
@@ -568,7 +629,14 @@ fn textures_past_the_texture_limit_are_an_error() {
         teapot.points,
         teapot.nets[..16].to_vec(),
     ));
-    let mut stage = BezierStage::new(&gpu.device, &small, &params).expect("sixteen patches fit");
+    let mut stage = BezierStage::new(
+        &gpu.device,
+        &gpu.queue,
+        &Kernels::new(&gpu.device),
+        &small,
+        &params,
+    )
+    .expect("sixteen patches fit");
     // At depth 8 their 288 coarse triangles' bit sets take 1063 words each: 1196 rows of
     // 256 texels, before the edges' sets.
     let deep = AdaptiveParams {
@@ -576,8 +644,15 @@ fn textures_past_the_texture_limit_are_an_error() {
         ..params
     };
     for err in [
-        BezierStage::new(&gpu.device, &small, &deep).err(),
-        stage.set_params(&gpu.device, &deep).err(),
+        BezierStage::new(
+            &gpu.device,
+            &gpu.queue,
+            &Kernels::new(&gpu.device),
+            &small,
+            &deep,
+        )
+        .err(),
+        stage.set_params(&gpu.device, &gpu.queue, &deep).err(),
     ] {
         let err = err.expect("the scratch does not fit");
         assert!(

@@ -41,7 +41,7 @@ fn points(model: &SurfaceModel) -> Vec<CcPoint> {
 
 fn run_gpu(gpu: &Gpu, model: &CcGpuModel, points: &[CcPoint]) -> Vec<OutVertex> {
     let device = &gpu.device;
-    let buffers = CcModelBuffers::new(device, model).expect("upload fits");
+    let buffers = CcModelBuffers::new(device, &gpu.queue, model).expect("upload fits");
     let eval = CcVertexEval::new(device);
     let storage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC;
     let point_buf = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
@@ -147,7 +147,7 @@ fn nets_past_the_texture_limit_are_an_error() {
     // The cube's 2160 nets (its quadtrees' pieces) take rows of 256 nets, 3072 texels.
     let flat = CcGpuModel::new(&model("opensubdiv/catmark_cube.obj"));
     assert_eq!(flat.nets.len(), 2160);
-    let err = CcModelBuffers::new(&gpu.device, &flat)
+    let err = CcModelBuffers::new(&gpu.device, &gpu.queue, &flat)
         .err()
         .expect("the nets do not fit");
     assert!(
@@ -165,7 +165,7 @@ fn nets_past_the_texture_limit_are_an_error() {
     // Twenty-one nets fit (252 texels).
     let mut small = flat.clone();
     small.nets.truncate(21);
-    CcModelBuffers::new(&gpu.device, &small).expect("21 nets fit");
+    CcModelBuffers::new(&gpu.device, &gpu.queue, &small).expect("21 nets fit");
     gpu.check().expect("no wgpu validation errors");
 }
 
@@ -174,7 +174,7 @@ fn moved_control_points_reupload_in_place_and_a_new_shape_is_refused() {
     let gpu = gpu();
     let mut a = model("opensubdiv/catmark_cube.obj");
     let flat = CcGpuModel::new(&a);
-    let buffers = CcModelBuffers::new(&gpu.device, &flat).expect("upload fits");
+    let buffers = CcModelBuffers::new(&gpu.device, &gpu.queue, &flat).expect("upload fits");
     // Scaling the control points moves every piece but keeps the trees' shape.
     for p in &mut a.mesh.points {
         *p *= 2.0;

@@ -13,12 +13,17 @@ use tessera_core::catmull_clark::vertex_hash::split_key;
 use tessera_core::catmull_clark::{
     load_surface, tessellate_adaptive, CcParams, FirstSplit, SurfaceModel,
 };
-use tessera_core::Mesh;
-use tessera_wgpu::catmull_clark::{CcCapacities, CcStage};
+use tessera_core::{Mesh, Tolerance};
+use tessera_wgpu::catmull_clark::{CcCapacities, CcStage, UniformParams};
 use tessera_wgpu::headless::Gpu;
+use tessera_wgpu::Kernels;
 
 fn gpu() -> Gpu {
     Gpu::new().expect("a wgpu adapter (CI installs Mesa's lavapipe; see `cargo xtask test`)")
+}
+
+fn kernels(gpu: &Gpu) -> Kernels {
+    Kernels::new(&gpu.device)
 }
 
 fn model(name: &str) -> SurfaceModel {
@@ -92,8 +97,8 @@ fn run(
     caps: Option<CcCapacities>,
 ) -> (Mesh, tessera_wgpu::catmull_clark::CcStatus) {
     let mut stage = match caps {
-        Some(c) => CcStage::with_capacity(&gpu.device, model, params, c),
-        None => CcStage::new(&gpu.device, model, params),
+        Some(c) => CcStage::with_capacity(&gpu.device, &gpu.queue, &kernels(gpu), model, params, c),
+        None => CcStage::new(&gpu.device, &gpu.queue, &kernels(gpu), model, params),
     }
     .expect("stage");
     let status = stage.run_blocking(&gpu.device, &gpu.queue).expect("run");
@@ -124,7 +129,7 @@ fn gpu_adaptive_matches_the_cpu_reference() {
         let model = model(name);
         let s = size(&model);
         let params = CcParams {
-            tolerance: rel * s,
+            tolerance: Tolerance::Absolute(rel * s),
             max_depth: 6,
             first_split: Default::default(),
             leaf_bound: Default::default(),
@@ -145,7 +150,9 @@ fn gpu_adaptive_matches_the_cpu_reference() {
         assert!(status.state.bounds >= status.state.leaves, "{name}: bounds");
         assert!(cpu.bounds >= cpu.leaves as u64, "{name}: bounds");
         assert_eq!(status.state.unmet as usize, cpu.unmet, "{name}: unmet");
-        assert!(status.max_bound() as f64 <= params.tolerance * (1.0 + 1e-6) || cpu.unmet > 0);
+        assert!(
+            status.max_bound() as f64 <= params.epsilon(&model) * (1.0 + 1e-6) || cpu.unmet > 0
+        );
         assert!((status.max_bound() as f64 - cpu.max_bound).abs() <= 1e-5 * cpu.max_bound);
         if let Err(e) = same_mesh(&mesh, &cpu.mesh, s) {
             panic!("{name}: {e}");
@@ -153,7 +160,7 @@ fn gpu_adaptive_matches_the_cpu_reference() {
         let finer = tessellate_adaptive(
             &model,
             &CcParams {
-                tolerance: 0.5 * params.tolerance,
+                tolerance: Tolerance::Absolute(0.5 * params.epsilon(&model)),
                 ..params
             },
         )
@@ -166,7 +173,7 @@ fn gpu_adaptive_matches_the_cpu_reference() {
     // Depth-limited leaves over the tolerance: counted and bounded as on the CPU.
     let model = model("catmull_clark/spot_control_mesh.obj");
     let params = CcParams {
-        tolerance: 3e-4 * size(&model),
+        tolerance: Tolerance::Absolute(3e-4 * size(&model)),
         max_depth: 1,
         first_split: Default::default(),
         leaf_bound: Default::default(),
@@ -193,7 +200,7 @@ fn gpu_midpoint_splits_match_the_cpu_reference() {
     ] {
         let model = model(name);
         let params = CcParams {
-            tolerance: rel * size(&model),
+            tolerance: Tolerance::Absolute(rel * size(&model)),
             max_depth: 6,
             first_split: FirstSplit::Midpoint,
             leaf_bound: Default::default(),
@@ -206,7 +213,7 @@ fn gpu_midpoint_splits_match_the_cpu_reference() {
         // the bounds and those are every cell tested).
         assert_eq!(status.state.proven as u64, cpu.proven, "{name}: proven");
         assert!(cpu.proven > 0, "{name}: no cell split on the proof");
-        assert!(status.max_bound() as f64 <= params.tolerance * (1.0 + 1e-6));
+        assert!(status.max_bound() as f64 <= params.epsilon(&model) * (1.0 + 1e-6));
         assert!((status.max_bound() as f64 - cpu.max_bound).abs() <= 1e-5 * cpu.max_bound);
         same_mesh(&mesh, &cpu.mesh, size(&model)).unwrap_or_else(|e| panic!("{name}: {e}"));
         let search = tessellate_adaptive(
@@ -226,6 +233,8 @@ fn gpu_midpoint_splits_match_the_cpu_reference() {
         // A stage switched from the search by set_params makes the same mesh.
         let mut stage = CcStage::new(
             &gpu.device,
+            &gpu.queue,
+            &kernels(&gpu),
             &model,
             &CcParams {
                 first_split: FirstSplit::Search,
@@ -235,7 +244,9 @@ fn gpu_midpoint_splits_match_the_cpu_reference() {
         )
         .expect("stage");
         stage.run_blocking(&gpu.device, &gpu.queue).expect("search");
-        stage.set_params(&gpu.queue, &params).expect("set_params");
+        stage
+            .set_params(&gpu.device, &gpu.queue, &params)
+            .expect("set_params");
         let status = stage
             .run_blocking(&gpu.device, &gpu.queue)
             .expect("midpoint");
@@ -260,12 +271,13 @@ fn the_polygon_kernel_matches_its_twin() {
     ] {
         let model = model(name);
         let params = CcParams {
-            tolerance: rel * size(&model),
+            tolerance: Tolerance::Absolute(rel * size(&model)),
             max_depth: 6,
             first_split: Default::default(),
             leaf_bound: Default::default(),
         };
-        let mut stage = CcStage::new(&gpu.device, &model, &params).expect("stage");
+        let mut stage =
+            CcStage::new(&gpu.device, &gpu.queue, &kernels(&gpu), &model, &params).expect("stage");
         let status = stage.run_blocking(&gpu.device, &gpu.queue).expect("run");
         gpu.check().expect("no wgpu errors");
         let gpu_polys = stage
@@ -339,7 +351,7 @@ fn tiny_capacities_grow_to_the_same_mesh_and_runs_are_byte_identical() {
     let gpu = gpu();
     let model = model("catmull_clark/spot_control_mesh.obj");
     let params = CcParams {
-        tolerance: 2e-3 * size(&model),
+        tolerance: Tolerance::Absolute(2e-3 * size(&model)),
         max_depth: 5,
         first_split: Default::default(),
         leaf_bound: Default::default(),
@@ -352,18 +364,28 @@ fn tiny_capacities_grow_to_the_same_mesh_and_runs_are_byte_identical() {
         indices: 1,
         hash_slots: 1,
     };
-    let mut stage = CcStage::with_capacity(&gpu.device, &model, &params, tiny).expect("stage");
+    let mut stage = CcStage::with_capacity(
+        &gpu.device,
+        &gpu.queue,
+        &kernels(&gpu),
+        &model,
+        &params,
+        tiny,
+    )
+    .expect("stage");
     // A sentinel in the output buffers: an overflowing run must leave them as they are
     // (a write past a capacity, clamped by robust buffer access, would land in them).
     const SENTINEL: u32 = 0xa5a5_a5a5;
     let out = stage.output();
     let words = |b: &wgpu::Buffer| (b.size() / 4) as usize;
-    for b in [&out.vertices, &out.indices] {
+    for b in [out.vertices(), out.indices()] {
         gpu.queue
             .write_buffer(b, 0, bytemuck::cast_slice(&vec![SENTINEL; words(b)]));
     }
     let mut encoder = gpu.device.create_command_encoder(&Default::default());
-    stage.prepare(&gpu.device, &gpu.queue, &mut encoder);
+    stage
+        .prepare(&gpu.device, &gpu.queue, &mut encoder)
+        .expect("prepare");
     gpu.queue.submit([encoder.finish()]);
     let first = stage.read_status(&gpu.device).expect("status");
     gpu.check()
@@ -371,7 +393,7 @@ fn tiny_capacities_grow_to_the_same_mesh_and_runs_are_byte_identical() {
     assert!(first.overflowed(), "one-element buffers must overflow");
     assert_eq!(first.indices, 0, "an overflowing run draws nothing");
     let out = stage.output();
-    for (name, b) in [("vertices", &out.vertices), ("indices", &out.indices)] {
+    for (name, b) in [("vertices", out.vertices()), ("indices", out.indices())] {
         let after: Vec<u32> = gpu.read_pod(b, words(b)).expect("read back");
         assert!(
             after.iter().all(|&w| w == SENTINEL),
@@ -414,16 +436,20 @@ fn moved_control_points_retessellate_in_place() {
     };
     let model = build(&control);
     let params = CcParams {
-        tolerance: 3e-3 * size(&model),
+        tolerance: Tolerance::Absolute(3e-3 * size(&model)),
         max_depth: 5,
         first_split: Default::default(),
         leaf_bound: Default::default(),
     };
-    let mut stage = CcStage::new(&gpu.device, &model, &params).expect("stage");
+    let mut stage =
+        CcStage::new(&gpu.device, &gpu.queue, &kernels(&gpu), &model, &params).expect("stage");
     stage.run_blocking(&gpu.device, &gpu.queue).expect("run");
     control.positions[0] *= 1.5;
     let moved = build(&control);
-    stage.update_points(&gpu.queue, &moved).expect("same shape");
+    let points: Vec<glam::Vec3> = control.positions.iter().map(|p| p.as_vec3()).collect();
+    stage
+        .update_points(&gpu.queue, &points)
+        .expect("same topology");
     let status = stage.run_blocking(&gpu.device, &gpu.queue).expect("run");
     let mesh = stage
         .read_mesh(&gpu.device, &gpu.queue, &status)
@@ -452,18 +478,27 @@ fn gpu_uniform_matches_its_twin_and_the_cpu_uniform() {
     ] {
         let model = model(name);
         let s = size(&model);
-        let mut stage = CcUniformStage::new(&gpu.device, &model, sizes[0]).expect("stage");
+        let mut stage = CcUniformStage::new(
+            &gpu.device,
+            &gpu.queue,
+            &kernels(&gpu),
+            &model,
+            &UniformParams { segments: sizes[0] },
+        )
+        .expect("stage");
         for n in sizes {
             stage
-                .set_segments(&gpu.device, &gpu.queue, n)
+                .set_params(&gpu.device, &gpu.queue, &UniformParams { segments: n })
                 .expect("segments");
             let mut encoder = gpu.device.create_command_encoder(&Default::default());
-            stage.prepare(&gpu.device, &gpu.queue, &mut encoder);
+            stage
+                .prepare(&gpu.device, &gpu.queue, &mut encoder)
+                .expect("prepare");
             gpu.queue.submit([encoder.finish()]);
             let mesh = stage.read_mesh(&gpu.device, &gpu.queue).expect("read");
             gpu.check().expect("no wgpu errors");
             let args: DrawIndexedIndirectArgs = bytemuck::pod_read_unaligned(
-                &gpu.read_buffer(&stage.output().indirect, 0, 20)
+                &gpu.read_buffer(stage.output().indirect(), 0, 20)
                     .expect("draw args"),
             );
             assert_eq!(
@@ -509,14 +544,21 @@ fn a_model_larger_than_the_device_allows_is_an_error_not_a_wgpu_failure() {
     .expect("device");
     let model = model("catmull_clark/spot_control_mesh.obj");
     let params = CcParams {
-        tolerance: 3e-3 * size(&model),
+        tolerance: Tolerance::Absolute(3e-3 * size(&model)),
         max_depth: 5,
         first_split: Default::default(),
         leaf_bound: Default::default(),
     };
     for result in [
-        CcStage::new(&gpu.device, &model, &params).map(|_| ()),
-        tessera_wgpu::catmull_clark::CcUniformStage::new(&gpu.device, &model, 2).map(|_| ()),
+        CcStage::new(&gpu.device, &gpu.queue, &kernels(&gpu), &model, &params).map(|_| ()),
+        tessera_wgpu::catmull_clark::CcUniformStage::new(
+            &gpu.device,
+            &gpu.queue,
+            &kernels(&gpu),
+            &model,
+            &UniformParams { segments: 2 },
+        )
+        .map(|_| ()),
     ] {
         let err = result.expect_err("must not fit");
         assert!(

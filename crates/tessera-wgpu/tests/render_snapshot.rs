@@ -244,13 +244,18 @@ fn wireframe_without_line_mode_renders_shaded_only() {
 #[test]
 fn validation_errors_fail_the_render() {
     let gpu = gpu();
-    let (mut mesh, bounds) = upload(&gpu, "teapot");
-    mesh.vertices = gpu.device.create_buffer(&wgpu::BufferDescriptor {
+    let (good, bounds) = upload(&gpu, "teapot");
+    let not_vertices = gpu.device.create_buffer(&wgpu::BufferDescriptor {
         label: Some("not a vertex buffer"),
-        size: mesh.vertices.size(),
+        size: good.vertices().size(),
         usage: wgpu::BufferUsages::COPY_DST,
         mapped_at_creation: false,
     });
+    let mesh = tessera_wgpu::MeshBuffers::from_buffers(
+        not_vertices,
+        good.indices().clone(),
+        good.indirect().clone(),
+    );
     match render_to_rgba(&gpu, &mesh, bounds, WIDTH, HEIGHT, &shaded()) {
         Err(Error::Wgpu(msg)) => eprintln!("as expected: {msg}"),
         other => panic!(
@@ -304,8 +309,14 @@ fn teapot_tessellated_on_the_gpu_matches_the_wireframe_snapshot() {
     let gpu = gpu();
     let (model, params) = snapshot_model("teapot");
     let prepared = PreparedBezier::new(&model);
-    let mut stage =
-        tessera_wgpu::bezier::BezierStage::new(&gpu.device, &prepared, &params).expect("stage");
+    let mut stage = tessera_wgpu::bezier::BezierStage::new(
+        &gpu.device,
+        &gpu.queue,
+        &tessera_wgpu::Kernels::new(&gpu.device),
+        &prepared,
+        &params,
+    )
+    .expect("stage");
     stage
         .run_blocking(&gpu.device, &gpu.queue)
         .expect("stage runs");

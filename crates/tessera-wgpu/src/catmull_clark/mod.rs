@@ -11,9 +11,9 @@
 mod stage;
 mod uniform;
 
+pub(crate) use stage::CcKernels;
 #[doc(hidden)]
 pub use stage::{CcCapacities, CcPolygons};
-pub(crate) use stage::CcKernels;
 pub use stage::{CcStage, CcStatus};
 pub(crate) use uniform::CcUniformKernels;
 pub use uniform::{CcUniformStage, UniformParams};

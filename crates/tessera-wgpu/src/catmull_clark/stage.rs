@@ -54,8 +54,8 @@
 //! # Ok(()) }
 //! ```
 
-use tessera_core::catmull_clark::gpu_model::{patch_topology, CcGpuModel};
 use std::sync::Arc;
+use tessera_core::catmull_clark::gpu_model::{patch_topology, CcGpuModel};
 
 use glam::Vec3;
 use tessera_core::catmull_clark::{CcParams, LeafBound, PatchMesh, SurfaceModel};
@@ -395,7 +395,11 @@ impl CcStage {
         params.validate_for(&self.patches, self.depth)?;
         gpu_leaf_bound(params)?;
         self.params = *params;
-        let p = tess_params(self.patch_count, (params, self.epsilon()), self.buffers.caps);
+        let p = tess_params(
+            self.patch_count,
+            (params, self.epsilon()),
+            self.buffers.caps,
+        );
         queue.write_buffer(&self.buffers.params, 0, bytemuck::bytes_of(&p));
         Ok(())
     }
@@ -816,7 +820,11 @@ fn status_from_bytes(bytes: &[u8]) -> CcStatus {
 }
 
 /// The kernels' parameters for `params` with ε resolved to `eps`.
-fn tess_params(patch_count: u32, (params, eps): (&CcParams, f64), caps: CcCapacities) -> CcTessParams {
+fn tess_params(
+    patch_count: u32,
+    (params, eps): (&CcParams, f64),
+    caps: CcCapacities,
+) -> CcTessParams {
     CcTessParams {
         grid: params.grid(),
         max_depth: params.max_depth,

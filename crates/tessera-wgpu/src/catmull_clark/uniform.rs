@@ -18,9 +18,9 @@
 //! # Ok(()) }
 //! ```
 
+use glam::Vec3;
 use tessera_core::catmull_clark::gpu_model::CcGpuModel;
 use tessera_core::catmull_clark::gpu_uniform::{uniform_patches, UniformLayout};
-use glam::Vec3;
 use tessera_core::catmull_clark::{PatchMesh, SurfaceModel};
 use tessera_core::gpu_types::{CcPoint, CcUniformParams, OutVertex};
 use tessera_core::Mesh;
@@ -229,7 +229,11 @@ impl CcUniformStage {
         Ok(())
     }
 
-    fn record_run(&self, encoder: &mut wgpu::CommandEncoder, timestamps: Option<RunTimestamps<'_>>) {
+    fn record_run(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        timestamps: Option<RunTimestamps<'_>>,
+    ) {
         let mut passes = Passes::new(timestamps);
         let p = &self.params;
         let side = p.segments + 1;
