@@ -13,8 +13,10 @@ use tessera_core::catmull_clark::{
     CcParams, FirstSplit, PatchMesh, SurfaceModel, MAX_DEPTH, TREE_DEPTH,
 };
 use tessera_core::io::load_control_mesh;
+use tessera_core::Tolerance;
 use tessera_wgpu::catmull_clark::CcStage;
 use tessera_wgpu::headless::Gpu;
+use tessera_wgpu::Kernels;
 
 fn main() {
     let mut args = std::env::args().skip(1);
@@ -30,13 +32,15 @@ fn main() {
     let control = load_control_mesh(&path).expect("mesh");
     let model = SurfaceModel::new(PatchMesh::new(&control).expect("valid"), TREE_DEPTH);
     let params = CcParams {
-        tolerance: rel * control.bbox_diag(),
+        tolerance: Tolerance::Relative(rel),
         max_depth: MAX_DEPTH,
         first_split,
         leaf_bound: Default::default(),
     };
     let gpu = Gpu::new().expect("a wgpu adapter");
-    let mut stage = CcStage::new(&gpu.device, &model, &params).expect("stage");
+    let kernels = Kernels::new(&gpu.device);
+    let mut stage =
+        CcStage::new(&gpu.device, &gpu.queue, &kernels, &model, &params).expect("stage");
     stage
         .run_blocking(&gpu.device, &gpu.queue)
         .expect("first run");

@@ -12,6 +12,7 @@
 use tessera_core::bezier::{AdaptiveParams, BezierModel, EdgeTest, PreparedBezier};
 use tessera_wgpu::bezier::BezierStage;
 use tessera_wgpu::headless::Gpu;
+use tessera_wgpu::Kernels;
 
 fn main() {
     let mut args = std::env::args().skip(1);
@@ -27,7 +28,9 @@ fn main() {
         threshold: rel * diag,
         max_depth: AdaptiveParams::DEFAULT_MAX_DEPTH,
     };
-    let mut stage = BezierStage::new(&gpu.device, &prep, &params).expect("stage");
+    let kernels = Kernels::new(&gpu.device);
+    let mut stage =
+        BezierStage::new(&gpu.device, &gpu.queue, &kernels, &prep, &params).expect("stage");
     stage
         .run_blocking(&gpu.device, &gpu.queue)
         .expect("first run");

@@ -13,6 +13,7 @@ use tessera_core::catmull_clark::{
 };
 use tessera_core::io::load_control_mesh;
 use tessera_core::measure::{measure_error, ErrorStats};
+use tessera_core::Tolerance;
 
 #[derive(Serialize)]
 struct Row {
@@ -78,7 +79,6 @@ pub fn run(assets: &Path, out_dir: &Path, quick: bool) {
         let mut control = load_control_mesh(&path).expect("shipped mesh");
         let cut = control.split_non_manifold().expect("sheets that meet");
         let model = SurfaceModel::new(PatchMesh::new(&control).expect("valid mesh"), TREE_DEPTH);
-        let diag = control.bbox_diag();
         let samples = surface_samples(&model, 32);
         // Uniform error by segment count, measured once per n as needed.
         let mut uniform: Vec<(usize, ErrorStats, f64)> = Vec::new();
@@ -89,24 +89,24 @@ pub fn run(assets: &Path, out_dir: &Path, quick: bool) {
                     crate::median_time(repeats, || tessellate_uniform(&model, k).expect("uniform"));
                 uniform.push((
                     t.mesh.triangle_count(),
-                    measure_error(&samples, &t.mesh),
+                    measure_error(&samples, &t.mesh, model.mesh.control_diag),
                     ms,
                 ));
             }
             uniform[n as usize - 1]
         };
         for &rel in tolerances {
-            let tolerance = rel * diag;
             let params = CcParams {
-                tolerance,
+                tolerance: Tolerance::Relative(rel),
                 max_depth: MAX_DEPTH,
                 first_split: Default::default(),
                 leaf_bound: Default::default(),
             };
+            let tolerance = params.epsilon(&model);
             let (ms, out) = crate::median_time(repeats, || {
                 tessellate_adaptive(&model, &params).expect("adaptive")
             });
-            let e = measure_error(&samples, &out.mesh);
+            let e = measure_error(&samples, &out.mesh, model.mesh.control_diag);
             let mut n = 1;
             while uniform_at(n).1.max_error > e.max_error && n < 256 {
                 n += 1;
@@ -125,7 +125,8 @@ pub fn run(assets: &Path, out_dir: &Path, quick: bool) {
             let (midpoint_ms, paper) = crate::median_time(repeats, || {
                 tessellate_adaptive(&model, &midpoint).expect("midpoint")
             });
-            let paper_error = measure_error(&samples, &paper.mesh).max_error;
+            let paper_error =
+                measure_error(&samples, &paper.mesh, model.mesh.control_diag).max_error;
             let mut k = 1;
             while uniform_at(k).1.max_error > paper_error && k < 256 {
                 k += 1;
@@ -138,7 +139,7 @@ pub fn run(assets: &Path, out_dir: &Path, quick: bool) {
             let (own_ms, own) = crate::median_time(repeats, || {
                 tessellate_adaptive(&model, &own_params).expect("own triangles")
             });
-            let own_error = measure_error(&samples, &own.mesh).max_error;
+            let own_error = measure_error(&samples, &own.mesh, model.mesh.control_diag).max_error;
             let mut j = 1;
             while uniform_at(j).1.max_error > own_error && j < 256 {
                 j += 1;

@@ -12,8 +12,9 @@ use serde::Serialize;
 use crate::median;
 use tessera_core::bezier::tessellate::{tessellate_adaptive_timed, StageTimes};
 use tessera_core::bezier::{AdaptiveParams, BezierModel, EdgeTest, PreparedBezier};
-use tessera_wgpu::bezier::{BezierKernels, BezierStage};
+use tessera_wgpu::bezier::BezierStage;
 use tessera_wgpu::headless::Gpu;
+use tessera_wgpu::Kernels;
 
 #[derive(Serialize, Clone)]
 pub struct GpuRow {
@@ -56,7 +57,7 @@ pub fn run(assets: &Path, out_dir: &Path, quick: bool) {
             return;
         }
     };
-    let kernels = BezierKernels::new(&gpu.device);
+    let kernels = Kernels::new(&gpu.device);
     let teapot = BezierModel::load(&assets.join("teapot")).unwrap_or_else(|e| panic!("{e}"));
     let (lo, hi) = teapot.bounds();
     let diag = (hi - lo).length();
@@ -82,11 +83,11 @@ pub fn run(assets: &Path, out_dir: &Path, quick: bool) {
         let l = prep.layout;
         let mut stage = BezierStage::with_capacity(
             &gpu.device,
+            &gpu.queue,
             &kernels,
             &prep,
             &first,
-            4 * l.coarse_vertices,
-            24 * l.coarse_triangles,
+            (4 * l.coarse_vertices, 24 * l.coarse_triangles),
         )
         .expect("stage");
         for &rel in thresholds {
@@ -94,7 +95,9 @@ pub fn run(assets: &Path, out_dir: &Path, quick: bool) {
                 threshold: rel * diag,
                 ..first
             };
-            stage.set_params(&gpu.device, &params).expect("params");
+            stage
+                .set_params(&gpu.device, &gpu.queue, &params)
+                .expect("params");
             let status = stage
                 .run_blocking(&gpu.device, &gpu.queue)
                 .expect("first run");
@@ -107,7 +110,7 @@ pub fn run(assets: &Path, out_dir: &Path, quick: bool) {
             let mut stages = Vec::new();
             for _ in 0..repeats {
                 gpu_runs.push(gpu_run_ms(&gpu, |e| {
-                    stage.prepare(&gpu.device, &gpu.queue, e)
+                    stage.prepare(&gpu.device, &gpu.queue, e).expect("prepare")
                 }));
                 let t = Instant::now();
                 let (out, s) = tessellate_adaptive_timed(&prep, &params).expect("cpu");

@@ -5,7 +5,6 @@
 mod cc;
 mod cc_gpu;
 mod gpu;
-mod probe;
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -117,12 +116,8 @@ fn main() {
         .and_then(|i| args.get(i + 1))
         .cloned();
     std::fs::create_dir_all(&out_dir).expect("create bench output folder");
-    // `--only gpu|cpu|cc|ccgpu|probe`: one part of the bench (cpu is the Bézier CPU
-    // table; probe is the cost of one map read on the CPU and on the adapter).
+    // `--only gpu|cpu|cc|ccgpu`: one part of the bench (cpu is the Bézier CPU table).
     let part = |name: &str| only.as_deref().is_none_or(|o| o == name);
-    if part("probe") {
-        probe::run(&assets, &out_dir, quick);
-    }
     if part("gpu") {
         gpu::run(&assets, &out_dir, quick);
     }
@@ -154,7 +149,7 @@ fn main() {
             let (time_ms, t) = median_time(repeats, || {
                 tessellate_uniform(&model, &prep, n).expect("uniform")
             });
-            let e = measure_error(&samples, &t.mesh);
+            let e = measure_error(&samples, &t.mesh, model.bbox_diag());
             uniform.push(Row {
                 segments: Some(n),
                 ..Row::measured(name, "uniform", &t, &e, time_ms)
@@ -191,7 +186,7 @@ fn main() {
                         ..base
                     };
                     let (time_ms, t) = median_time(repeats, || tessellate_adaptive(&prep, &params));
-                    let e = measure_error(&samples, &t.mesh);
+                    let e = measure_error(&samples, &t.mesh, model.bbox_diag());
                     let u = uniform_at(e.max_error);
                     rows.push(Row {
                         max_depth: Some(depth),
