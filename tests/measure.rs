@@ -26,7 +26,10 @@ fn a_plane_is_measured_exactly() {
     // The control box and the sampled surface's box, reported apart.
     assert!((e.bbox_diag - 2f64.sqrt()).abs() < 1e-6, "{e:?}");
     assert!((e.surface_bbox_diag - 2f64.sqrt()).abs() < 1e-9, "{e:?}");
-    assert!((e.max_error_rel - 0.125 / e.bbox_diag).abs() < 1e-9, "{e:?}");
+    assert!(
+        (e.max_error_rel - 0.125 / e.bbox_diag).abs() < 1e-9,
+        "{e:?}"
+    );
 }
 
 #[test]
@@ -38,7 +41,11 @@ fn parabolic_cylinder_error_is_the_analytic_sagitta() {
     let prep = PreparedBezier::new(&model);
     for n in [2u32, 4, 8] {
         let t = tessellate_uniform(&model, &prep, n).unwrap();
-        let e = measure_error(&bezier_surface_samples(&model, 65), &t.mesh, model.bbox_diag());
+        let e = measure_error(
+            &bezier_surface_samples(&model, 65),
+            &t.mesh,
+            model.bbox_diag(),
+        );
         let h = 1.0 / n as f64;
         let expected = h * h / (4.0 * (1.0 + h * h).sqrt());
         assert!(

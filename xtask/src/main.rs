@@ -1,6 +1,6 @@
-//! `cargo xtask test`, `cargo xtask bench` and `cargo xtask fuzz`: the project's entry
-//! points for developers and CI. Only the standard library: it must build fast on a
-//! fresh machine.
+//! `cargo xtask render`, `cargo xtask test`, `cargo xtask bench` and `cargo xtask fuzz`:
+//! the project's entry points for users, developers and CI. Only the standard library: it
+//! must build fast on a fresh machine.
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, ExitCode};
@@ -8,11 +8,12 @@ use std::process::{Command, ExitCode};
 fn main() -> ExitCode {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let result = match args.first().map(String::as_str) {
+        Some("render") => render(&args[1..]),
         Some("test") => test(&args[1..]),
         Some("bench") => bench(&args[1..]),
         Some("fuzz") => fuzz(&args[1..]),
         _ => {
-            eprintln!("usage: cargo xtask test [-- <cargo test args>]\n       cargo xtask bench [--quick] [--only PART] | --assemble-only\n       cargo xtask fuzz N [--seed S]");
+            eprintln!("usage: cargo xtask render -- INPUT -o OUT.png [tessera render options]\n       cargo xtask test [-- <cargo test args>]\n       cargo xtask bench [--quick] [--only PART] | --assemble-only\n       cargo xtask fuzz N [--seed S]");
             return ExitCode::from(2);
         }
     };
@@ -96,6 +97,35 @@ fn ensure_vulkan() -> Result<(), String> {
         return Err("mesa-vulkan-drivers installed but no Vulkan ICD manifest appeared".into());
     }
     Ok(())
+}
+
+/// The main job on a fresh machine: a Vulkan driver if there is none, then the CLI's
+/// `tessera render` with the given arguments, in the caller's directory (paths are the
+/// caller's), exiting as the CLI exits.
+fn render(args: &[String]) -> Result<(), String> {
+    ensure_vulkan()?;
+    let manifest = root().join("Cargo.toml");
+    let status = cargo()
+        .args([
+            "run",
+            "--quiet",
+            "--release",
+            "--locked",
+            "-p",
+            "tessera-cli",
+        ])
+        .arg("--manifest-path")
+        .arg(&manifest)
+        .args(["--", "render"])
+        .args(args.iter().skip_while(|a| *a == "--"))
+        .status()
+        .map_err(|e| format!("cargo run: {e}"))?;
+    if status.success() {
+        Ok(())
+    } else {
+        // The CLI has said what went wrong, in one line.
+        std::process::exit(status.code().unwrap_or(1))
+    }
 }
 
 fn test(extra: &[String]) -> Result<(), String> {

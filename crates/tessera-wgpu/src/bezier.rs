@@ -253,9 +253,9 @@ impl BindGroups {
             (PARAMS, &b.uniform),
             (COUNTS, &b.counts),
             (RECORDS, &b.records),
-            (VERTICES, &b.output.vertices()),
-            (INDICES, &b.output.indices()),
-            (DRAW_ARGS, &b.output.indirect()),
+            (VERTICES, b.output.vertices()),
+            (INDICES, b.output.indices()),
+            (DRAW_ARGS, b.output.indirect()),
             (STATUS, &b.status),
             (TALLY, &b.tally),
         ];

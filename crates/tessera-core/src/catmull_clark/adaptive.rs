@@ -57,9 +57,9 @@ use super::triangle_bound::triangles_bound;
 use super::triangulate::{triangulate, zip_start, PolyVertex};
 use crate::error::{Error, Result};
 use crate::gpu_types::OutVertex;
-use crate::tolerance::Tolerance;
 use crate::measure::closest_point_on_triangle;
 use crate::mesh::Mesh;
+use crate::tolerance::Tolerance;
 
 /// The largest first split of a patch along each side (`ku × kv` cells).
 pub const MAX_BASE_SPLIT: u32 = 8;
@@ -182,19 +182,25 @@ impl CcParams {
     /// Checks the tolerance (positive, and at least [`MIN_TOLERANCE_REL`] of the
     /// bounding-box diagonal of the refined control points) and the depth.
     pub fn validate(&self, model: &SurfaceModel) -> Result<()> {
+        self.validate_for(&model.mesh, model.depth)
+    }
+
+    /// [`validate`](Self::validate) for patches `mesh` whose quadtrees have `depth`
+    /// levels (a stage keeps these, not the quadtrees).
+    pub fn validate_for(&self, mesh: &PatchMesh, depth: u32) -> Result<()> {
         self.tolerance.validate()?;
-        let eps = self.epsilon(model);
-        let size = model.mesh.bbox_diag();
+        let eps = self.tolerance.resolve(mesh.control_diag);
+        let size = mesh.bbox_diag();
         if eps < MIN_TOLERANCE_REL * size {
             return Err(Error::Param(format!(
                 "tolerance {eps:e} is below {MIN_TOLERANCE_REL:e} of the surface's size ({size:e}): finer than single-precision output can hold"
             )));
         }
-        if self.max_depth > model.depth.min(super::MAX_DEPTH) {
+        if self.max_depth > depth.min(super::MAX_DEPTH) {
             return Err(Error::Param(format!(
                 "max depth {} out of range 0..={}",
                 self.max_depth,
-                model.depth.min(super::MAX_DEPTH)
+                depth.min(super::MAX_DEPTH)
             )));
         }
         Ok(())
@@ -573,10 +579,7 @@ fn mark_patches(eval: &mut Evaluator, params: &CcParams, splits: &[(u32, u32)]) 
 /// triangles), and marks again, with the flatness bound alone, each that fails; until
 /// none does. Marking again only adds points, so this ends, and the order of work does
 /// not matter. Returns the leaves' polygons.
-fn settle_exact_leaves(
-    eval: &mut Evaluator,
-    marking: &mut Marking,
-) -> Vec<Polygon> {
+fn settle_exact_leaves(eval: &mut Evaluator, marking: &mut Marking) -> Vec<Polygon> {
     let eps = eval.eps;
     let (n, mesh) = (eval.n, &eval.model.mesh);
     loop {
@@ -613,13 +616,7 @@ fn settle_exact_leaves(
             let bx = [cell.i, cell.i + cell.w, cell.j, cell.j + cell.h].map(|t| t * scale);
             let quad = cell.corners().map(|(a, c)| eval.get(p, a, c).position);
             eval.triangle_bounds += 1;
-            let b = triangles_bound(
-                &eval.model.patches[p],
-                bx,
-                quad,
-                &triangles,
-                eps,
-            );
+            let b = triangles_bound(&eval.model.patches[p], bx, quad, &triangles, eps);
             if b <= eps {
                 marking.bounds[k].0 = b;
             } else {
@@ -638,21 +635,13 @@ fn settle_exact_leaves(
                 next.next();
                 let (p, cell) = marking.leaves[k];
                 let splits_left = marking.bounds[k].1.expect("an exact leaf");
-                mark(
-                    eval,
-                    p,
-                    cell,
-                    splits_left,
-                    eps,
-                    false,
-                    &mut |c, b, _| {
-                        if b > eps {
-                            marking.unmet += 1;
-                        }
-                        leaves.push((p, c));
-                        bounds.push((b, None));
-                    },
-                );
+                mark(eval, p, cell, splits_left, eps, false, &mut |c, b, _| {
+                    if b > eps {
+                        marking.unmet += 1;
+                    }
+                    leaves.push((p, c));
+                    bounds.push((b, None));
+                });
             } else {
                 leaves.push(marking.leaves[k]);
                 bounds.push(marking.bounds[k]);

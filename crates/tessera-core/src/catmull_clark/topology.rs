@@ -144,9 +144,10 @@ impl PatchMesh {
                 self.control_vertices
             )));
         }
-        if let Some(i) = positions.iter().position(|p| {
-            !p.is_finite() || p.abs().max_element() > crate::io::MAX_COORDINATE
-        }) {
+        if let Some(i) = positions
+            .iter()
+            .position(|p| !p.is_finite() || p.abs().max_element() > crate::io::MAX_COORDINATE)
+        {
             return Err(Error::Param(format!(
                 "control point {i} is {}: coordinates must be finite and within ±{:e}",
                 positions[i],

@@ -616,7 +616,7 @@ impl CcStage {
         stamp(encoder, "polygons and triangles");
         let state_size = std::mem::size_of::<CcState>() as u64;
         let hash_size = std::mem::size_of::<CcHashStatus>() as u64;
-        let (state, hash, indirect) = (&self.state, &b.hash.status, &b.output.indirect());
+        let (state, hash, indirect) = (&self.state, &b.hash.status, b.output.indirect());
         self.readback.record(device, encoder, |encoder, readback| {
             encoder.copy_buffer_to_buffer(state, 0, readback, 0, state_size);
             encoder.copy_buffer_to_buffer(hash, 0, readback, state_size, hash_size);
@@ -980,9 +980,9 @@ impl Binds {
                 (slot::ITEM_POINTS, &b.item_points),
                 (slot::POLY_OFFSETS, &b.poly_offsets),
                 (slot::POLY_VERTS, &b.poly_verts),
-                (slot::VERTICES, &b.output.vertices()),
-                (slot::INDICES, &b.output.indices()),
-                (slot::DRAW, &b.output.indirect()),
+                (slot::VERTICES, b.output.vertices()),
+                (slot::INDICES, b.output.indices()),
+                (slot::DRAW, b.output.indirect()),
                 (slot::KEYS, &b.keys),
                 (slot::TABLE, &b.hash.table),
                 (slot::ITEM_SLOT, &b.hash.item_slot),
@@ -1026,7 +1026,7 @@ impl Binds {
                 model,
                 &b.vertex_points,
                 &b.vertex_count,
-                &b.output.vertices(),
+                b.output.vertices(),
             ),
         }
     }

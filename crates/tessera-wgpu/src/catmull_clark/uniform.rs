@@ -307,15 +307,15 @@ impl Sized {
             ),
             kernels
                 .eval
-                .bind(device, model, &points, &counts, &output.vertices()),
+                .bind(device, model, &points, &counts, output.vertices()),
             kernels.cells.bind(
                 device,
                 &entries(
                     shared,
                     &[
-                        (slot::VERTICES, &output.vertices()),
-                        (slot::INDICES, &output.indices()),
-                        (slot::DRAW, &output.indirect()),
+                        (slot::VERTICES, output.vertices()),
+                        (slot::INDICES, output.indices()),
+                        (slot::DRAW, output.indirect()),
                     ],
                 ),
             ),
