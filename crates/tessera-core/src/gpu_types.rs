@@ -45,6 +45,7 @@ pub mod tally {
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
 pub struct GpuPatch {
+    /// The 16 control points `b[4j + i]` (`i` along u), three floats each.
     pub cp: [f32; 48],
 }
 
@@ -53,6 +54,8 @@ pub struct GpuPatch {
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
 pub struct DisplacementMap {
+    /// Signed distances from the coarse mesh to the surface, model units, row-major
+    /// (`j` along v).
     pub d: [f32; MAP_RES * MAP_RES],
 }
 
@@ -120,7 +123,9 @@ impl MapHalves {
 /// and the reads stay bit-identical to the CPU twin ([`crate::bezier::prepare::map_read`]).
 #[derive(Clone, Debug, PartialEq)]
 pub struct MapAtlas {
+    /// Texture width in texels (see [`MapAtlas::size`]).
     pub width: u32,
+    /// Texture height in texels.
     pub height: u32,
     /// Row-major, `width × height` texels, each four `f16` bit patterns.
     pub texels: Vec<[u16; 4]>,
@@ -201,7 +206,9 @@ pub const NET_TEXTURE_PATCHES_PER_ROW: u32 = 256;
 /// The same 192 bytes per patch as a storage buffer would hold.
 #[derive(Clone, Debug, PartialEq)]
 pub struct NetTexture {
+    /// Texture width in texels (see [`NetTexture::size`]).
     pub width: u32,
+    /// Texture height in texels.
     pub height: u32,
     /// Row-major, `width × height` texels.
     pub texels: Vec<[f32; 4]>,
@@ -225,6 +232,8 @@ impl NetTexture {
         )
     }
 
+    /// The texture of `patches`, patch `p` in texels `texel_of(p, 0..12)`; the texels
+    /// past the last patch are zero.
     pub fn new(patches: &[GpuPatch]) -> Self {
         let (width, height) = Self::size(patches.len());
         let mut texels = vec![[0.0f32; 4]; width as usize * height as usize];
@@ -264,7 +273,9 @@ pub const TOPO_TEXELS: u32 = 3;
 /// storage textures per kernel.
 #[derive(Clone, Debug, PartialEq)]
 pub struct TopologyTexture {
+    /// Texture width in texels, at most [`TOPOLOGY_TEXTURE_WIDTH`].
     pub width: u32,
+    /// Texture height in texels.
     pub height: u32,
     /// Row-major, `width × height` texels.
     pub texels: Vec<[u32; 4]>,
@@ -278,6 +289,8 @@ impl TopologyTexture {
         (texels.min(width) as u32, texels.div_ceil(width) as u32)
     }
 
+    /// The texture of the patches' topology `topo` followed by `curves`; unused texels
+    /// are zero.
     pub fn new(topo: &[GpuPatchTopo], curves: &[GpuCurve]) -> Self {
         let (width, height) = Self::size(topo.len(), curves.len());
         let mut texels = vec![[0u32; 4]; width as usize * height as usize];
@@ -318,12 +331,16 @@ pub struct GpuPatchTopo {
 }
 
 impl GpuPatchTopo {
+    /// The boundary curve on side `side` (0..4: `v = 0`, `u = 1`, `v = 1`, `u = 0`).
     pub fn side_curve(&self, side: usize) -> u32 {
         self.sides[side] >> 1
     }
+    /// Whether side `side` runs against its curve's canonical direction.
     pub fn side_reversed(&self, side: usize) -> bool {
         self.sides[side] & 1 != 0
     }
+    /// Whether the patch's winding is flipped (its normals are negated, its triangles
+    /// emitted in reverse order).
     pub fn flipped(&self) -> bool {
         self.flags & 1 != 0
     }
@@ -347,10 +364,13 @@ pub struct GpuCurve {
 }
 
 impl GpuCurve {
+    /// [`GpuCurve::other`] of a curve on an open boundary (`NO_SIDE` in WGSL).
     pub const NO_SIDE: u32 = u32::MAX;
+    /// The side of [`owner`](GpuCurve::owner) that the curve is on (0..4).
     pub fn owner_side(&self) -> usize {
         (self.flags & 3) as usize
     }
+    /// Whether the curve is collapsed to a point (a degenerate patch side).
     pub fn collapsed(&self) -> bool {
         self.flags & 4 != 0
     }
@@ -361,8 +381,11 @@ impl GpuCurve {
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
 pub struct VertexRecord {
+    /// Patch index (`patch_id` in WGSL).
     pub patch: u32,
+    /// Parameter along the patch's u, in `[0, 1]`.
     pub u: f32,
+    /// Parameter along the patch's v, in `[0, 1]`.
     pub v: f32,
 }
 
@@ -370,9 +393,13 @@ pub struct VertexRecord {
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
 pub struct OutVertex {
+    /// Surface point, model units.
     pub position: [f32; 3],
+    /// Unit surface normal, facing the front of the patch.
     pub normal: [f32; 3],
+    /// The patch parameter `(u, v)` of the point, in `[0, 1]²`.
     pub uv: [f32; 2],
+    /// Index of the patch the point was evaluated on (`patch_id` in WGSL).
     pub patch: u32,
 }
 
@@ -380,10 +407,15 @@ pub struct OutVertex {
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq, Eq, Default)]
 pub struct DrawIndexedIndirectArgs {
+    /// Indices to draw (three per triangle; 0 after an overflow).
     pub index_count: u32,
+    /// Instances to draw (1).
     pub instance_count: u32,
+    /// First index read from the index buffer.
     pub first_index: u32,
+    /// Added to each index before the vertex buffer is read.
     pub base_vertex: i32,
+    /// First instance id.
     pub first_instance: u32,
 }
 
@@ -394,12 +426,20 @@ pub struct BezierParams {
     /// [`EdgeTest`](crate::bezier::EdgeTest) index. For readers of the buffer: the
     /// kernels take the test as their pipeline constant `EDGE_TEST` instead.
     pub test: u32,
+    /// The edge tests' threshold `th`, model units
+    /// ([`AdaptiveParams::threshold`](crate::bezier::AdaptiveParams::threshold)).
     pub threshold: f32,
+    /// Levels of bisection per coarse edge, at most [`MAX_DEPTH_LIMIT`].
     pub max_depth: u32,
+    /// Patches in the model.
     pub patches: u32,
+    /// Boundary curves ([`GpuCurve`]s) in the topology texture.
     pub curves: u32,
+    /// Coarse vertices: the first records of the vertex-record buffer (binding 9).
     pub coarse_vertices: u32,
+    /// Coarse edges: three per curve, then [`INTERIOR_EDGES_PER_PATCH`] per patch.
     pub coarse_edges: u32,
+    /// Coarse triangles: [`COARSE_TRIANGLES_PER_PATCH`] per patch.
     pub coarse_triangles: u32,
     /// Words of lattice points per coarse triangle in the scratch texture.
     pub points_words: u32,
@@ -407,13 +447,16 @@ pub struct BezierParams {
     pub pole_words: u32,
     /// `1 / (3 · 2^max_depth)` (see `lattice::inv_lattice`).
     pub inv_lattice: f32,
+    /// Output vertices the vertex buffers hold (bindings 9 and 10).
     pub vertex_capacity: u32,
+    /// Output indices the index buffer holds (binding 11).
     pub index_capacity: u32,
     /// What the map atlas's half-precision values are multiplied by (a power of two).
     pub map_scale: f32,
     /// Scratch word `w` is texel `(w mod 2^scratch_shift, w >> scratch_shift)` of the
     /// scratch texture.
     pub scratch_shift: u32,
+    /// Padding to a multiple of 16 bytes; zero.
     pub _pad: u32,
 }
 
@@ -450,7 +493,10 @@ pub struct BezierStatus {
     pub indices: u32,
     /// Bit 0: the vertices did not fit; bit 1: the indices did not fit.
     pub overflow: u32,
+    /// Vertices inserted on the coarse edges (numbered after the coarse vertices).
     pub edge_vertices: u32,
+    /// The vertex kernel's indirect dispatch, `x y z` workgroups (`dispatch_x` ..
+    /// `dispatch_z` in WGSL).
     pub dispatch: [u32; 3],
     /// Surface evaluations: the flat test's (3 per tested chord) plus one per vertex.
     pub evaluations: u32,
@@ -574,14 +620,17 @@ mod tests {
     }
 }
 
-/// Catmull-Clark quadtree node kinds ([`CcNode::kind`]).
+/// Catmull-Clark quadtree node kind ([`CcNode::kind`]): a Bézier net.
 pub const CC_NODE_BEZIER: u32 = 0;
+/// Node kind: a split into four children.
 pub const CC_NODE_SPLIT: u32 = 1;
+/// Node kind: the innermost node at an extraordinary vertex (a [`CcCorner`]).
 pub const CC_NODE_CORNER: u32 = 2;
 /// [`CcNode::kind`] holds the kind in its low byte; a split node on the chain at an
 /// extraordinary vertex holds `1 +` the index of its ball (a [`CcCorner`]) above
 /// [`CC_NODE_BALL_SHIFT`] (0: none).
 pub const CC_NODE_KIND_MASK: u32 = 0xff;
+/// Bit position of a split node's ball index in [`CcNode::kind`].
 pub const CC_NODE_BALL_SHIFT: u32 = 8;
 /// A patch without a surface (a hole): its root is this.
 pub const CC_NO_ROOT: u32 = u32::MAX;
@@ -595,19 +644,32 @@ pub const CC_PARAM_ONE: u32 = 1 << 31;
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq, Eq)]
 pub struct CcNode {
+    /// [`CC_NODE_BEZIER`], [`CC_NODE_SPLIT`] or [`CC_NODE_CORNER`] in the low byte
+    /// ([`CC_NODE_KIND_MASK`]); for a split, `1 +` its ball's index above
+    /// [`CC_NODE_BALL_SHIFT`] (0: no ball).
     pub kind: u32,
+    /// Index into the nets (binding 23), the child quadruples (binding 22) or the
+    /// corners (binding 24), by kind.
     pub index: u32,
 }
 
 /// The innermost node at an extraordinary vertex: the vertex's limit point and normal,
 /// which node corner it is (0..4), and the radius of a ball around the limit point that
 /// holds the surface over the node.
+///
+/// A split node's ball is stored as one of these too, with `limit` and `hull_radius`
+/// set and `corner` and `normal` zero.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
 pub struct CcCorner {
+    /// Limit point of the extraordinary vertex, model units.
     pub limit: [f32; 3],
+    /// Which node corner is the vertex: 0..4 at `(0,0), (1,0), (1,1), (0,1)`.
     pub corner: u32,
+    /// Unit limit normal at the vertex.
     pub normal: [f32; 3],
+    /// Radius of the ball around `limit` that holds the surface over the node, model
+    /// units.
     pub hull_radius: f32,
 }
 
@@ -615,8 +677,11 @@ pub struct CcCorner {
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq, Eq, Hash)]
 pub struct CcPoint {
+    /// Patch index in the mesh.
     pub patch_id: u32,
+    /// Parameter along u, fixed point (`u / CC_PARAM_ONE`).
     pub u: u32,
+    /// Parameter along v, fixed point.
     pub v: u32,
 }
 
@@ -632,8 +697,11 @@ pub const CC_NO_SLOT: u32 = u32::MAX;
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable, PartialEq, Eq)]
 pub struct CcHashSlot {
+    /// High word of the point key ([`crate::catmull_clark::keys::point_key`]), inverted.
     pub key_hi: u32,
+    /// Low word of the point key, inverted.
     pub key_lo: u32,
+    /// The smallest item that inserted the key, inverted (0: none yet).
     pub first: u32,
 }
 
@@ -647,6 +715,7 @@ pub struct CcHashStatus {
     pub overflow: u32,
     /// Distinct keys, in order of first occurrence.
     pub unique: u32,
+    /// Padding to 16 bytes.
     pub pad: u32,
 }
 
@@ -656,9 +725,14 @@ pub struct CcHashStatus {
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable, PartialEq, Eq)]
 pub struct CcCell {
+    /// Patch index in the mesh.
     pub patch_id: u32,
+    /// `trial | depth << 8`: the first-split trial (`0..CC_TRIALS`) in the low byte, the
+    /// midpoint splits below it above.
     pub trial_depth: u32,
+    /// Lower-left corner along u, grid units.
     pub i: u32,
+    /// Lower-left corner along v, grid units.
     pub j: u32,
 }
 
@@ -701,8 +775,14 @@ pub fn cc_trial_round(t: u32) -> u32 {
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable, PartialEq, Eq)]
 pub struct CcPatchTopo {
+    /// Level-1 points at the corners `(0,0), (1,0), (1,1), (0,1)`
+    /// ([`PatchMesh::quads`](crate::catmull_clark::PatchMesh::quads)).
     pub quad: [u32; 4],
+    /// Level-1 edge ids, edge `k` from corner `k` to corner `k + 1`
+    /// ([`PatchMesh::quad_edges`](crate::catmull_clark::PatchMesh::quad_edges)).
     pub edges: [u32; 4],
+    /// Per edge: `q << 2 | k` of the patch `q` across it and its edge `k`, or
+    /// [`CC_NO_NEIGHBOUR`].
     pub across: [u32; 4],
 }
 
@@ -712,12 +792,16 @@ pub struct CcPatchTopo {
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable, PartialEq, Eq)]
 pub struct CcUniformPatch {
+    /// Patch index in the mesh.
     pub patch_id: u32,
+    /// Dense ids of the corner points, numbered first in the output vertices.
     pub corners: [u32; 4],
+    /// Dense ids of the level-1 edges, edge `k` from corner `k` to corner `k + 1`.
     pub edges: [u32; 4],
     /// Bits `k` (evaluates corner `k`), `4 + k` (evaluates edge `k`'s points) and `8 + k`
     /// (edge `k` runs from its larger end point).
     pub flags: u32,
+    /// Padding to a multiple of 16 bytes (`pad0`, `pad1` in WGSL).
     pub pad: [u32; 2],
 }
 
@@ -729,8 +813,9 @@ pub struct CcUniformParams {
     pub segments: u32,
     /// Surface patches (holes left out).
     pub patch_count: u32,
-    /// Distinct patch corners and level-1 edges of the surface patches.
+    /// Distinct patch corners of the surface patches.
     pub corner_count: u32,
+    /// Distinct level-1 edges of the surface patches.
     pub edge_count: u32,
 }
 
@@ -740,17 +825,26 @@ pub struct CcUniformParams {
 pub struct CcTessParams {
     /// Grid units per patch side: `840 << max_depth`.
     pub grid: u32,
+    /// Most midpoint splits below the first split, at most
+    /// [`MAX_DEPTH`](crate::catmull_clark::MAX_DEPTH).
     pub max_depth: u32,
+    /// The absolute tolerance ε on the flatness bound, model units.
     pub tolerance: f32,
+    /// Patches in the mesh, holes included.
     pub patch_count: u32,
+    /// Cells each cell list holds (bindings 52 and 53).
     pub cell_capacity: u32,
+    /// Leaves the output leaf list holds (binding 55).
     pub leaf_capacity: u32,
+    /// Polygon vertices the polygon buffer holds (binding 63).
     pub poly_capacity: u32,
+    /// Indices the index buffer holds (binding 65).
     pub index_capacity: u32,
     /// Leaves of every trial of the search, kept until the best one is known.
     pub search_leaf_capacity: u32,
     /// Rounds of the first-split search run ([`crate::catmull_clark::FirstSplit::search_rounds`]).
     pub search_rounds: u32,
+    /// Padding to a multiple of 16 bytes (`pad1`, `pad2` in WGSL).
     pub pad: [u32; 2],
 }
 
@@ -772,8 +866,9 @@ pub struct CcState {
     pub overflow: u32,
     /// The largest cell list needed.
     pub need_cells: u32,
-    /// Polygon vertices needed and indices needed.
+    /// Polygon vertices needed.
     pub need_poly: u32,
+    /// Indices needed.
     pub need_indices: u32,
     /// Leaves stopped by `max_depth` with a bound above the tolerance.
     pub unmet: u32,
