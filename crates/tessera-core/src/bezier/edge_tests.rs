@@ -26,6 +26,8 @@ pub enum EdgeTest {
 }
 
 impl EdgeTest {
+    /// The test's lower-case name (`map2p`, `map4p`, `map8p`, `flat`), as the CLI
+    /// spells it.
     pub fn name(self) -> &'static str {
         match self {
             EdgeTest::Map2p => "map2p",
@@ -74,10 +76,15 @@ pub fn bit_count(bits: &EdgeBits) -> u32 {
 /// What one patch's tests read.
 #[derive(Clone, Copy)]
 pub struct TestInputs<'a> {
+    /// Which test.
     pub test: EdgeTest,
+    /// The test's threshold `th`, model units.
     pub threshold: f32,
+    /// Levels of bisection of a segment.
     pub max_depth: u32,
+    /// The patch's displacement map (map tests).
     pub map: &'a DisplacementMap,
+    /// The patch's control points (the flat test evaluates the surface).
     pub cp: &'a [Vec3; 16],
 }
 

@@ -19,6 +19,7 @@ pub type Lp = [u32; 2];
 /// Where a lattice point lies in its coarse triangle.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum LatticePlace {
+    /// Corner `k` (0..3) of the triangle.
     Corner(usize),
     /// On side `k`, `f` lattice steps from corner `k`.
     Side(usize, u32),
@@ -29,15 +30,18 @@ pub enum LatticePlace {
 /// The lattice of coarse triangle `tri` at refinement depth `depth`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Lattice {
+    /// Patch index of the coarse triangle.
     pub patch: u32,
     /// Grid points (in thirds of the patch) of the corners, counter-clockwise.
     pub grid: [[u32; 2]; 3],
     /// Lattice steps per side, `2^depth`.
     pub n: u32,
+    /// Halvings of each side: `n = 2^depth`.
     pub depth: u32,
 }
 
 impl Lattice {
+    /// The lattice of global coarse triangle `tri` (18 per patch, in patch order).
     pub fn new(tri: u32, depth: u32) -> Self {
         let per_patch = COARSE_TRIANGLES_PER_PATCH as u32;
         Lattice {
@@ -71,6 +75,7 @@ impl Lattice {
         [c[0] as f32 * inv, c[1] as f32 * inv]
     }
 
+    /// Whether `p` is a corner, on a side (and where) or inside (and its bit).
     pub fn place(&self, p: Lp) -> LatticePlace {
         let (i, j, n) = (p[0], p[1], self.n);
         match (i, j) {
@@ -239,11 +244,13 @@ pub fn bisect(t: [Lp; 3]) -> [[Lp; 3]; 2] {
 pub struct TreeWalk {
     /// The current node and its level (the root is at 0).
     pub t: [Lp; 3],
+    /// Level of `t` in the tree (the root is at 0).
     pub level: u32,
     path: u32,
 }
 
 impl TreeWalk {
+    /// A walk that starts at `root`, level 0.
     pub fn new(root: [Lp; 3]) -> Self {
         TreeWalk {
             t: root,
@@ -280,10 +287,12 @@ impl TreeWalk {
     }
 }
 
+/// Whether bit `k` of the bit set `words` is set.
 pub fn bit_get(words: &[u32], k: usize) -> bool {
     words[k / 32] >> (k % 32) & 1 != 0
 }
 
+/// Sets bit `k` of the bit set `words`.
 pub fn bit_set(words: &mut [u32], k: usize) {
     words[k / 32] |= 1 << (k % 32);
 }

@@ -13,10 +13,13 @@ use crate::weld::weld_points;
 /// A set of bicubic Bézier patches ready for tessellation.
 #[derive(Clone, Debug)]
 pub struct BezierModel {
+    /// The patches' control points, taken from `points` through `nets`.
     pub patches: Vec<BezierPatch>,
     /// Welded control nets: indices into `points`.
     pub nets: Vec<[u32; 16]>,
+    /// The distinct (welded) control points.
     pub points: Vec<Vec3>,
+    /// Which patches share curves and corners, and their orientation.
     pub topology: PatchTopology,
 }
 

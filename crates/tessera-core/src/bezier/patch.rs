@@ -34,9 +34,13 @@ bernstein!(bernstein_f64, f64);
 /// Point, first derivatives and the mixed derivative of a patch at one parameter.
 #[derive(Clone, Copy, Debug)]
 pub struct Frame<V> {
+    /// The surface point `S(u, v)`.
     pub pos: V,
+    /// `∂S/∂u`.
     pub du: V,
+    /// `∂S/∂v`.
     pub dv: V,
+    /// `∂²S/∂u∂v`.
     pub duv: V,
 }
 
@@ -106,6 +110,7 @@ frame_normal!(frame_normal_f64, DVec3, f64);
 /// One bicubic Bézier patch (single precision, as uploaded to the GPU).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct BezierPatch {
+    /// Control points, row-major `b[4j + i]` (`i` along u).
     pub cp: [Vec3; 16],
 }
 

@@ -22,27 +22,37 @@ use crate::gpu_types::*;
 /// inside it (6 horizontal, 6 vertical, 9 diagonal).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct CoarseLayout {
+    /// Patches in the model.
     pub patches: u32,
+    /// Boundary curves (shared patch sides).
     pub curves: u32,
+    /// Distinct patch corners: the first coarse vertex ids.
     pub corners: u32,
     /// First id of the inner grid points of patch 0.
     pub interior_vertex_base: u32,
+    /// Coarse vertices in all: corners, curve points, inner grid points.
     pub coarse_vertices: u32,
+    /// Coarse edges in all: `3 · curves + 21 · patches`.
     pub coarse_edges: u32,
+    /// Coarse triangles in all: `18 · patches`.
     pub coarse_triangles: u32,
 }
 
 /// Everything the tessellation kernels read: the upload.
 #[derive(Clone, Debug)]
 pub struct PreparedBezier {
+    /// How the coarse vertices and edges are numbered.
     pub layout: CoarseLayout,
+    /// Control points of each patch, as uploaded (in the [`NetTexture`]).
     pub patches: Vec<GpuPatch>,
+    /// Connectivity of each patch (in the [`TopologyTexture`]).
     pub topo: Vec<GpuPatchTopo>,
     /// The displacement maps, in half precision scaled by `map_scale` (see
     /// [`quantize_maps`]): every value is `f16 · map_scale` exactly.
     pub maps: Vec<DisplacementMap>,
     /// The power of two the maps' half-precision values are multiplied by.
     pub map_scale: f32,
+    /// The boundary curves (in the [`TopologyTexture`], after the patches).
     pub curves: Vec<GpuCurve>,
     /// Where each corner is evaluated.
     pub corners: Vec<VertexRecord>,

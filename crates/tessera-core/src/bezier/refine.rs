@@ -43,7 +43,12 @@ pub enum VertexRef {
     /// A coarse grid vertex (global id).
     Coarse(u32),
     /// The `rank`-th inserted point of a coarse edge, in canonical order.
-    Edge { edge: u32, rank: u32 },
+    Edge {
+        /// Coarse edge id.
+        edge: u32,
+        /// Rank of the point among the edge's inserted points.
+        rank: u32,
+    },
     /// The `n`-th inner point of this coarse triangle, in lattice-index order.
     Inner(u32),
 }
@@ -51,6 +56,8 @@ pub enum VertexRef {
 /// Receives the triangles of a coarse triangle: a counting sink and a writing sink give
 /// the count and emit stages.
 pub trait TriangleSink {
+    /// One output triangle, counter-clockwise seen from the front (flipped patches
+    /// already reversed).
     fn triangle(&mut self, tri: [VertexRef; 3]);
 }
 
@@ -202,18 +209,23 @@ fn canonical(l: &Lattice, a: Lp, b: Lp) -> (Lp, Lp) {
 
 /// What the triangle stages of one coarse triangle read.
 pub struct TriContext<'a> {
+    /// What the tests on the triangle's patch read.
     pub inputs: TestInputs<'a>,
+    /// The triangle's lattice at the tests' `max_depth`.
     pub lattice: Lattice,
     /// Per side: coarse edge id, whether the side runs along its canonical direction,
     /// whether it is collapsed to a point.
     pub sides: [(u32, bool, bool); 3],
     /// Global ids of the corners.
     pub corner_ids: [u32; 3],
+    /// Every coarse edge's inserted points, by edge id (the edge stage's output).
     pub edge_bits: &'a [EdgeBits],
+    /// Whether the triangle's patch is flipped (its triangles are emitted reversed).
     pub flipped: bool,
 }
 
 impl<'a> TriContext<'a> {
+    /// The context of global coarse triangle `tri`, with the tests `inputs` of its patch.
     pub fn new(
         prep: &PreparedBezier,
         inputs: TestInputs<'a>,
@@ -318,10 +330,12 @@ pub struct TriScratch {
     /// Bit g: group g of `points` (words `g << group_shift ..`, see
     /// [`Lattice::word_group_shift`]) holds a point.
     pub groups: u32,
+    /// [`Lattice::word_group_shift`] of the points' words.
     pub group_shift: u32,
 }
 
 impl TriScratch {
+    /// Empty scratch for a lattice of depth `depth`.
     pub fn new(depth: u32) -> Self {
         let points_words = Lattice::points_words(depth);
         TriScratch {
@@ -335,6 +349,7 @@ impl TriScratch {
     pub fn words(&self) -> Vec<u32> {
         [&self.points[..], &self.pole[..], &[self.groups]].concat()
     }
+    /// Inner lattice points that are vertices.
     pub fn inner_count(&self) -> u32 {
         self.points.iter().map(|w| w.count_ones()).sum()
     }

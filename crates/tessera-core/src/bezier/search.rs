@@ -10,7 +10,9 @@ pub const TARGET_TOLERANCE: f64 = 0.02;
 
 /// The result of a search: the threshold used and the mesh it gave.
 pub struct TargetResult {
+    /// The threshold that gave `tessellation`, model units.
     pub threshold: f32,
+    /// The tessellation at that threshold.
     pub tessellation: Tessellation,
     /// Whether the count is within [`TARGET_TOLERANCE`] of the target.
     pub within_tolerance: bool,

@@ -36,6 +36,7 @@ pub use crate::scan::exclusive_scan;
 /// Parameters of the adaptive (map or flat) tessellator.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct AdaptiveParams {
+    /// Which test decides whether a segment is split.
     pub test: EdgeTest,
     /// `th`: map-distance difference (map tests) or chord deviation (flat), model units.
     pub threshold: f32,
@@ -44,8 +45,11 @@ pub struct AdaptiveParams {
 }
 
 impl AdaptiveParams {
+    /// The depth used when none is given: at most 64 segments per coarse edge.
     pub const DEFAULT_MAX_DEPTH: u32 = 6;
 
+    /// Checks that the threshold is positive and finite and the depth at most
+    /// [`MAX_DEPTH_LIMIT`].
     pub fn validate(&self) -> Result<()> {
         if !(self.threshold.is_finite() && self.threshold > 0.0) {
             return Err(Error::Param(format!(
@@ -66,6 +70,7 @@ impl AdaptiveParams {
 /// A tessellated mesh and what it cost.
 #[derive(Clone, Debug, Default)]
 pub struct Tessellation {
+    /// The triangles and their vertices.
     pub mesh: Mesh,
     /// Surface evaluations: one per output vertex, plus the flat test's candidates.
     pub evaluations: u64,

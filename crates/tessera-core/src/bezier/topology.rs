@@ -40,6 +40,7 @@ pub enum GridPoint {
     Corner(usize),
     /// Side 0..4 and the position `k ∈ 1..n` along the side's own direction.
     Side(usize, u32),
+    /// Strictly inside the patch.
     Interior,
 }
 
@@ -71,6 +72,7 @@ pub fn grid_point(i: u32, j: u32, n: u32) -> GridPoint {
 /// A side of a patch, as a reference to a shared boundary curve.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct SideRef {
+    /// Index of the curve in [`PatchTopology::curves`].
     pub curve: u32,
     /// The side parameter runs against the curve's canonical direction.
     pub reversed: bool,
@@ -79,8 +81,10 @@ pub struct SideRef {
 /// A boundary curve, shared by every patch side with the same four control points.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Curve {
-    /// The patch that evaluates points on this curve, and its side.
+    /// The patch that evaluates points on this curve; its side runs along the curve's
+    /// canonical direction.
     pub owner: u32,
+    /// The side of `owner` (0..4) the curve is on.
     pub owner_side: u8,
     /// All four control points coincide: the curve is a single point.
     pub collapsed: bool,
@@ -91,7 +95,9 @@ pub struct Curve {
 /// A point given by a patch and a parameter: what a vertex record holds.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ParamPoint {
+    /// Patch index.
     pub patch: u32,
+    /// Parameter `(u, v)` in the patch, in `[0, 1]²`.
     pub uv: [f32; 2],
 }
 
@@ -100,7 +106,9 @@ pub struct ParamPoint {
 pub struct PatchTopology {
     /// Global corner id at corner slots 0..4 of each patch.
     pub patch_corners: Vec<[u32; 4]>,
+    /// The curve on each side 0..4 of each patch (see [`side_uv`]).
     pub patch_sides: Vec<[SideRef; 4]>,
+    /// The distinct boundary curves, in order of first use.
     pub curves: Vec<Curve>,
     /// Where each corner is evaluated.
     pub corner_owner: Vec<ParamPoint>,

@@ -16,6 +16,9 @@ use crate::mesh::Mesh;
 /// Largest segment count accepted (about 2·10⁶ triangles per patch).
 pub const MAX_SEGMENTS: u32 = 1024;
 
+/// Every patch of `model` ([`PreparedBezier::new`] of it in `prep`) on a `segments ×
+/// segments` grid; an error if `segments` is outside `1..=MAX_SEGMENTS` or the output
+/// would be too large.
 pub fn tessellate_uniform(
     model: &BezierModel,
     prep: &PreparedBezier,
