@@ -210,6 +210,7 @@ impl CcParams {
 /// A tessellation with what it cost.
 #[derive(Clone, Debug, Default)]
 pub struct CcTessellation {
+    /// The triangles and their vertices.
     pub mesh: Mesh,
     /// Distinct surface points evaluated: the corners of every cell tested, and the
     /// centres and side midpoints of the split proof (see [`super::bound::split_proof`]).

@@ -3,6 +3,7 @@
 
 use glam::DVec3;
 
+/// The 16 control points of a bicubic Bézier patch, `b[4*j + i]`.
 pub type Net = [DVec3; 16];
 
 fn bernstein(t: f64) -> [f64; 4] {

@@ -80,8 +80,11 @@ pub const WALK_STACK: usize = 32;
 
 /// Side bits of a piece: on the box's bottom (`v = v0`), right, top and left side.
 pub const SIDE_BOTTOM: u32 = 1;
+/// Side bit: on the box's right side (`u = u1`).
 pub const SIDE_RIGHT: u32 = 2;
+/// Side bit: on the box's top side (`v = v1`).
 pub const SIDE_TOP: u32 = 4;
+/// Side bit: on the box's left side (`u = u0`).
 pub const SIDE_LEFT: u32 = 8;
 /// The sides a quadrant of a node shares with the node, in quadrant order.
 const QUADRANT_SIDES: [u32; 4] = [

@@ -21,6 +21,7 @@ pub enum BoundaryRule {
 pub struct ControlMesh {
     /// The file it came from (names it in errors).
     pub source: PathBuf,
+    /// Control vertex positions, model units.
     pub positions: Vec<DVec3>,
     /// Vertex indices of each face, 0-based.
     pub faces: Vec<Vec<u32>>,
@@ -28,6 +29,7 @@ pub struct ControlMesh {
     pub face_lines: Vec<usize>,
     /// Faces tagged `hole`: they shape their neighbours but produce no surface.
     pub holes: Vec<bool>,
+    /// How open boundaries are subdivided.
     pub boundary: BoundaryRule,
     /// Things the loader read and ignored (unsupported tags), one line each.
     pub warnings: Vec<String>,

@@ -21,6 +21,7 @@ use crate::gpu_types::{
 pub struct CcGpuModel {
     /// Root node of each patch, [`CC_NO_ROOT`] for a hole.
     pub roots: Vec<u32>,
+    /// Every patch's nodes, patch after patch (binding 21).
     pub nodes: Vec<CcNode>,
     /// Children of split nodes, in quadrant order `[0,½]², [½,1]×[0,½], [½,1]², [0,½]×[½,1]`.
     pub splits: Vec<[u32; 4]>,
@@ -28,10 +29,13 @@ pub struct CcGpuModel {
     /// absolute, points 1..16 are offsets from it, so that the tiny pieces next to an
     /// extraordinary vertex keep their shape (and normals) in single precision.
     pub nets: Vec<GpuPatch>,
+    /// Corner nodes and the balls of split nodes on a chain at an extraordinary vertex
+    /// (binding 24).
     pub corners: Vec<CcCorner>,
 }
 
 impl CcGpuModel {
+    /// Flattens the quadtrees of `model`; holes get [`CC_NO_ROOT`] and no nodes.
     pub fn new(model: &SurfaceModel) -> Self {
         let mut out = CcGpuModel::default();
         for (p, surface) in model.patches.iter().enumerate() {

@@ -34,8 +34,11 @@ pub const EDGE_REVERSED: u32 = 1 << 8;
 /// shared points are numbered, and the counts of corners and edges.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct UniformLayout {
+    /// The surface patches, in patch order (binding 71).
     pub patches: Vec<CcUniformPatch>,
+    /// Distinct corners the surface patches use.
     pub corners: u32,
+    /// Distinct level-1 edges the surface patches use.
     pub edges: u32,
 }
 
@@ -148,8 +151,11 @@ pub fn grid_param(i: u32, n: u32) -> u32 {
 /// edge `k`, or inside.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum GridPlace {
+    /// Corner `k` (0..4, at `(0,0), (1,0), (1,1), (0,1)`).
     Corner(usize),
+    /// Edge `k` and the point's distance `t` from corner `k`, in `1..n`.
     Edge(usize, u32),
+    /// Strictly inside the patch.
     Inside,
 }
 

@@ -60,9 +60,24 @@ pub fn quad_point_key(quad: [u32; 4], edges: [u32; 4], p: usize, i: u32, j: u32,
 /// Where a key lies: on a level-1 edge at canonical `t`, inside a patch, or a vertex.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum KeyPlace {
+    /// A patch corner: the level-1 point.
     Vertex(u32),
-    Edge { edge: u32, t: u32 },
-    Interior { patch: u32, i: u32, j: u32 },
+    /// On a level-1 edge.
+    Edge {
+        /// Level-1 edge id.
+        edge: u32,
+        /// Distance from the edge's smaller end point, in `1/n`.
+        t: u32,
+    },
+    /// Inside a patch.
+    Interior {
+        /// Patch index.
+        patch: u32,
+        /// Grid coordinate along u.
+        i: u32,
+        /// Grid coordinate along v.
+        j: u32,
+    },
 }
 
 /// Decodes a key of [`point_key`].

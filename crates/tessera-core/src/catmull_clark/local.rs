@@ -15,7 +15,10 @@ use super::refine::refine;
 /// `quads[0][0..4]` sit at parameters `(0,0), (1,0), (1,1), (0,1)`.
 #[derive(Clone, Debug)]
 pub struct LocalMesh {
+    /// Positions of the one-ring's points.
     pub points: Vec<DVec3>,
+    /// The target quad, then the other quads touching its corners, as indices into
+    /// `points` (each counter-clockwise).
     pub quads: Vec<[u32; 4]>,
 }
 
@@ -26,6 +29,7 @@ pub struct CornerInfo {
     pub valence: usize,
     /// Number of faces around it.
     pub faces: usize,
+    /// Whether the vertex is on an open boundary.
     pub boundary: bool,
 }
 

@@ -36,10 +36,13 @@ pub enum Node {
 pub struct CornerNode {
     /// Which node corner (0..4, at `(0,0), (1,0), (1,1), (0,1)`) is the vertex.
     pub corner: usize,
+    /// Limit point of the vertex.
     pub limit: DVec3,
+    /// Unit limit normal at the vertex.
     pub normal: DVec3,
     /// `|S(x) - limit| ≤ hull_radius` over the node (convex hull of the one-ring).
     pub hull_radius: f64,
+    /// The node's one-ring, subdivided further when a point inside is evaluated.
     pub ring: LocalMesh,
 }
 
@@ -48,7 +51,9 @@ pub struct CornerNode {
 /// stops walking down the chain at a node small enough for the ball to be negligible.
 #[derive(Clone, Copy, Debug)]
 pub struct Ball {
+    /// Limit point of the vertex: the ball's centre.
     pub limit: DVec3,
+    /// Radius, model units.
     pub radius: f64,
 }
 
@@ -59,13 +64,16 @@ pub struct PatchSurface {
     pub nodes: Vec<Node>,
     /// Per node: for split nodes with one extraordinary corner, its ball.
     pub balls: Vec<Option<Ball>>,
+    /// The boundary rule the one-rings are subdivided with.
     pub rule: BoundaryRule,
 }
 
 /// A point of the limit surface with its unit normal.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SurfacePoint {
+    /// The limit point, model units.
     pub position: DVec3,
+    /// Unit normal (zero where it is not defined).
     pub normal: DVec3,
 }
 
@@ -243,9 +251,11 @@ fn eval_corner(node: &CornerNode, rule: BoundaryRule, u: f64, v: f64) -> Surface
 /// All patches of a mesh, built once (the part a GPU stage would upload).
 #[derive(Clone, Debug)]
 pub struct SurfaceModel {
+    /// The patches' connectivity and level-1 points.
     pub mesh: PatchMesh,
     /// One per patch; holes get an empty surface.
     pub patches: Vec<PatchSurface>,
+    /// Levels each quadtree was built to (`1..=TREE_DEPTH`).
     pub depth: u32,
 }
 

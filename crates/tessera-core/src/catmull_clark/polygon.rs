@@ -20,6 +20,7 @@ use crate::gpu_types::{cc_trial_split, CcCell, CcPatchTopo, CC_NO_NEIGHBOUR};
 pub struct PolygonKernel<'a> {
     /// `840 · 2^max_depth`: grid units per patch side.
     pub grid: u32,
+    /// Connectivity of each patch (binding 59).
     pub topo: &'a [CcPatchTopo],
     /// Per patch, the trial ([`cc_trial_split`]) of its first split: the kernel's `best[p].y`.
     pub first_trial: &'a [u32],

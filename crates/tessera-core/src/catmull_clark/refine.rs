@@ -18,8 +18,11 @@ use super::control_mesh::BoundaryRule;
 /// `[V(f[k]), E(f[k], f[k+1]), F(f), E(f[k-1], f[k])]`, counter-clockwise like `f`.
 #[derive(Clone, Debug)]
 pub struct Refined {
+    /// The new points: vertex points, then edge points, then face points.
     pub points: Vec<DVec3>,
+    /// The sub-quads, one per corner of each input face, as indices into `points`.
     pub quads: Vec<[u32; 4]>,
+    /// First sub-quad of each input face.
     pub face_start: Vec<u32>,
 }
 

@@ -34,6 +34,7 @@ pub const MAX_VALENCE: usize = 64;
 /// A validated mesh after its first Catmull-Clark step: all quads, one patch each.
 #[derive(Clone, Debug)]
 pub struct PatchMesh {
+    /// How open boundaries are subdivided (the control mesh's rule).
     pub boundary: BoundaryRule,
     /// Level-1 points: `[vertex points] [edge points] [face points]` of the control mesh.
     pub points: Vec<DVec3>,
@@ -161,6 +162,7 @@ impl PatchMesh {
         })
     }
 
+    /// Patches (level-1 quads), holes included.
     pub fn patch_count(&self) -> usize {
         self.quads.len()
     }

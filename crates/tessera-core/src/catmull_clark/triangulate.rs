@@ -18,8 +18,11 @@ use glam::DVec3;
 /// A polygon vertex: integer parameter coordinates and the output vertex id.
 #[derive(Clone, Copy, Debug)]
 pub struct PolyVertex {
+    /// Parameter coordinate along u, in grid units.
     pub i: i64,
+    /// Parameter coordinate along v, in grid units.
     pub j: i64,
+    /// The id the output triangles are written with.
     pub id: u32,
 }
 
