@@ -12,17 +12,27 @@ pub enum Error {
     /// A syntax or content error in an input file, at a 1-based line.
     #[error("{}:{line}: {msg}", file.display())]
     Parse {
+        /// The input file.
         file: PathBuf,
+        /// 1-based line of the problem.
         line: usize,
+        /// What is wrong, one line.
         msg: String,
     },
     /// A problem with an input file as a whole (empty, binary, inconsistent topology).
     #[error("{}: {msg}", file.display())]
-    Input { file: PathBuf, msg: String },
+    Input {
+        /// The input file.
+        file: PathBuf,
+        /// What is wrong, one line.
+        msg: String,
+    },
     /// Reading or writing a file failed.
     #[error("{}: {source}", path.display())]
     Io {
+        /// The file read or written.
         path: PathBuf,
+        /// The underlying error.
         #[source]
         source: std::io::Error,
     },
@@ -65,4 +75,5 @@ fn one_line(msg: String) -> String {
     out
 }
 
+/// `std::result::Result` with [`Error`] as the default error.
 pub type Result<T, E = Error> = std::result::Result<T, E>;

@@ -36,8 +36,11 @@ pub fn check_sampling(per_side: usize, patches: usize) -> crate::Result<()> {
 /// Summary of the distances from the surface samples to the mesh.
 #[derive(Clone, Copy, Debug, Default, Serialize, PartialEq)]
 pub struct ErrorStats {
+    /// Largest distance from a sample to the mesh, model units.
     pub max_error: f64,
+    /// Mean distance over the samples, model units.
     pub mean_error: f64,
+    /// 99th percentile of the distances, model units.
     pub p99_error: f64,
     /// Diagonal of the bounding box of the input's control points: the box a relative
     /// tolerance is a fraction of ([`crate::Tolerance`]).
@@ -47,6 +50,7 @@ pub struct ErrorStats {
     /// Diagonal of the bounding box of the surface samples (the measured surface's box,
     /// inside the control points' hull).
     pub surface_bbox_diag: f64,
+    /// Surface samples measured.
     pub samples: usize,
     /// Index of the sample with the largest error.
     pub worst_sample: usize,
@@ -198,6 +202,7 @@ pub struct TriangleBvh {
 }
 
 impl TriangleBvh {
+    /// Builds the hierarchy over `tris` (the triangles' corner positions).
     pub fn new(mut tris: Vec<[DVec3; 3]>) -> Self {
         let mut nodes = Vec::with_capacity(2 * tris.len() / 2 + 1);
         nodes.push(Node {

@@ -23,19 +23,24 @@ pub fn check_output_triangles(triangles: u64, what: &str) -> Result<()> {
 /// Indexed triangles; three indices per triangle, counter-clockwise seen from the front.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Mesh {
+    /// The vertices, as the GPU stages write them.
     pub vertices: Vec<OutVertex>,
+    /// Indices into `vertices`, three per triangle.
     pub indices: Vec<u32>,
 }
 
 impl Mesh {
+    /// Triangles in the mesh.
     pub fn triangle_count(&self) -> usize {
         self.indices.len() / 3
     }
 
+    /// The vertex positions, in vertex order.
     pub fn positions(&self) -> impl Iterator<Item = Vec3> + '_ {
         self.vertices.iter().map(|v| Vec3::from_array(v.position))
     }
 
+    /// Each triangle's three vertex indices.
     pub fn triangles(&self) -> impl Iterator<Item = [u32; 3]> + '_ {
         self.indices.chunks_exact(3).map(|t| [t[0], t[1], t[2]])
     }

@@ -34,6 +34,7 @@ pub struct WatertightReport {
 }
 
 impl WatertightReport {
+    /// No degenerate triangle, non-manifold edge, crack, T-junction or duplicate vertex.
     pub fn is_watertight(&self) -> bool {
         self.degenerate_triangles == 0
             && self.non_manifold_edges == 0
