@@ -15,6 +15,8 @@
 //! # Ok::<(), tessera_core::Error>(())
 //! ```
 
+#![deny(missing_docs)]
+
 pub mod bezier;
 pub mod catmull_clark;
 pub mod error;

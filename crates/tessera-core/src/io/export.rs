@@ -13,12 +13,16 @@ use crate::mesh::Mesh;
 /// Output formats, chosen by file extension.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum MeshFormat {
+    /// Wavefront OBJ (`.obj`).
     Obj,
+    /// ASCII PLY (`.ply`).
     Ply,
+    /// Binary glTF (`.glb`).
     Glb,
 }
 
 impl MeshFormat {
+    /// The format named by `path`'s extension (case-insensitive); an error for any other.
     pub fn from_path(path: &Path) -> Result<Self> {
         match path
             .extension()
@@ -134,6 +138,8 @@ pub fn stage(
     Ok(staged)
 }
 
+/// Writes `mesh` as OBJ: positions, normals, patch `(u, v)` as texture coordinates,
+/// faces indexing all three alike.
 pub fn write_obj(w: &mut dyn Write, mesh: &Mesh) -> std::io::Result<()> {
     writeln!(
         w,
@@ -157,6 +163,7 @@ pub fn write_obj(w: &mut dyn Write, mesh: &Mesh) -> std::io::Result<()> {
     Ok(())
 }
 
+/// Writes `mesh` as ASCII PLY: per vertex position, normal, patch `(u, v)` and patch id.
 pub fn write_ply(w: &mut dyn Write, mesh: &Mesh) -> std::io::Result<()> {
     writeln!(w, "ply\nformat ascii 1.0\ncomment tessera")?;
     writeln!(w, "element vertex {}", mesh.vertices.len())?;

@@ -19,7 +19,9 @@ use crate::error::{Error, Result};
 /// The raw content of a teaset file: patches as 0-based indices into `vertices`.
 #[derive(Clone, Debug)]
 pub struct TeasetFile {
+    /// The control points, in file order.
     pub vertices: Vec<Vec3>,
+    /// Each patch's 4×4 net, row-major, as 0-based indices into `vertices`.
     pub patches: Vec<[u32; 16]>,
 }
 
