@@ -140,6 +140,29 @@ fn test(extra: &[String]) -> Result<(), String> {
         "-D",
         "warnings",
     ]))?;
+    // An embedding renderer turns the headless helpers off: the stage builds without them.
+    run(cargo().args([
+        "clippy",
+        "-p",
+        "tessera-wgpu",
+        "--no-default-features",
+        "--locked",
+        "--",
+        "-D",
+        "warnings",
+    ]))?;
+    // The library crates' docs build without a warning (every public item documented).
+    run(cargo()
+        .args([
+            "doc",
+            "--no-deps",
+            "--locked",
+            "-p",
+            "tessera-core",
+            "-p",
+            "tessera-wgpu",
+        ])
+        .env("RUSTDOCFLAGS", "-D warnings"))?;
     let mut t = cargo();
     t.args(["test", "--workspace", "--locked"]);
     if !extra.is_empty() {

@@ -182,9 +182,8 @@ pub(crate) fn gpu_median_ms(
 }
 
 /// How long [`gpu_median_ms`] runs the work untimed first. A discrete GPU left idle
-/// while the CPU reference ran drops its clocks: on an NVIDIA H100 the Catmull-Clark
-/// stage's median of three runs read up to 4× its back-to-back time without this. On
-/// lavapipe one run is longer than this, so it costs one run.
+/// while the CPU reference ran drops its clocks, and the first timed runs would read
+/// its ramp-up; where one run is longer than this, it costs one run.
 const WARM_UP_MS: f64 = 200.0;
 
 /// One run of what `record` puts into an encoder: recorded, submitted and waited for (ms).

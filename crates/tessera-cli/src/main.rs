@@ -23,7 +23,7 @@ fn main() -> std::process::ExitCode {
     }
 }
 
-/// Without a session (no `XDG_RUNTIME_DIR`), Mesa's device-select Vulkan layer probes for
+/// Without a desktop login (no `XDG_RUNTIME_DIR`), Mesa's device-select Vulkan layer probes for
 /// a Wayland display and libwayland prints an error line per probe; the layer only
 /// reorders adapters, which a headless run does not need. Set before any thread starts.
 fn quiet_headless_vulkan() {

@@ -109,6 +109,31 @@ fn stats_with_spec_keys(stats: &Path, extra: &[&str]) -> serde_json::Value {
     json
 }
 
+/// Without any Vulkan driver the render fails in one line that says how to get one, and
+/// writes nothing.
+#[test]
+fn no_adapter_says_how_to_get_one() {
+    let png = tmp("no_adapter.png");
+    let _ = std::fs::remove_file(&png);
+    let out = tessera()
+        .env("VK_ICD_FILENAMES", "/nonexistent/icd.json")
+        .env("VK_DRIVER_FILES", "/nonexistent/icd.json")
+        .env_remove("WGPU_BACKEND")
+        .args(["render", teapot().to_str().unwrap(), "-o"])
+        .arg(&png)
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{stderr}");
+    assert_eq!(stderr.trim_end().lines().count(), 1, "{stderr}");
+    assert!(stderr.contains("no GPU adapter"), "{stderr}");
+    assert!(
+        stderr.contains("apt-get install mesa-vulkan-drivers"),
+        "{stderr}"
+    );
+    assert!(!png.exists());
+}
+
 /// `--tolerance-rel` and the stats' `bbox_diag` speak of one box, the control points':
 /// on the pyramid it is 6.0 long across, where the limit surface's is much smaller.
 #[test]

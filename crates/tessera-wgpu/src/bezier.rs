@@ -162,13 +162,12 @@ impl Pipelines {
 
 /// The kernels that include `shaders/shared/need.wgsl`, with its `EDGE_TEST` constant
 /// fixed. A CPU device runs both sides of every branch, so a test chosen at run time made
-/// each decision pay for all four; fixed, the compiler drops the other three
-/// (`edge_decide` 2.3× faster on lavapipe). `tri_emit` runs no test but includes the
-/// file, so it needs the constant too.
+/// each decision pay for all four; fixed, the compiler drops the other three.
+/// `tri_emit` runs no test but includes the file, so it needs the constant too.
 ///
 /// The triangle kernels' private arrays are sized for `array_depth`: every invocation
-/// zeroes them, and sized for `MAX_DEPTH_LIMIT` they cost `tri_emit` about a sixth of
-/// its time at depth 6 on lavapipe.
+/// zeroes them, so arrays sized for `MAX_DEPTH_LIMIT` would cost every run at the
+/// common depths what only the deepest need.
 struct TestKernels {
     edge_decide: Kernel,
     tri_mark: Kernel,

@@ -21,12 +21,16 @@ pub struct Gpu {
 
 impl Gpu {
     /// The first adapter wgpu finds (`WGPU_BACKEND` and `WGPU_ADAPTER_NAME` narrow the
-    /// choice), with the limits the stage needs raised to what the adapter allows and the
-    /// renderer's optional features (wireframe) where the adapter has them.
+    /// choice), with the limits the stage needs raised to what the adapter allows, and
+    /// the renderer's optional features (wireframe) and timestamp queries
+    /// ([`crate::GpuTimer`]) where the adapter has them.
     pub fn new() -> Result<Gpu> {
-        Self::with_optional_features(crate::render::MeshRenderer::required_features(
-            wgpu::Features::all(),
-        ))
+        Self::with_optional_features(Self::optional_features())
+    }
+
+    fn optional_features() -> wgpu::Features {
+        crate::render::MeshRenderer::required_features(wgpu::Features::all())
+            | wgpu::Features::TIMESTAMP_QUERY
     }
 
     /// As [`new`](Self::new), with those of the `optional` features that the adapter has
@@ -38,10 +42,7 @@ impl Gpu {
     /// As [`new`](Self::new), with the device's limits chosen by `limits` from the
     /// adapter's (tests use it to play a device smaller than the one at hand).
     pub fn with_limits(limits: impl FnOnce(&wgpu::Limits) -> wgpu::Limits) -> Result<Gpu> {
-        Self::build(
-            crate::render::MeshRenderer::required_features(wgpu::Features::all()),
-            limits,
-        )
+        Self::build(Self::optional_features(), limits)
     }
 
     fn build(

@@ -568,3 +568,63 @@ fn a_model_larger_than_the_device_allows_is_an_error_not_a_wgpu_failure() {
     }
     gpu.check().expect("no wgpu errors");
 }
+
+#[test]
+fn a_frame_loop_grows_the_buffers_without_a_blocking_run() {
+    // What a renderer does: `prepare` and submit every frame, never `run_blocking`. The
+    // first frame overflows one-element buffers and draws nothing; a later `prepare`
+    // reads that status back without waiting and grows, and the mesh it then draws is
+    // the CPU reference's.
+    let gpu = gpu();
+    let model = model("opensubdiv/catmark_torus.obj");
+    let params = CcParams {
+        tolerance: Tolerance::Relative(3e-3),
+        max_depth: 5,
+        first_split: Default::default(),
+        leaf_bound: Default::default(),
+    };
+    let tiny = CcCapacities {
+        cells: 1,
+        leaves: 1,
+        search_leaves: 1,
+        poly: 1,
+        indices: 1,
+        hash_slots: 1,
+    };
+    let mut stage = CcStage::with_capacity(
+        &gpu.device,
+        &gpu.queue,
+        &kernels(&gpu),
+        &model,
+        &params,
+        tiny,
+    )
+    .expect("stage");
+    let mut drawn = Vec::new();
+    for _frame in 0..8 {
+        let mut encoder = gpu.device.create_command_encoder(&Default::default());
+        stage
+            .prepare(&gpu.device, &gpu.queue, &mut encoder)
+            .expect("prepare");
+        gpu.queue.submit([encoder.finish()]);
+        gpu.wait().expect("frame done");
+        let args: tessera_core::gpu_types::DrawIndexedIndirectArgs = bytemuck::pod_read_unaligned(
+            &gpu.read_buffer(stage.output().indirect(), 0, 20)
+                .expect("draw args"),
+        );
+        drawn.push(args.index_count);
+        if args.index_count > 0 {
+            break;
+        }
+    }
+    assert_eq!(drawn[0], 0, "one-element buffers overflow: {drawn:?}");
+    assert!(*drawn.last().unwrap() > 0, "never grew: {drawn:?}");
+    let status = stage.read_status(&gpu.device).expect("status");
+    assert!(!status.overflowed());
+    let mesh = stage
+        .read_mesh(&gpu.device, &gpu.queue, &status)
+        .expect("mesh");
+    let cpu = tessellate_adaptive(&model, &params).expect("cpu");
+    same_mesh(&mesh, &cpu.mesh, size(&model)).expect("the grown frame draws the CPU's mesh");
+    gpu.check().expect("no wgpu errors");
+}

@@ -63,14 +63,20 @@ fn the_readme_snippet_is_taken_from_the_example() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
     let readme = std::fs::read_to_string(root.join("../../README.md")).expect("README");
     let example = std::fs::read_to_string(root.join("examples/embed.rs")).expect("example");
-    let start = readme.find("<!-- embed-example").expect("the snippet's marker");
+    let start = readme
+        .find("<!-- embed-example")
+        .expect("the snippet's marker");
     let block = &readme[start..];
-    let open = block.find("```rust\n").expect("a rust block after the marker") + 8;
+    let open = block
+        .find("```rust\n")
+        .expect("a rust block after the marker")
+        + 8;
     let snippet = &block[open..open + block[open..].find("```").expect("closed")];
     assert!(snippet.lines().count() > 10, "{snippet}");
     is_excerpt(snippet, &example).unwrap_or_else(|e| panic!("README: {e}"));
     // The check fails on a line the example does not have, and on lines out of order.
     assert!(is_excerpt("cc.prepare(&device, &mut encoder)?;", &example).is_err());
-    let swapped = "cc.prepare(&device, &queue, &mut encoder)?;\nlet kernels = Kernels::new(&device);";
+    let swapped =
+        "cc.prepare(&device, &queue, &mut encoder)?;\nlet kernels = Kernels::new(&device);";
     assert!(is_excerpt(swapped, &example).is_err());
 }

@@ -34,8 +34,7 @@ pub struct CcModelBuffers {
     pub splits: wgpu::Buffer,
     /// The Bézier nets ([`NetTexture`], binding 23): a read-only `rgba32float` storage
     /// texture, where a storage buffer read at per-lane addresses is a loop over the
-    /// lanes on a CPU device (the nets' reads were a fifth of the mark kernel's samples
-    /// on lavapipe).
+    /// lanes on a CPU device, and the mark kernel reads nets more than anything else.
     pub nets: wgpu::Texture,
     nets_view: wgpu::TextureView,
     pub corners: wgpu::Buffer,
