@@ -49,14 +49,16 @@ pub fn parse_gltf(path: &Path, bytes: &[u8]) -> Result<ControlMesh> {
     let root = gltf::Document::from_json(root)
         .map_err(|e| invalid(e.to_string()))?
         .into_json();
-    let buffers = load_buffers(path, &root, blob)?;
-    // What the file and its buffers could describe: the bound on every count below.
-    let budget = bytes.len() + buffers.iter().map(Vec::len).sum::<usize>();
+    let sources = read_sources(path, &root)?;
+    let buffers = buffer_bytes(path, &root, blob, &sources)?;
+    // What the file and the files it names could describe: the bound on every count below.
+    let budget = bytes.len() + sources.iter().map(Vec::len).sum::<usize>();
     let mut reader = Reader {
         path,
         root: &root,
         buffers: &buffers,
         budget,
+        read: 0,
         mesh: ControlMesh {
             source: path.to_path_buf(),
             ..ControlMesh::default()
@@ -71,33 +73,37 @@ pub fn parse_gltf(path: &Path, bytes: &[u8]) -> Result<ControlMesh> {
     match scene.and_then(|s| root.scenes.get(s).map(|scene| (s, scene))) {
         Some((s, scene)) => {
             // glTF nodes form trees: a node reached twice (a cycle, or a child that is
-            // also a root) is an error, not an endless or exponential walk.
+            // also a root) is an error, not an endless or exponential walk. Nodes are
+            // marked when pushed, so the stack holds each at most once.
             let mut seen = vec![false; root.nodes.len()];
-            let mut stack: Vec<(usize, DMat4)> = scene
-                .nodes
-                .iter()
-                .map(|n| (n.value(), DMat4::IDENTITY))
-                .collect();
-            while let Some((n, parent)) = stack.pop() {
-                let node = root.nodes.get(n).ok_or_else(|| {
-                    invalid(format!(
-                        "scene {s} refers to node {n}, which does not exist"
-                    ))
-                })?;
-                match seen.get_mut(n) {
-                    Some(seen) if !*seen => *seen = true,
-                    _ => {
-                        return Err(invalid(format!(
-                            "node {n} is reached twice from scene {s}: nodes must form trees"
-                        )))
+            let mut enter =
+                |n: usize, world: DMat4, stack: &mut Vec<(usize, DMat4)>| match seen.get_mut(n) {
+                    Some(seen) if !*seen => {
+                        *seen = true;
+                        stack.push((n, world));
+                        Ok(())
                     }
-                }
+                    Some(_) => Err(invalid(format!(
+                        "node {n} is reached twice from scene {s}: nodes must form trees"
+                    ))),
+                    None => Err(invalid(format!(
+                        "scene {s} reaches node {n}, which does not exist"
+                    ))),
+                };
+            let mut stack = Vec::new();
+            for n in &scene.nodes {
+                enter(n.value(), DMat4::IDENTITY, &mut stack)?;
+            }
+            while let Some((n, parent)) = stack.pop() {
+                let Some(node) = root.nodes.get(n) else {
+                    continue;
+                };
                 let world = parent * node_matrix(node);
                 if let Some(m) = node.mesh {
                     reader.add_mesh(m.value(), world)?;
                 }
-                if let Some(children) = &node.children {
-                    stack.extend(children.iter().map(|c| (c.value(), world)));
+                for c in node.children.iter().flatten() {
+                    enter(c.value(), world, &mut stack)?;
                 }
             }
         }
@@ -259,30 +265,58 @@ fn check_indices(root: &json::Root) -> std::result::Result<(), String> {
     Ok(())
 }
 
-/// Each buffer's bytes, cut to its declared length.
-fn load_buffers(path: &Path, root: &json::Root, blob: Option<&[u8]>) -> Result<Vec<Vec<u8>>> {
+/// The data behind each distinct buffer URI (decoded `data:` URIs, files), in order of
+/// first use: a file that many buffers name is read once.
+fn read_sources(path: &Path, root: &json::Root) -> Result<Vec<Vec<u8>>> {
+    let mut seen = std::collections::HashSet::new();
+    let mut sources = Vec::new();
+    for (i, buffer) in root.buffers.iter().enumerate() {
+        if let Some(uri) = &buffer.uri {
+            if seen.insert(uri.as_str()) {
+                sources.push(read_uri(path, i, uri)?);
+            }
+        }
+    }
+    Ok(sources)
+}
+
+/// Each buffer's bytes, cut to its declared length: slices of the GLB chunk or of
+/// `sources` (never copies, however many buffers share them).
+fn buffer_bytes<'a>(
+    path: &Path,
+    root: &json::Root,
+    blob: Option<&'a [u8]>,
+    sources: &'a [Vec<u8>],
+) -> Result<Vec<&'a [u8]>> {
+    let mut source_of = HashMap::new();
+    for buffer in &root.buffers {
+        if let Some(uri) = &buffer.uri {
+            let next = source_of.len();
+            source_of.entry(uri.as_str()).or_insert(next);
+        }
+    }
     let mut buffers = Vec::with_capacity(root.buffers.len());
     for (i, buffer) in root.buffers.iter().enumerate() {
-        let mut data = match &buffer.uri {
-            None => blob
-                .ok_or_else(|| {
-                    Error::input(path, "buffer refers to a GLB binary chunk the file lacks")
-                })?
-                .to_vec(),
-            Some(uri) => read_uri(path, i, uri)?,
+        let data: &[u8] = match &buffer.uri {
+            None => blob.ok_or_else(|| {
+                Error::input(path, "buffer refers to a GLB binary chunk the file lacks")
+            })?,
+            Some(uri) => source_of
+                .get(uri.as_str())
+                .and_then(|&k| sources.get(k))
+                .map_or(&[], Vec::as_slice),
         };
         let declared = usize::try_from(buffer.byte_length.0).unwrap_or(usize::MAX);
-        if data.len() < declared {
-            return Err(Error::input(
+        let data = data.get(..declared).ok_or_else(|| {
+            Error::input(
                 path,
                 format!(
                     "buffer {i} holds {} bytes, {} declared",
                     data.len(),
                     buffer.byte_length.0
                 ),
-            ));
-        }
-        data.truncate(declared);
+            )
+        })?;
         buffers.push(data);
     }
     Ok(buffers)
@@ -325,14 +359,22 @@ fn node_matrix(node: &json::Node) -> DMat4 {
     )
 }
 
+/// How many times over the file's data may be read (see [`Reader::read`]): a mesh of
+/// many materials shares one `POSITION` accessor among that many primitives.
+const REREAD: usize = 16;
+
 /// Reads meshes into one welded control mesh.
 struct Reader<'a> {
     path: &'a Path,
     root: &'a json::Root,
-    buffers: &'a [Vec<u8>],
+    buffers: &'a [&'a [u8]],
     /// At most this many elements in any accessor read without data behind it, and
     /// this many triangles and points in all (instances included).
     budget: usize,
+    /// Positions and indices decoded so far, over every primitive and instance: at most
+    /// [`REREAD`] times the budget, so that instancing or primitives sharing one
+    /// accessor cannot multiply the work without end.
+    read: usize,
     mesh: ControlMesh,
     weld: HashMap<[u64; 3], u32>,
     skipped: usize,
@@ -366,6 +408,12 @@ impl Reader<'_> {
                 Some(a) => self.indices(a.value())?,
                 None => (0..positions.len() as u32).collect(),
             };
+            self.read += positions.len() + indices.len();
+            if self.read > REREAD * self.budget {
+                return Err(self.err(format!(
+                    "mesh {m}: the primitives and nodes read the file's data more than {REREAD} times over"
+                )));
+            }
             if !indices.len().is_multiple_of(3) {
                 return Err(self.err(format!(
                     "mesh {m}: {} indices is not a multiple of 3",
@@ -842,6 +890,34 @@ mod tests {
     }
 
     #[test]
+    fn rereading_shared_accessors_is_bounded() {
+        // Primitives sharing one large POSITION accessor, one triangle each.
+        let (mut json, _) = triangle();
+        let points = 10_000;
+        let mut bin: Vec<u8> = (0..points)
+            .flat_map(|k| [k as f32, (k % 7) as f32, 0.0])
+            .flat_map(f32::to_le_bytes)
+            .collect();
+        let at = bin.len();
+        bin.extend_from_slice(&[0, 1, 2, 0]);
+        json["buffers"][0]["byteLength"] = json!(bin.len());
+        json["bufferViews"][0]["byteLength"] = json!(at);
+        json["bufferViews"][1]["byteOffset"] = json!(at);
+        json["accessors"][0]["count"] = json!(points);
+        let with = |json: &mut Value, primitives: usize| {
+            let prim = json["meshes"][0]["primitives"][0].clone();
+            json["meshes"][0]["primitives"] = Value::Array(vec![prim; primitives]);
+            parse_gltf(Path::new("t.glb"), &glb(json, &bin)).map_err(|e| e.to_string())
+        };
+        assert_eq!(with(&mut json, 100).unwrap().faces.len(), 100);
+        let e = with(&mut json, 400).unwrap_err();
+        assert!(
+            e.ends_with("the primitives and nodes read the file's data more than 16 times over"),
+            "{e}"
+        );
+    }
+
+    #[test]
     fn glb_containers_are_checked() {
         let (json, bin) = triangle();
         let good = glb(&json, &bin);
@@ -873,6 +949,32 @@ mod tests {
     fn quoted_control_characters_stay_on_one_line() {
         let e = err_with(|j| j["extensionsRequired"] = json!(["KHR_a\nb"]));
         assert!(e.contains("KHR_a\\nb"), "{e}");
+    }
+
+    #[test]
+    fn external_buffers_are_read_once_and_named_in_errors() {
+        let dir = std::env::temp_dir().join(format!("tessera-gltf-ext-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let (mut json, bin) = triangle();
+        std::fs::write(dir.join("t.bin"), &bin).unwrap();
+        let buffer = json!({"uri": "t.bin", "byteLength": bin.len()});
+        json["buffers"] = json!([buffer, buffer]);
+        json["bufferViews"][1]["buffer"] = json!(1);
+        let file = dir.join("t.gltf");
+        std::fs::write(&file, json.to_string()).unwrap();
+        assert_eq!(load_gltf(&file).unwrap().faces.len(), 1);
+        json["buffers"][1]["uri"] = json!("missing.bin");
+        std::fs::write(&file, json.to_string()).unwrap();
+        let e = load_gltf(&file).unwrap_err().to_string();
+        assert!(
+            e.starts_with(&format!(
+                "{}: buffer 1: cannot read {}: ",
+                file.display(),
+                dir.join("missing.bin").display()
+            )),
+            "{e}"
+        );
+        let _ = std::fs::remove_dir_all(&dir);
     }
 
     #[cfg(unix)]
