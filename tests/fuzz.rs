@@ -685,7 +685,12 @@ mod tests {
         assert_eq!(m(7).bytes, m(7).bytes);
         let distinct: std::collections::HashSet<Vec<u8>> = (0..50).map(|i| m(i).bytes).collect();
         assert!(distinct.len() > 45, "{} distinct of 50", distinct.len());
-        assert!(!distinct.contains(&input.seed.bytes()));
+        // A mutation can undo itself (a byte set to its own value, a line swapped with
+        // itself), rarely.
+        let unchanged = (0..50)
+            .filter(|&i| m(i).bytes == input.seed.bytes())
+            .count();
+        assert!(unchanged <= 2, "{unchanged} of 50 unchanged");
     }
 
     #[test]
@@ -693,7 +698,7 @@ mod tests {
         let t = b"v 1.5 -2e3 x3\nf 1 2/3 TEXCOORD_0\n";
         let spans: Vec<&[u8]> = number_spans(t).iter().map(|&(s, e)| &t[s..e]).collect();
         assert_eq!(spans, [&b"1.5"[..], b"-2e3", b"1", b"2", b"3"]);
-        assert_eq!(line_spans(t), [(0, 14), (14, 34)]);
+        assert_eq!(line_spans(t), [(0, 14), (14, 33)]);
         assert_eq!(base64(b"ab"), "YWI=");
         assert_eq!(base64(b"abc"), "YWJj");
     }

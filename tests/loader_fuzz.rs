@@ -314,13 +314,17 @@ fn fuzz_loader(loader: &str, load: fn(&Path) -> Result<(), String>) {
         .expect("known loader")
         .1;
     // The seeds themselves load: mutants start from valid files.
-    let dir = std::env::temp_dir().join(format!("tessera-fuzz-seeds-{}", std::process::id()));
+    let dir = std::env::temp_dir().join(format!(
+        "tessera-fuzz-seeds-{}-{loader}",
+        std::process::id()
+    ));
     std::fs::create_dir_all(&dir).unwrap();
     for input in &inputs {
         let file = dir.join(format!("{}.{}", input.name, input.ext));
         std::fs::write(&file, input.seed.bytes()).unwrap();
         load(&file).unwrap_or_else(|e| panic!("the unmutated {} fails: {e}", input.name));
     }
+    let _ = std::fs::remove_dir_all(&dir);
     let mutants = env_number("TESSERA_FUZZ_MUTANTS", 1000) as usize;
     let seed = env_number("TESSERA_FUZZ_SEED", fuzz::DEFAULT_SEED);
     let t = Instant::now();
