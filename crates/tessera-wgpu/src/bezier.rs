@@ -459,7 +459,10 @@ fn upload(device: &wgpu::Device, label: &str, bytes: &[u8]) -> wgpu::Buffer {
     device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
         label: Some(label),
         contents,
-        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+        // COPY_DST: moved patches write them again (`update_model`).
+        usage: wgpu::BufferUsages::STORAGE
+            | wgpu::BufferUsages::COPY_SRC
+            | wgpu::BufferUsages::COPY_DST,
     })
 }
 
@@ -687,6 +690,18 @@ impl BezierStage {
                 rows_per_image: None,
             },
             self.buffers.nets.texture().size(),
+        );
+        // Orientation (which way a patch's normal faces) follows the geometry.
+        let topology = TopologyTexture::new(&prepared.topo, &prepared.curves);
+        queue.write_texture(
+            self.buffers.topology.texture().as_image_copy(),
+            bytemuck::cast_slice(&topology.texels),
+            wgpu::TexelCopyBufferLayout {
+                offset: 0,
+                bytes_per_row: Some(16 * topology.width),
+                rows_per_image: None,
+            },
+            self.buffers.topology.texture().size(),
         );
         queue.write_buffer(
             &self.buffers.coarse_records,

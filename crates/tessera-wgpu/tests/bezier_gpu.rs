@@ -673,3 +673,58 @@ fn textures_past_the_texture_limit_are_an_error() {
         .expect("the stage still runs");
     gpu.check().expect("no wgpu validation errors");
 }
+
+#[test]
+fn moved_patches_are_written_in_place_and_tessellate_as_on_the_cpu() {
+    // Animation of Bézier input: the CPU prepares the moved patches again and the stage
+    // writes only their nets, coarse vertices and maps; the next run is what a stage
+    // made from the moved model gives, byte for byte, and the CPU reference's triangle
+    // count. A model of another layout is refused.
+    let gpu = gpu();
+    let teapot = load("teapot");
+    let params = AdaptiveParams {
+        test: EdgeTest::Map4p,
+        threshold: 0.01,
+        max_depth: 6,
+    };
+    let kernels = Kernels::new(&gpu.device);
+    let prepared = PreparedBezier::new(&teapot);
+    let mut stage =
+        BezierStage::new(&gpu.device, &gpu.queue, &kernels, &prepared, &params).expect("stage");
+    let before = stage.run_blocking(&gpu.device, &gpu.queue).expect("run");
+    let moved_points: Vec<Vec3> = teapot
+        .points
+        .iter()
+        .map(|p| Vec3::new(p.x * (1.0 + 0.3 * p.z.sin()), p.y, 1.5 * p.z))
+        .collect();
+    let moved = PreparedBezier::new(&tessera_core::bezier::BezierModel::from_nets(
+        moved_points,
+        teapot.nets.clone(),
+    ));
+    stage.update_model(&gpu.queue, &moved).expect("same layout");
+    let status = stage.run_blocking(&gpu.device, &gpu.queue).expect("run");
+    let mesh = stage
+        .read_mesh(&gpu.device, &gpu.queue, &status)
+        .expect("mesh");
+    let mut fresh =
+        BezierStage::new(&gpu.device, &gpu.queue, &kernels, &moved, &params).expect("stage");
+    let fresh_status = fresh.run_blocking(&gpu.device, &gpu.queue).expect("run");
+    let want = fresh
+        .read_mesh(&gpu.device, &gpu.queue, &fresh_status)
+        .expect("mesh");
+    assert_eq!(mesh, want, "updated in place = made anew");
+    let cpu = tessellate_adaptive(&moved, &params).expect("cpu").mesh;
+    let (gpu_tris, cpu_tris) = (mesh.triangle_count() as f64, cpu.triangle_count() as f64);
+    assert!(
+        (gpu_tris - cpu_tris).abs() <= 0.01 * cpu_tris,
+        "{gpu_tris} triangles against the CPU's {cpu_tris}"
+    );
+    assert_ne!(
+        (before.vertices, before.indices),
+        (status.vertices, status.indices),
+        "moving the patches changes the tessellation"
+    );
+    let teacup = model("teacup");
+    assert!(stage.update_model(&gpu.queue, &teacup).is_err());
+    gpu.check().expect("no wgpu validation errors");
+}
