@@ -22,6 +22,18 @@ fn gpu() -> Gpu {
     Gpu::new().expect("a wgpu adapter (CI installs Mesa's lavapipe; see `cargo xtask test`)")
 }
 
+/// Buffers of one element each: every run on them overflows.
+fn one_of_each() -> CcCapacities {
+    CcCapacities {
+        cells: 1,
+        leaves: 1,
+        search_leaves: 1,
+        poly: 1,
+        indices: 1,
+        hash_slots: 1,
+    }
+}
+
 fn kernels(gpu: &Gpu) -> Kernels {
     Kernels::new(&gpu.device)
 }
@@ -356,14 +368,7 @@ fn tiny_capacities_grow_to_the_same_mesh_and_runs_are_byte_identical() {
         first_split: Default::default(),
         leaf_bound: Default::default(),
     };
-    let tiny = CcCapacities {
-        cells: 1,
-        leaves: 1,
-        search_leaves: 1,
-        poly: 1,
-        indices: 1,
-        hash_slots: 1,
-    };
+    let tiny = one_of_each();
     let mut stage = CcStage::with_capacity(
         &gpu.device,
         &gpu.queue,
@@ -583,14 +588,7 @@ fn a_frame_loop_grows_the_buffers_without_a_blocking_run() {
         first_split: Default::default(),
         leaf_bound: Default::default(),
     };
-    let tiny = CcCapacities {
-        cells: 1,
-        leaves: 1,
-        search_leaves: 1,
-        poly: 1,
-        indices: 1,
-        hash_slots: 1,
-    };
+    let tiny = one_of_each();
     let mut stage = CcStage::with_capacity(
         &gpu.device,
         &gpu.queue,
