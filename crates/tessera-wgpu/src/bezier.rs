@@ -290,6 +290,9 @@ pub struct BezierStage {
     /// The parameters last written to their uniform.
     written: Option<BezierParams>,
     readback: StatusReadback,
+    /// The newest status read back, and whether the buffers are still to grow for it.
+    latest: Option<(BezierStatus, bool)>,
+    growths: u32,
     prepared_layout: tessera_core::bezier::prepare::CoarseLayout,
     params: AdaptiveParams,
     buffers: Buffers,
@@ -623,6 +626,8 @@ impl BezierStage {
             map_scale: prepared.map_scale,
             map_cells,
             written: None,
+            latest: None,
+            growths: 0,
             readback: StatusReadback::new(
                 "tessera bezier status readback",
                 std::mem::size_of::<BezierStatus>() as u64,
@@ -794,8 +799,8 @@ impl BezierStage {
         encoder: &mut wgpu::CommandEncoder,
         timestamps: Option<RunTimestamps<'_>>,
     ) -> Result<()> {
-        if let Some(bytes) = self.readback.poll(device) {
-            let status: BezierStatus = bytemuck::pod_read_unaligned(&bytes);
+        self.poll_status(device);
+        if let Some((status, true)) = self.latest {
             self.grow(device, &status)?;
         }
         self.write_params(queue);
@@ -948,6 +953,22 @@ impl BezierStage {
         Ok(bytemuck::pod_read_unaligned(&bytes))
     }
 
+    /// The newest run's status that has arrived, without waiting (a frame or so late);
+    /// `None` before the first. After an overflow (`status.overflow != 0`) the next
+    /// [`prepare`](Self::prepare) grows the buffers: record a run again to draw the mesh.
+    pub fn poll_status(&mut self, device: &wgpu::Device) -> Option<BezierStatus> {
+        if let Some(bytes) = self.readback.poll(device) {
+            let status: BezierStatus = bytemuck::pod_read_unaligned(&bytes);
+            self.latest = Some((status, status.overflow != 0));
+        }
+        self.latest.map(|(s, _)| s)
+    }
+
+    /// How many times the output buffers have been reallocated to fit a run.
+    pub fn growths(&self) -> u32 {
+        self.growths
+    }
+
     /// Grows the output buffers to what `status` says the run needed (with headroom).
     /// Returns whether anything was reallocated, or an error when the device cannot hold
     /// buffers that large (nothing is reallocated then). Public for the test that asks
@@ -981,6 +1002,8 @@ impl BezierStage {
         );
         self.rebind(device);
         self.readback.new_generation();
+        self.latest = self.latest.map(|(s, _)| (s, false));
+        self.growths += 1;
         Ok(true)
     }
 

@@ -61,13 +61,16 @@ impl<'a> Passes<'a> {
 /// Times a stage's runs on the GPU with a two-query timestamp set: pass
 /// [`timestamps`](Self::timestamps) to the stage's `prepare_timed`, record
 /// [`resolve`](Self::resolve) after it in the same encoder, submit, then read
-/// [`read_ms`](Self::read_ms).
+/// [`try_read_ms`](Self::try_read_ms) in a later frame (it never waits) or
+/// [`read_ms`](Self::read_ms) (it waits).
 pub struct GpuTimer {
     query_set: wgpu::QuerySet,
     resolved: wgpu::Buffer,
-    readback: wgpu::Buffer,
+    readback: StatusReadback,
     /// Nanoseconds per timestamp tick.
     period: f32,
+    /// The newest time read.
+    latest: Option<f64>,
 }
 
 impl GpuTimer {
@@ -77,29 +80,21 @@ impl GpuTimer {
         if !device.features().contains(wgpu::Features::TIMESTAMP_QUERY) {
             return None;
         }
-        let buffer = |label, usage| {
-            device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some(label),
-                size: 16,
-                usage,
-                mapped_at_creation: false,
-            })
-        };
         Some(GpuTimer {
             query_set: device.create_query_set(&wgpu::QuerySetDescriptor {
                 label: Some("tessera run timestamps"),
                 ty: wgpu::QueryType::Timestamp,
                 count: 2,
             }),
-            resolved: buffer(
-                "tessera run timestamps resolved",
-                wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
-            ),
-            readback: buffer(
-                "tessera run timestamps readback",
-                wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
-            ),
+            resolved: device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("tessera run timestamps resolved"),
+                size: 16,
+                usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
+                mapped_at_creation: false,
+            }),
+            readback: StatusReadback::new("tessera run timestamps readback", 16),
             period: queue.get_timestamp_period(),
+            latest: None,
         })
     }
 
@@ -112,18 +107,37 @@ impl GpuTimer {
         }
     }
 
-    /// Records the resolution of the two timestamps, after the timed run.
-    pub fn resolve(&self, encoder: &mut wgpu::CommandEncoder) {
+    /// Records the resolution of the two timestamps, after the timed run, and their
+    /// copy back (mapped when the caller submits).
+    pub fn resolve(&mut self, device: &wgpu::Device, encoder: &mut wgpu::CommandEncoder) {
         encoder.resolve_query_set(&self.query_set, 0..2, &self.resolved, 0);
-        encoder.copy_buffer_to_buffer(&self.resolved, 0, &self.readback, 0, 16);
+        let resolved = &self.resolved;
+        self.readback.record(device, encoder, |encoder, readback| {
+            encoder.copy_buffer_to_buffer(resolved, 0, readback, 0, 16)
+        });
     }
 
-    /// The GPU time of the timed run, in milliseconds (waits for the submission that
-    /// holds [`resolve`](Self::resolve)).
-    pub fn read_ms(&self, device: &wgpu::Device) -> Result<f64> {
-        let bytes = crate::readback::map_read(device, &self.readback)?;
+    /// The GPU time of the last timed run, in milliseconds (waits for the submission that
+    /// holds its [`resolve`](Self::resolve)).
+    pub fn read_ms(&mut self, device: &wgpu::Device) -> Result<f64> {
+        let bytes = self.readback.wait_last(device)?;
+        let ms = self.ms(&bytes);
+        self.latest = Some(ms);
+        Ok(ms)
+    }
+
+    /// The GPU time of the newest timed run whose timestamps have arrived, without
+    /// waiting (a frame or so late); `None` before the first.
+    pub fn try_read_ms(&mut self, device: &wgpu::Device) -> Option<f64> {
+        if let Some(bytes) = self.readback.poll(device) {
+            self.latest = Some(self.ms(&bytes));
+        }
+        self.latest
+    }
+
+    fn ms(&self, bytes: &[u8]) -> f64 {
         let stamps: [u64; 2] = bytemuck::pod_read_unaligned(&bytes[..16]);
-        Ok(stamps[1].saturating_sub(stamps[0]) as f64 * f64::from(self.period) * 1e-6)
+        stamps[1].saturating_sub(stamps[0]) as f64 * f64::from(self.period) * 1e-6
     }
 }
 
@@ -253,6 +267,10 @@ impl StatusReadback {
             let Some(bytes) = read_mapped(slot) else {
                 continue;
             };
+            // The last run's status stays at hand for `wait_last`.
+            if Some(slot.run) == self.runs.checked_sub(1) {
+                self.last_read = Some((slot.run, bytes.clone()));
+            }
             if slot.generation == self.generation
                 && newest.as_ref().is_none_or(|(run, _)| slot.run > *run)
             {

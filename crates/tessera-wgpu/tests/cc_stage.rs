@@ -617,6 +617,12 @@ fn a_frame_loop_grows_the_buffers_without_a_blocking_run() {
     }
     assert_eq!(drawn[0], 0, "one-element buffers overflow: {drawn:?}");
     assert!(*drawn.last().unwrap() > 0, "never grew: {drawn:?}");
+    assert!(stage.growths() >= 1);
+    // The frame's status arrives without waiting, and says what was drawn.
+    let polled = stage
+        .poll_status(&gpu.device)
+        .expect("a status has arrived");
+    assert_eq!(polled.indices, *drawn.last().unwrap());
     let status = stage.read_status(&gpu.device).expect("status");
     assert!(!status.overflowed());
     let mesh = stage

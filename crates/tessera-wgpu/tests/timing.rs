@@ -18,14 +18,18 @@ fn asset(name: &str) -> std::path::PathBuf {
 /// Records `record` timed, submits, and returns the GPU milliseconds.
 fn timed(
     gpu: &Gpu,
-    timer: &GpuTimer,
+    timer: &mut GpuTimer,
     record: impl FnOnce(&mut wgpu::CommandEncoder, tessera_wgpu::RunTimestamps),
 ) -> f64 {
     let mut encoder = gpu.device.create_command_encoder(&Default::default());
     record(&mut encoder, timer.timestamps());
-    timer.resolve(&mut encoder);
+    timer.resolve(&gpu.device, &mut encoder);
     gpu.queue.submit([encoder.finish()]);
-    timer.read_ms(&gpu.device).expect("timestamps")
+    let ms = timer.read_ms(&gpu.device).expect("timestamps");
+    // The same time, read again later without waiting.
+    gpu.wait().expect("idle");
+    assert_eq!(timer.try_read_ms(&gpu.device), Some(ms));
+    ms
 }
 
 #[test]
@@ -35,7 +39,7 @@ fn every_stage_times_its_run_on_the_gpu() {
         .device
         .features()
         .contains(wgpu::Features::TIMESTAMP_QUERY);
-    let Some(timer) = GpuTimer::new(&gpu.device, &gpu.queue) else {
+    let Some(mut timer) = GpuTimer::new(&gpu.device, &gpu.queue) else {
         assert!(
             !has,
             "the device has timestamp queries but no timer was made"
@@ -70,7 +74,7 @@ fn every_stage_times_its_run_on_the_gpu() {
     )
     .expect("stage");
     let untimed = bezier.run_blocking(&gpu.device, &gpu.queue).expect("run");
-    let ms = timed(&gpu, &timer, |e, t| {
+    let ms = timed(&gpu, &mut timer, |e, t| {
         bezier
             .prepare_timed(&gpu.device, &gpu.queue, e, t)
             .expect("prepare")
@@ -92,7 +96,7 @@ fn every_stage_times_its_run_on_the_gpu() {
     let mut cc =
         CcStage::new(&gpu.device, &gpu.queue, &kernels, &torus, &cc_params).expect("stage");
     let untimed = cc.run_blocking(&gpu.device, &gpu.queue).expect("run");
-    let ms = timed(&gpu, &timer, |e, t| {
+    let ms = timed(&gpu, &mut timer, |e, t| {
         cc.prepare_timed(&gpu.device, &gpu.queue, e, t)
             .expect("prepare")
     });
@@ -108,7 +112,7 @@ fn every_stage_times_its_run_on_the_gpu() {
         &UniformParams { segments: 4 },
     )
     .expect("stage");
-    let ms = timed(&gpu, &timer, |e, t| {
+    let ms = timed(&gpu, &mut timer, |e, t| {
         uniform
             .prepare_timed(&gpu.device, &gpu.queue, e, t)
             .expect("prepare")

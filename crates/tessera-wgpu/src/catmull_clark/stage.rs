@@ -283,6 +283,9 @@ pub struct CcStage {
     root_scan: PrefixSum,
     args: wgpu::Buffer,
     readback: StatusReadback,
+    /// The newest status read back, and whether the buffers are still to grow for it.
+    latest: Option<(CcStatus, bool)>,
+    growths: u32,
     buffers: Buffers,
     binds: Binds,
 }
@@ -378,6 +381,8 @@ impl CcStage {
             root_scan,
             args,
             readback: StatusReadback::new("tessera cc status readback", status_size()),
+            latest: None,
+            growths: 0,
             buffers,
             binds,
         })
@@ -490,10 +495,27 @@ impl CcStage {
     }
 
     fn grow_from_readback(&mut self, device: &wgpu::Device) -> Result<()> {
-        if let Some(bytes) = self.readback.poll(device) {
-            self.grow(device, &status_from_bytes(&bytes))?;
+        self.poll_status(device);
+        if let Some((status, true)) = self.latest {
+            self.grow(device, &status)?;
         }
         Ok(())
+    }
+
+    /// The newest run's status that has arrived, without waiting (a frame or so late);
+    /// `None` before the first. After an overflow the next [`prepare`](Self::prepare)
+    /// grows the buffers: record a run again to draw the mesh.
+    pub fn poll_status(&mut self, device: &wgpu::Device) -> Option<CcStatus> {
+        if let Some(bytes) = self.readback.poll(device) {
+            let status = status_from_bytes(&bytes);
+            self.latest = Some((status, status.overflowed()));
+        }
+        self.latest.map(|(s, _)| s)
+    }
+
+    /// How many times the buffers have been reallocated to fit a run.
+    pub fn growths(&self) -> u32 {
+        self.growths
     }
 
     fn record_run(
@@ -684,6 +706,8 @@ impl CcStage {
         );
         self.buffers = buffers;
         self.readback.new_generation();
+        self.latest = self.latest.map(|(s, _)| (s, false));
+        self.growths += 1;
         Ok(true)
     }
 
