@@ -71,6 +71,15 @@ fn ensure_vulkan() -> Result<(), String> {
         return Ok(());
     }
     eprintln!("xtask: no Vulkan driver found; installing Mesa's lavapipe (mesa-vulkan-drivers)");
+    apt_install(&["mesa-vulkan-drivers", "libvulkan1"])?;
+    if !vulkan_driver_present() {
+        return Err("mesa-vulkan-drivers installed but no Vulkan ICD manifest appeared".into());
+    }
+    Ok(())
+}
+
+/// Debian packages by name, as root or through passwordless sudo.
+fn apt_install(packages: &[&str]) -> Result<(), String> {
     let is_root = Command::new("id")
         .arg("-u")
         .output()
@@ -85,18 +94,49 @@ fn ensure_vulkan() -> Result<(), String> {
         run(&mut c)
     };
     apt(&["update", "-q"])?;
-    apt(&[
-        "install",
-        "-y",
-        "-q",
-        "--no-install-recommends",
-        "mesa-vulkan-drivers",
-        "libvulkan1",
-    ])?;
-    if !vulkan_driver_present() {
-        return Err("mesa-vulkan-drivers installed but no Vulkan ICD manifest appeared".into());
+    let mut install = vec!["install", "-y", "-q", "--no-install-recommends"];
+    install.extend_from_slice(packages);
+    apt(&install)
+}
+
+/// The X server the demo's tests open their windows on (Xvfb, through `xvfb-run`), and
+/// the X libraries winit loads at run time.
+fn ensure_xvfb() -> Result<(), String> {
+    let libs = [
+        "libX11.so.6",
+        "libX11-xcb.so.1",
+        "libXcursor.so.1",
+        "libXrandr.so.2",
+        "libXi.so.6",
+        "libxkbcommon-x11.so.0",
+    ];
+    let lib_present = |name: &str| {
+        [
+            "/usr/lib/x86_64-linux-gnu",
+            "/usr/lib/aarch64-linux-gnu",
+            "/usr/lib",
+            "/lib",
+        ]
+        .iter()
+        .any(|d| Path::new(d).join(name).exists())
+    };
+    let have_server = ["/usr/bin/Xvfb", "/usr/bin/xvfb-run", "/usr/bin/xauth"]
+        .iter()
+        .all(|p| Path::new(p).exists());
+    if have_server && libs.iter().all(|l| lib_present(l)) {
+        return Ok(());
     }
-    Ok(())
+    eprintln!("xtask: installing Xvfb and the X libraries for the demo's tests");
+    apt_install(&[
+        "xvfb",
+        "xauth",
+        "libx11-6",
+        "libx11-xcb1",
+        "libxcursor1",
+        "libxrandr2",
+        "libxi6",
+        "libxkbcommon-x11-0",
+    ])
 }
 
 /// The main job on a fresh machine: a Vulkan driver if there is none, then the CLI's
@@ -130,6 +170,7 @@ fn render(args: &[String]) -> Result<(), String> {
 
 fn test(extra: &[String]) -> Result<(), String> {
     ensure_vulkan()?;
+    ensure_xvfb()?;
     run(cargo().args(["fmt", "--all", "--", "--check"]))?;
     run(cargo().args([
         "clippy",
