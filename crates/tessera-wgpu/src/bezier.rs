@@ -501,6 +501,7 @@ impl BezierStage {
         params: &AdaptiveParams,
         (vertex_capacity, index_capacity): (u32, u32),
     ) -> Result<Self> {
+        kernels.check_device(device)?;
         params.validate()?;
         let l = prepared.layout;
         let counts_len = l.coarse_edges + 2 * l.coarse_triangles + 1;

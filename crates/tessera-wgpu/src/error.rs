@@ -10,6 +10,9 @@ pub enum Error {
     /// The adapter refused the device (limits or features).
     #[error("requesting a device failed: {0}")]
     RequestDevice(String),
+    /// A stage was given [`crate::Kernels`] made for another device.
+    #[error("the kernels were made for another device; make a Kernels for this one")]
+    ForeignKernels,
     /// wgpu reported a validation or out-of-memory error.
     #[error("wgpu error: {0}")]
     Wgpu(String),

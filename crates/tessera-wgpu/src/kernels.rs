@@ -36,6 +36,17 @@ impl Kernels {
         }))
     }
 
+    /// Fails unless these kernels were made for `device`: pipelines of one device cannot
+    /// run on another. wgpu tells devices apart within one `Instance` (their ids), which
+    /// is where a renderer makes its devices.
+    pub(crate) fn check_device(&self, device: &wgpu::Device) -> crate::Result<()> {
+        if &self.0.device == device {
+            Ok(())
+        } else {
+            Err(crate::Error::ForeignKernels)
+        }
+    }
+
     pub(crate) fn bezier(&self) -> &BezierKernels {
         self.0
             .bezier

@@ -120,3 +120,40 @@ fn every_stage_times_its_run_on_the_gpu() {
     plausible("uniform", ms);
     gpu.check().expect("no wgpu errors");
 }
+
+#[test]
+fn kernels_of_another_device_are_refused() {
+    // Pipelines belong to the device that made them: a stage given another device's
+    // kernels (a second device of the same adapter) is an error, not a wgpu failure.
+    let a = Gpu::new().expect("a wgpu adapter");
+    let (device_b, queue_b) =
+        pollster::block_on(a.adapter.request_device(&wgpu::DeviceDescriptor {
+            required_limits: a.device.limits(),
+            ..Default::default()
+        }))
+        .expect("a second device");
+    let kernels = Kernels::new(&a.device);
+    let teapot = BezierModel::load(&asset("teaset/teapot")).expect("teapot");
+    let params = AdaptiveParams {
+        test: EdgeTest::Map4p,
+        threshold: 0.01,
+        max_depth: 6,
+    };
+    let prepared = PreparedBezier::new(&teapot);
+    let err = BezierStage::new(&device_b, &queue_b, &kernels, &prepared, &params)
+        .err()
+        .expect("refused");
+    assert!(matches!(err, tessera_wgpu::Error::ForeignKernels), "{err}");
+    let torus = load_surface(&asset("opensubdiv/catmark_torus.obj")).expect("torus");
+    let uniform = CcUniformStage::new(
+        &device_b,
+        &queue_b,
+        &kernels,
+        &torus,
+        &UniformParams { segments: 2 },
+    );
+    assert!(matches!(uniform, Err(tessera_wgpu::Error::ForeignKernels)));
+    // On its own device the same set works.
+    BezierStage::new(&a.device, &a.queue, &kernels, &prepared, &params).expect("stage");
+    a.check().expect("no wgpu errors");
+}

@@ -327,6 +327,7 @@ impl CcStage {
         params: &CcParams,
         caps: CcCapacities,
     ) -> Result<Self> {
+        kernels.check_device(device)?;
         params.validate(model)?;
         gpu_leaf_bound(params)?;
         let kernels = kernels.cc();

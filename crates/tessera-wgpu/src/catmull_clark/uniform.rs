@@ -100,6 +100,7 @@ impl CcUniformStage {
         model: &SurfaceModel,
         params: &UniformParams,
     ) -> Result<Self> {
+        kernels.check_device(device)?;
         let layout = uniform_patches(&model.mesh);
         let params = layout.params(params.segments)?;
         let kernels = kernels.cc_uniform();
