@@ -7,7 +7,7 @@ use std::time::Instant;
 use serde::Serialize;
 use tessera_core::catmull_clark::{
     surface_samples, tessellate_adaptive, tessellate_uniform, CcParams, CcTessellation,
-    ControlMesh, PatchMesh, SurfaceModel, MAX_DEPTH, TREE_DEPTH,
+    SurfaceModel, MAX_DEPTH, TREE_DEPTH,
 };
 use tessera_core::io::export::MeshFormat;
 use tessera_core::io::load_control_mesh;
@@ -128,7 +128,7 @@ pub fn tessellate(args: TessellateArgs) -> Result<(), Error> {
     timings.load = ms(t);
     let t = Instant::now();
     let model = SurfaceModel::new(
-        patch_mesh(&mut control, args.split_non_manifold)?,
+        tessera_core::catmull_clark::patch_mesh(&mut control, args.split_non_manifold)?,
         TREE_DEPTH,
     );
     timings.prepare = ms(t);
@@ -262,28 +262,9 @@ pub fn tessellate(args: TessellateArgs) -> Result<(), Error> {
     Ok(())
 }
 
-/// The first subdivision level of `control`, cut along its non-manifold edges first
-/// where `split` (`--split-non-manifold`); without it, the error for such an edge says
-/// how to ask for the cut.
-pub fn patch_mesh(control: &mut ControlMesh, split: bool) -> Result<PatchMesh, CoreError> {
-    if split {
-        control.split_non_manifold()?;
-    }
-    PatchMesh::new(control).map_err(|e| match e {
-        CoreError::Parse { file, line, msg } if msg.starts_with("non-manifold edge") => {
-            CoreError::Parse {
-                file,
-                line,
-                msg: format!("{msg} (--split-non-manifold cuts the mesh there)"),
-            }
-        }
-        e => e,
-    })
-}
-
 pub fn info(input: &Path) -> Result<(), Error> {
     let mut control = load_control_mesh(input)?;
-    let mesh = patch_mesh(&mut control, false)?;
+    let mesh = tessera_core::catmull_clark::patch_mesh(&mut control, false)?;
     let mut sizes = std::collections::BTreeMap::new();
     for f in &control.faces {
         *sizes.entry(f.len()).or_insert(0usize) += 1;

@@ -38,7 +38,7 @@ impl StageOutput {
 
 pub fn render(args: RenderArgs) -> Result<(), Error> {
     let t_total = Instant::now();
-    let cc = crate::tessellate::is_control_mesh(&args.input);
+    let cc = tessera_core::io::is_control_mesh(&args.input);
     let test = match (cc, args.method) {
         (false, None | Some(Method::Map4p)) => EdgeTest::Map4p,
         (false, Some(Method::Map2p)) => EdgeTest::Map2p,
@@ -104,7 +104,7 @@ pub fn render(args: RenderArgs) -> Result<(), Error> {
         for w in &control.warnings {
             eprintln!("warning: {w}");
         }
-        let mesh = crate::catmull_clark::patch_mesh(&mut control, args.split_non_manifold)?;
+        let mesh = tessera_core::catmull_clark::patch_mesh(&mut control, args.split_non_manifold)?;
         let model = SurfaceModel::new(mesh, TREE_DEPTH);
         let (lo, hi) = control.positions.iter().fold(
             (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),

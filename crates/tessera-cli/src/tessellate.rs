@@ -148,7 +148,7 @@ pub fn load(input: &Path) -> Result<BezierModel, CoreError> {
 }
 
 fn info(input: &Path) -> Result<(), Error> {
-    if is_control_mesh(input) {
+    if tessera_core::io::is_control_mesh(input) {
         return crate::catmull_clark::info(input);
     }
     let model = load(input)?;
@@ -178,17 +178,8 @@ fn info(input: &Path) -> Result<(), Error> {
     Ok(())
 }
 
-/// Catmull-Clark control meshes are recognised by extension.
-pub fn is_control_mesh(input: &Path) -> bool {
-    let ext = input
-        .extension()
-        .and_then(|e| e.to_str())
-        .map(str::to_ascii_lowercase);
-    matches!(ext.as_deref(), Some("obj" | "gltf" | "glb"))
-}
-
 fn tessellate(args: TessellateArgs) -> Result<(), Error> {
-    if is_control_mesh(&args.input) {
+    if tessera_core::io::is_control_mesh(&args.input) {
         return crate::catmull_clark::tessellate(args);
     }
     if args.tolerance.is_some()

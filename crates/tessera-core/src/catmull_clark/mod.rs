@@ -77,6 +77,25 @@ pub fn load_surface(path: &Path) -> crate::Result<SurfaceModel> {
     Ok(SurfaceModel::new(PatchMesh::new(&mesh)?, TREE_DEPTH))
 }
 
+/// The patches of `control` ([`PatchMesh::new`]), cut along its non-manifold edges first
+/// where `split_non_manifold` ([`ControlMesh::split_non_manifold`]); without it, the error
+/// for such an edge names the `--split-non-manifold` option the tessera tools take.
+pub fn patch_mesh(control: &mut ControlMesh, split_non_manifold: bool) -> crate::Result<PatchMesh> {
+    if split_non_manifold {
+        control.split_non_manifold()?;
+    }
+    PatchMesh::new(control).map_err(|e| match e {
+        crate::Error::Parse { file, line, msg } if msg.starts_with("non-manifold edge") => {
+            crate::Error::Parse {
+                file,
+                line,
+                msg: format!("{msg} (--split-non-manifold cuts the mesh there)"),
+            }
+        }
+        e => e,
+    })
+}
+
 /// Exact surface points of every non-hole patch on an `n × n` grid `(i, j)/(n-1)`,
 /// patch after patch, for error measurement.
 pub fn surface_samples(model: &SurfaceModel, n: usize) -> Vec<DVec3> {

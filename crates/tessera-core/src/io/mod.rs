@@ -20,6 +20,16 @@ pub fn load_control_mesh(
     }
 }
 
+/// Whether `path` names a Catmull-Clark control mesh (`.obj`, `.gltf`, `.glb`, any case)
+/// rather than a Newell teaset file: how the tools tell the two kinds of input apart.
+pub fn is_control_mesh(path: &std::path::Path) -> bool {
+    let ext = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase);
+    matches!(ext.as_deref(), Some("obj" | "gltf" | "glb"))
+}
+
 /// Input coordinates beyond this are refused: squared distances of single-precision
 /// points (what the GPU computes) would overflow.
 pub const MAX_COORDINATE: f64 = 1e18;
@@ -43,4 +53,20 @@ pub(crate) fn utf8_text<'a>(path: &std::path::Path, bytes: &'a [u8]) -> crate::R
             ),
         )
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::is_control_mesh;
+    use std::path::Path;
+
+    #[test]
+    fn control_meshes_are_told_by_extension() {
+        for p in ["a.obj", "b.OBJ", "dir/c.gltf", "d.Glb"] {
+            assert!(is_control_mesh(Path::new(p)), "{p}");
+        }
+        for p in ["teapot", "teacup.txt", "obj", "x.objx", "dir.obj/teapot"] {
+            assert!(!is_control_mesh(Path::new(p)), "{p}");
+        }
+    }
 }
