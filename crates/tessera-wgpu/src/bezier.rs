@@ -970,6 +970,15 @@ impl BezierStage {
         self.growths
     }
 
+    /// Whether the newest status [`poll_status`](Self::poll_status) read is an overflow
+    /// that the buffers have not yet grown for: the mesh drawn now is empty, and a render
+    /// loop that tessellates only on change records one more run (its `prepare` grows
+    /// first). False again once that `prepare` has grown, so a status that arrives late
+    /// from before the growth does not ask twice.
+    pub fn grow_pending(&self) -> bool {
+        matches!(self.latest, Some((_, true)))
+    }
+
     /// Grows the output buffers to what `status` says the run needed (with headroom).
     /// Returns whether anything was reallocated, or an error when the device cannot hold
     /// buffers that large (nothing is reallocated then). Public for the test that asks

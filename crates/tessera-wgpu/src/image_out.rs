@@ -55,14 +55,7 @@ pub fn render_camera_to_rgba(
     // Errors from earlier work are not this render's.
     gpu.check()?;
     let device = &gpu.device;
-    let samples = [4, 1]
-        .into_iter()
-        .find(|&n| {
-            let color = gpu.adapter.get_texture_format_features(COLOR_FORMAT).flags;
-            let depth = gpu.adapter.get_texture_format_features(DEPTH_FORMAT).flags;
-            color.sample_count_supported(n) && depth.sample_count_supported(n)
-        })
-        .unwrap_or(1);
+    let samples = sample_count(&gpu.adapter);
     let size = wgpu::Extent3d {
         width,
         height,
@@ -146,6 +139,39 @@ pub fn render_camera_to_rgba(
     let pixels = readback.read(device)?;
     gpu.check()?;
     RgbaImage::from_raw(width, height, pixels)
+        .ok_or_else(|| Error::Readback("image buffer has the wrong size".into()))
+}
+
+/// The samples per pixel of [`render_camera_to_rgba`] on `adapter`: 4 where
+/// [`COLOR_FORMAT`] and [`DEPTH_FORMAT`] both allow it, else 1. A window that draws its
+/// frames as these images are drawn (the demo's) takes the same.
+pub fn sample_count(adapter: &wgpu::Adapter) -> u32 {
+    let color = adapter.get_texture_format_features(COLOR_FORMAT).flags;
+    let depth = adapter.get_texture_format_features(DEPTH_FORMAT).flags;
+    [4, 1]
+        .into_iter()
+        .find(|&n| color.sample_count_supported(n) && depth.sample_count_supported(n))
+        .unwrap_or(1)
+}
+
+/// The pixels of an 8-bit RGBA texture (`Rgba8Unorm` or `Rgba8UnormSrgb`, one sample,
+/// `COPY_SRC` usage), copied on their own submission after the work already submitted:
+/// a window's last frame, saved as these images are.
+pub fn read_rgba(
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    texture: &wgpu::Texture,
+) -> Result<RgbaImage> {
+    let format = texture.format();
+    if format.remove_srgb_suffix() != wgpu::TextureFormat::Rgba8Unorm || texture.sample_count() != 1
+    {
+        return Err(Error::Render(format!(
+            "read_rgba reads single-sampled 8-bit RGBA textures, not {format:?} with {} samples",
+            texture.sample_count()
+        )));
+    }
+    let pixels = crate::readback::read_texture(device, queue, texture)?;
+    RgbaImage::from_raw(texture.width(), texture.height(), pixels)
         .ok_or_else(|| Error::Readback("image buffer has the wrong size".into()))
 }
 

@@ -728,3 +728,53 @@ fn moved_patches_are_written_in_place_and_tessellate_as_on_the_cpu() {
     assert!(stage.update_model(&gpu.queue, &teacup).is_err());
     gpu.check().expect("no wgpu validation errors");
 }
+
+#[test]
+fn a_loop_that_tessellates_on_change_reruns_once_after_an_overflow() {
+    // A viewer's loop: one run, then another only while `grow_pending` says the newest
+    // status overflowed and the buffers have not grown for it. Statuses arrive without
+    // waiting; the stale overflow still held after the growth must not ask again.
+    let gpu = gpu();
+    let prep = model("teapot");
+    let params = AdaptiveParams {
+        test: EdgeTest::Map4p,
+        threshold: 0.02,
+        max_depth: 6,
+    };
+    let kernels = Kernels::new(&gpu.device);
+    let mut stage =
+        BezierStage::with_capacity(&gpu.device, &gpu.queue, &kernels, &prep, &params, (1, 3))
+            .expect("stage");
+    let record = |stage: &mut BezierStage| {
+        let mut encoder = gpu.device.create_command_encoder(&Default::default());
+        stage
+            .prepare(&gpu.device, &gpu.queue, &mut encoder)
+            .expect("prepare");
+        gpu.queue.submit([encoder.finish()]);
+    };
+    assert!(!stage.grow_pending());
+    record(&mut stage);
+    let mut runs = 1;
+    for _frame in 0..10 {
+        gpu.wait().expect("frame done");
+        let polled = stage
+            .poll_status(&gpu.device)
+            .expect("a status has arrived");
+        if stage.grow_pending() {
+            assert_ne!(polled.overflow, 0);
+            record(&mut stage);
+            runs += 1;
+            assert!(!stage.grow_pending(), "the prepare grew for it");
+        }
+    }
+    // Both buffers are told the sizes the first run needed: one growth, one rerun.
+    assert_eq!((runs, stage.growths()), (2, 1));
+    let status = stage.read_status(&gpu.device).expect("status");
+    assert_eq!(status.overflow, 0);
+    let got = stage
+        .read_mesh(&gpu.device, &gpu.queue, &status)
+        .expect("mesh");
+    let want = tessellate_adaptive(&prep, &params).expect("cpu").mesh;
+    assert_eq!(got.triangle_count(), want.triangle_count());
+    gpu.check().expect("no wgpu validation errors");
+}

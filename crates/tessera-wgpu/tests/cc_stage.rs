@@ -632,3 +632,67 @@ fn a_frame_loop_grows_the_buffers_without_a_blocking_run() {
     same_mesh(&mesh, &cpu.mesh, size(&model)).expect("the grown frame draws the CPU's mesh");
     gpu.check().expect("no wgpu errors");
 }
+
+#[test]
+fn a_loop_that_tessellates_on_change_reruns_once_per_pending_growth() {
+    // What a viewer does: one run after a change, then a run only when `grow_pending`
+    // says the newest status overflowed and nothing has grown for it yet. Statuses are
+    // read without waiting; a stale one (from before a growth) must not ask again.
+    let gpu = gpu();
+    let model = model("opensubdiv/catmark_torus.obj");
+    let params = CcParams {
+        tolerance: Tolerance::Relative(3e-3),
+        max_depth: 5,
+        first_split: Default::default(),
+        leaf_bound: Default::default(),
+    };
+    let mut stage = CcStage::with_capacity(
+        &gpu.device,
+        &gpu.queue,
+        &kernels(&gpu),
+        &model,
+        &params,
+        one_of_each(),
+    )
+    .expect("stage");
+    assert!(!stage.grow_pending(), "no status yet");
+    let (mut runs, mut last_growths) = (0, 0);
+    let record = |stage: &mut CcStage| {
+        let mut encoder = gpu.device.create_command_encoder(&Default::default());
+        stage
+            .prepare(&gpu.device, &gpu.queue, &mut encoder)
+            .expect("prepare");
+        gpu.queue.submit([encoder.finish()]);
+    };
+    record(&mut stage);
+    runs += 1;
+    for _frame in 0..40 {
+        gpu.wait().expect("frame done");
+        stage.poll_status(&gpu.device);
+        if stage.grow_pending() {
+            record(&mut stage);
+            runs += 1;
+            // Every run asked for follows a growth.
+            assert_eq!(stage.growths(), last_growths + 1, "run {runs}");
+            last_growths = stage.growths();
+            assert!(
+                !stage.grow_pending(),
+                "pending until the prepare that grows"
+            );
+        }
+    }
+    let status = stage.read_status(&gpu.device).expect("status");
+    assert!(!status.overflowed(), "the last run fits");
+    assert_eq!(
+        runs as u32,
+        stage.growths() + 1,
+        "one run per growth, plus the first"
+    );
+    assert!(stage.growths() >= 1);
+    let mesh = stage
+        .read_mesh(&gpu.device, &gpu.queue, &status)
+        .expect("mesh");
+    let cpu = tessellate_adaptive(&model, &params).expect("cpu");
+    same_mesh(&mesh, &cpu.mesh, size(&model)).expect("the last run draws the CPU's mesh");
+    gpu.check().expect("no wgpu errors");
+}

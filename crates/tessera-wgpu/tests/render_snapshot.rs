@@ -330,3 +330,88 @@ fn teapot_tessellated_on_the_gpu_matches_the_wireframe_snapshot() {
     gpu.check().expect("no wgpu errors");
     assert_snapshot("teapot_wireframe", &img);
 }
+
+#[test]
+fn a_frame_drawn_into_the_callers_target_reads_back_as_the_image() {
+    // A window draws into its own target, with the samples, formats and background of
+    // `render_camera_to_rgba`, and saves it through `read_rgba`: the same pixels.
+    let gpu = gpu();
+    let (mesh, (min, max)) = upload(&gpu, "teapot");
+    let camera = Camera::framing(min, max, WIDTH as f32 / HEIGHT as f32);
+    let want =
+        render_camera_to_rgba(&gpu, &mesh, &camera, WIDTH, HEIGHT, &wireframe()).expect("render");
+
+    let samples = tessera_wgpu::image_out::sample_count(&gpu.adapter);
+    assert!(samples == 4 || samples == 1, "{samples}");
+    let size = wgpu::Extent3d {
+        width: WIDTH,
+        height: HEIGHT,
+        depth_or_array_layers: 1,
+    };
+    let target = |format, sample_count, usage| {
+        gpu.device.create_texture(&wgpu::TextureDescriptor {
+            label: None,
+            size,
+            mip_level_count: 1,
+            sample_count,
+            dimension: wgpu::TextureDimension::D2,
+            format,
+            usage: wgpu::TextureUsages::RENDER_ATTACHMENT | usage,
+            view_formats: &[],
+        })
+    };
+    use tessera_wgpu::image_out::{srgb_to_linear, COLOR_FORMAT, DEPTH_FORMAT};
+    let frame = target(COLOR_FORMAT, 1, wgpu::TextureUsages::COPY_SRC);
+    let ms = target(COLOR_FORMAT, samples, wgpu::TextureUsages::empty());
+    let depth = target(DEPTH_FORMAT, samples, wgpu::TextureUsages::empty());
+    let (frame_view, ms_view, depth_view) = (
+        frame.create_view(&Default::default()),
+        ms.create_view(&Default::default()),
+        depth.create_view(&Default::default()),
+    );
+    let renderer = MeshRenderer::new(&gpu.device, COLOR_FORMAT, Some(DEPTH_FORMAT), samples);
+    renderer.prepare(&gpu.queue, &camera, &wireframe());
+    let [r, g, b] = BACKGROUND.map(|c| srgb_to_linear(c) as f64);
+    let mut encoder = gpu.device.create_command_encoder(&Default::default());
+    {
+        let (view, resolve_target) = if samples > 1 {
+            (&ms_view, Some(&frame_view))
+        } else {
+            (&frame_view, None)
+        };
+        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                view,
+                depth_slice: None,
+                resolve_target,
+                ops: wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(wgpu::Color { r, g, b, a: 1.0 }),
+                    store: wgpu::StoreOp::Store,
+                },
+            })],
+            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                view: &depth_view,
+                depth_ops: Some(wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(1.0),
+                    store: wgpu::StoreOp::Discard,
+                }),
+                stencil_ops: None,
+            }),
+            ..Default::default()
+        });
+        renderer.draw(&mut pass, &mesh);
+    }
+    gpu.queue.submit([encoder.finish()]);
+    let got = tessera_wgpu::image_out::read_rgba(&gpu.device, &gpu.queue, &frame).expect("read");
+    assert!(got == want, "the caller's frame differs from the image");
+
+    // Only what it can hand over as RGBA pixels.
+    let bgra = target(
+        wgpu::TextureFormat::Bgra8Unorm,
+        1,
+        wgpu::TextureUsages::COPY_SRC,
+    );
+    let e = tessera_wgpu::image_out::read_rgba(&gpu.device, &gpu.queue, &bgra).unwrap_err();
+    assert!(matches!(e, Error::Render(_)), "{e}");
+    gpu.check().expect("no wgpu validation errors");
+}

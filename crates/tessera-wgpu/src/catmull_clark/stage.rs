@@ -519,6 +519,15 @@ impl CcStage {
         self.growths
     }
 
+    /// Whether the newest status [`poll_status`](Self::poll_status) read is an overflow
+    /// that the buffers have not yet grown for: the mesh drawn now is empty, and a render
+    /// loop that tessellates only on change records one more run (its `prepare` grows
+    /// first). False again once that `prepare` has grown, so a status that arrives late
+    /// from before the growth does not ask twice.
+    pub fn grow_pending(&self) -> bool {
+        matches!(self.latest, Some((_, true)))
+    }
+
     fn record_run(
         &mut self,
         device: &wgpu::Device,
