@@ -334,7 +334,7 @@ impl Running {
                 for w in &model.warnings {
                     eprintln!("warning: {w}");
                 }
-                self.params = self.params.for_model(&model);
+                self.params = self.params.for_model(self.tess.model.kind(), &model);
                 self.tess = Tessellator::new(self.kernels.clone(), model);
                 if self.view.animate {
                     self.tess.animate(Some(self.anim_time), self.view.up);
@@ -453,7 +453,8 @@ impl Running {
             // Minimised: nothing to draw, and a surface is never configured at 0.
             return Ok(true);
         }
-        if self.gpu.size() != (size.width, size.height) {
+        let max = self.gpu.device.limits().max_texture_dimension_2d;
+        if self.gpu.size() != (size.width.min(max), size.height.min(max)) {
             self.gpu.resize(size.width, size.height);
         }
         self.gpu.reconfigure_if_needed();
@@ -493,9 +494,10 @@ impl Running {
             self.egui_ctx.run_ui(raw, |ui| {
                 if options.panel {
                     // Wide enough for its controls, and the model keeps most of a small window.
-                    let width = (0.45 * ui.available_width()).clamp(160.0, 280.0);
+                    let avail = ui.available_width();
                     let r = egui::Panel::left("tessera panel")
-                        .default_size(width)
+                        .default_size((0.45 * avail).clamp(160.0, 280.0))
+                        .max_size((0.6 * avail).max(160.0))
                         .show(ui, |ui| panel::contents(ui, &shown, &mut params, &mut view));
                     panel_right = r.response.rect.right();
                     requests = r.inner;
@@ -738,6 +740,7 @@ impl Running {
             frame_ms: start.elapsed().as_secs_f64() * 1e3,
             growths: counts.growths,
             tessellated,
+            overflowed: counts.overflowed,
         };
         self.rows.push(self.stats.clone());
     }

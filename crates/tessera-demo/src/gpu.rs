@@ -10,6 +10,9 @@ use tessera_wgpu::image_out::{
 use tessera_wgpu::{wgpu, MeshRenderer};
 use winit::window::Window;
 
+/// wgpu errors kept (the first ones: later ones are usually their consequences).
+const MAX_ERRORS: usize = 100;
+
 /// The adapter, device, queue and the window's surface, with every wgpu error the device
 /// reported (validation errors included) collected for the panel.
 pub struct Gpu {
@@ -65,13 +68,16 @@ impl Gpu {
         let sink = errors.clone();
         device.on_uncaptured_error(Arc::new(move |e: wgpu::Error| {
             if let Ok(mut v) = sink.lock() {
-                // One line each: the panel lists them and stderr prints them.
-                v.push(
-                    e.to_string()
-                        .split_whitespace()
-                        .collect::<Vec<_>>()
-                        .join(" "),
-                );
+                // One line each: the panel lists them and stderr prints them. An error
+                // repeated every frame must not grow the list without end.
+                if v.len() < MAX_ERRORS {
+                    v.push(
+                        e.to_string()
+                            .split_whitespace()
+                            .collect::<Vec<_>>()
+                            .join(" "),
+                    );
+                }
             }
         }));
         let caps = surface.get_capabilities(&adapter);
@@ -144,8 +150,11 @@ impl Gpu {
     /// Configures the surface for a new window size; a zero size (minimised) is kept
     /// for later and never configured.
     pub fn resize(&mut self, width: u32, height: u32) {
-        self.config.width = width;
-        self.config.height = height;
+        // A window larger than the device's textures is drawn at the largest size and
+        // stretched by the presentation.
+        let max = self.device.limits().max_texture_dimension_2d;
+        self.config.width = width.min(max);
+        self.config.height = height.min(max);
         self.configured = false;
         self.configure();
     }
@@ -207,7 +216,9 @@ impl Gpu {
 
     pub fn push_error(&self, e: String) {
         if let Ok(mut v) = self.errors.lock() {
-            v.push(e);
+            if v.len() < MAX_ERRORS {
+                v.push(e);
+            }
         }
     }
 

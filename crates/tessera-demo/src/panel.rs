@@ -61,9 +61,9 @@ pub fn contents(
         ui.separator();
         tessellation(ui, shown, params);
         ui.separator();
-        drawing(ui, shown, view, &mut requests);
-        ui.separator();
         stats(ui, shown, params);
+        ui.separator();
+        drawing(ui, shown, view, &mut requests);
         errors(ui, shown);
     });
     requests
@@ -82,7 +82,6 @@ fn file(ui: &mut egui::Ui, shown: &Shown, view: &mut View, requests: &mut Vec<Re
     ));
     egui::ComboBox::from_id_salt("open")
         .selected_text("Open a shipped model…")
-        .width(ui.available_width())
         .show_ui(ui, |ui| {
             for path in shown.assets {
                 let label = asset_label(path);
@@ -159,7 +158,7 @@ fn tessellation(ui: &mut egui::Ui, shown: &Shown, params: &mut Params) {
             ui.add(slider);
             ui.small(format!(
                 "fraction of the diagonal: {:.3e} model units",
-                params.tolerance_rel * diag
+                shown.model.tolerance(params.tolerance_rel)
             ));
         }
     }
@@ -231,9 +230,11 @@ fn stats(ui: &mut egui::Ui, shown: &Shown, params: &Params) {
         row("triangles", s.triangles.to_string());
         row("vertices", s.vertices.to_string());
         row("patches", s.patches.to_string());
+        // Short rows: a resizable panel widens to its widest row and stays so.
         if let Some(b) = s.guaranteed_bound {
-            let eps = params.tolerance_rel * shown.model.diagonal() as f64;
-            row("guaranteed bound", format!("{b:.3e} (ε {eps:.3e})"));
+            row("guaranteed bound", format!("{b:.3e}"));
+            let eps = shown.model.tolerance(params.tolerance_rel);
+            row("tolerance ε", format!("{eps:.3e}"));
         }
         match (s.gpu_ms, s.wall_ms) {
             (Some(ms), _) => row("tessellation (GPU)", format!("{ms:.2} ms")),
@@ -247,7 +248,14 @@ fn stats(ui: &mut egui::Ui, shown: &Shown, params: &Params) {
                 None => format!("{:.1} ms", s.frame_ms),
             },
         );
-        row("buffer growths", s.growths.to_string());
+        row(
+            "buffer growths",
+            if s.overflowed {
+                format!("{} (growing)", s.growths)
+            } else {
+                s.growths.to_string()
+            },
+        );
         row(
             "tessellated",
             if s.tessellated {

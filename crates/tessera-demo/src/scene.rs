@@ -140,12 +140,13 @@ impl Params {
         }
     }
 
-    /// The same settings for another model: the method kept where it exists there, the
-    /// threshold (model units) the new model's default.
-    pub fn for_model(&self, model: &Model) -> Params {
+    /// The same settings for another model: the method kept for a model of the same
+    /// kind (else that kind's default), the threshold (model units) the new model's
+    /// default.
+    pub fn for_model(&self, kind: Kind, model: &Model) -> Params {
         let defaults = Params::defaults(model);
         Params {
-            method: if Method::of(model.kind()).contains(&self.method) {
+            method: if kind == model.kind() {
                 self.method
             } else {
                 defaults.method
@@ -252,6 +253,15 @@ impl Model {
 
     pub fn diagonal(&self) -> f32 {
         (self.bounds.1 - self.bounds.0).length()
+    }
+
+    /// ε of a relative tolerance `rel` in model units, as the stages resolve it
+    /// (Catmull-Clark: against the control box as loaded).
+    pub fn tolerance(&self, rel: f64) -> f64 {
+        match &self.surface {
+            Surface::CatmullClark { model, .. } => rel * model.mesh.control_diag,
+            Surface::Bezier(_) => rel * self.diagonal() as f64,
+        }
     }
 
     pub fn name(&self) -> String {
@@ -396,23 +406,26 @@ impl Tessellator {
             Drawn::Bezier => {
                 let (_, s) = self.bezier.as_mut()?;
                 let status = s.poll_status(device)?;
+                // An overflowed run reports what it needed and draws nothing.
+                let drawn = status.overflow == 0;
                 Some(Counts {
-                    triangles: status.indices / 3,
-                    vertices: status.vertices,
+                    triangles: if drawn { status.indices / 3 } else { 0 },
+                    vertices: if drawn { status.vertices } else { 0 },
                     guaranteed_bound: None,
                     growths: s.growths(),
-                    overflowed: status.overflow != 0,
+                    overflowed: !drawn,
                 })
             }
             Drawn::Cc => {
                 let (_, s) = self.cc.as_mut()?;
                 let status = s.poll_status(device)?;
+                let drawn = !status.overflowed();
                 Some(Counts {
                     triangles: status.indices / 3,
-                    vertices: status.vertices(),
-                    guaranteed_bound: Some(status.max_bound() as f64),
+                    vertices: if drawn { status.vertices() } else { 0 },
+                    guaranteed_bound: drawn.then_some(status.max_bound() as f64),
                     growths: s.growths(),
-                    overflowed: status.overflowed(),
+                    overflowed: !drawn,
                 })
             }
             Drawn::CcUniform => {
@@ -749,7 +762,7 @@ mod tests {
         assert_eq!(p.bezier_depth, 6);
         let torus = Model::load(&asset("opensubdiv/catmark_torus.obj"), false).expect("torus");
         assert_eq!(torus.kind(), Kind::CatmullClark);
-        let q = p.for_model(&torus);
+        let q = p.for_model(Kind::Bezier, &torus);
         assert_eq!(
             (q.method, q.tolerance_rel, q.cc_depth),
             (Method::Adaptive, 1e-3, 10)

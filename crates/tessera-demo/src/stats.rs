@@ -28,6 +28,9 @@ pub struct FrameStats {
     pub growths: u32,
     /// Whether this frame recorded a tessellation.
     pub tessellated: bool,
+    /// The newest run overflowed its buffers: nothing is drawn until the rerun.
+    #[serde(skip)]
+    pub overflowed: bool,
 }
 
 /// Frame rate over the last second of frames.
