@@ -478,7 +478,7 @@ impl Running {
         let mut requests = Vec::new();
         let mut panel_right = 0.0f32;
         let wgpu_errors = self.gpu.errors();
-        let full = {
+        let mut full = {
             let shown = Shown {
                 model: &self.tess.model,
                 stats: &self.stats,
@@ -504,7 +504,6 @@ impl Running {
                 }
             })
         };
-        let mut full = full;
         self.egui_state
             .handle_platform_output(&self.window, full.platform_output);
         // The panel's textures go up now, so that no return below leaves a delta
@@ -522,7 +521,7 @@ impl Running {
         if view.up != self.view.up {
             self.set_up(view.up);
         }
-        let reload = view.split_non_manifold != self.view.split_non_manifold;
+        // (A change of `split_non_manifold` comes with the panel's request to reload.)
         self.view = View {
             up: self.view.up,
             ..view
@@ -536,10 +535,6 @@ impl Running {
                 Request::Frame => self.orbit.home(),
                 Request::ResetAnimation => self.reset_animation(),
             }
-        }
-        if reload && !self.tess.model.path.as_os_str().is_empty() {
-            let path = self.tess.model.path.clone();
-            self.load(&path);
         }
 
         // Animation: time advances while it is on (by a fixed step when scripted).
@@ -677,7 +672,8 @@ impl Running {
                 .poll(wgpu::PollType::wait_indefinitely())
                 .map_err(|e| format!("waiting for the GPU: {e}"))?;
         }
-        self.record_stats(start, tessellated);
+        let keep = scripted.is_some_and(|s| s.stats_json.is_some());
+        self.record_stats(start, tessellated, keep);
 
         let Some(s) = scripted else {
             self.frame += 1;
@@ -710,7 +706,8 @@ impl Running {
         Ok(false)
     }
 
-    fn record_stats(&mut self, start: Instant, tessellated: bool) {
+    /// This frame's figures; kept for `--stats-json` where `keep`.
+    fn record_stats(&mut self, start: Instant, tessellated: bool, keep: bool) {
         let counts = self.tess.counts(&self.gpu.device).unwrap_or_default();
         let (mut gpu_ms, mut wall_ms) = (None, None);
         match self.last_run {
@@ -742,7 +739,9 @@ impl Running {
             tessellated,
             overflowed: counts.overflowed,
         };
-        self.rows.push(self.stats.clone());
+        if keep {
+            self.rows.push(self.stats.clone());
+        }
     }
 
     /// Saves the frame just drawn (the texture the surface was given).

@@ -48,7 +48,11 @@ impl Gpu {
         let instance = wgpu::Instance::new(desc);
         let surface = instance
             .create_surface(window.clone())
-            .map_err(|e| format!("the window has no surface to draw on: {e}"))?;
+            // No backend at all (no Vulkan loader, say) is no adapter to the user.
+            .map_err(|e| {
+                tessera_wgpu::Error::NoAdapter(format!("no backend can draw to the window: {e}"))
+                    .to_string()
+            })?;
         let adapter = pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions {
             power_preference: wgpu::PowerPreference::HighPerformance,
             compatible_surface: Some(&surface),

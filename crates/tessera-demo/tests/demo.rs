@@ -61,11 +61,16 @@ fn xvfb_run() -> PathBuf {
 
 /// Runs the demo in a fresh X server with `args`.
 fn demo(args: &[&str]) -> Output {
+    demo_with_env(args, &[])
+}
+
+fn demo_with_env(args: &[&str], env: &[(&str, &str)]) -> Output {
     let _turn = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
     let started = std::time::Instant::now();
     let out = Command::new(xvfb_run())
         .args(["-a", "-s", "-screen 0 1280x1024x24", BIN])
         .args(args)
+        .envs(env.iter().copied())
         .output()
         .expect("xvfb-run starts");
     eprintln!(
@@ -486,4 +491,18 @@ fn a_file_that_fails_to_load_in_the_window_keeps_the_open_model() {
     // The teapot's 32 patches until the cube (24) opens.
     assert_eq!(patches, [32, 32, 32, 24, 24], "{rows:?}");
     assert!(u(&rows[2], "triangles") > 0);
+}
+
+#[cfg(target_os = "linux")]
+#[test]
+fn no_adapter_exits_1_with_one_line() {
+    // No Metal on Linux: wgpu has no backend, so no adapter can draw to the window.
+    let out = demo_with_env(&["--frames", "2"], &[("WGPU_BACKEND", "metal")]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{stderr}");
+    assert!(
+        stderr.starts_with("error: no GPU adapter (") && stderr.contains("install a Vulkan driver"),
+        "{stderr}"
+    );
+    assert_eq!(stderr.lines().count(), 1, "{stderr}");
 }
