@@ -161,7 +161,7 @@ pub struct RenderArgs {
     #[arg(short = 'o', long = "output")]
     pub output: PathBuf,
     /// Image size, WIDTHxHEIGHT.
-    #[arg(long, default_value = "800x600", value_parser = parse_size)]
+    #[arg(long, default_value = "800x600", value_parser = tessera_wgpu::image_out::parse_size)]
     pub size: (u32, u32),
     /// Bézier: edge test (map2p, map4p, map8p or flat; default map4p). Catmull-Clark:
     /// adaptive (the default) or uniform.
@@ -203,18 +203,4 @@ pub enum Axis {
     X,
     Y,
     Z,
-}
-
-fn parse_size(s: &str) -> Result<(u32, u32), String> {
-    let (w, h) = s
-        .split_once(['x', 'X'])
-        .ok_or_else(|| format!("size {s:?} is not WIDTHxHEIGHT"))?;
-    let parse = |v: &str| {
-        v.trim()
-            .parse::<u32>()
-            .ok()
-            .filter(|&n| (1..=16384).contains(&n))
-            .ok_or_else(|| format!("size {s:?}: {v:?} is not a number in 1..=16384"))
-    };
-    Ok((parse(w)?, parse(h)?))
 }

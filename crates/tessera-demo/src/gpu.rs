@@ -4,9 +4,7 @@
 
 use std::sync::{Arc, Mutex};
 
-use tessera_wgpu::image_out::{
-    sample_count, srgb_to_linear, BACKGROUND, COLOR_FORMAT, DEPTH_FORMAT,
-};
+use tessera_wgpu::image_out::{begin_scene_pass, sample_count, COLOR_FORMAT, DEPTH_FORMAT};
 use tessera_wgpu::{wgpu, MeshRenderer};
 use winit::window::Window;
 
@@ -399,32 +397,11 @@ impl Painter {
         mesh: Option<&tessera_wgpu::MeshBuffers>,
         viewport: [f32; 4],
     ) {
-        let [r, g, b] = BACKGROUND.map(|c| srgb_to_linear(c) as f64);
         let (view, resolve_target) = match &targets.multisampled {
             Some(ms) => (ms, Some(&targets.frame_view)),
             None => (&targets.frame_view, None),
         };
-        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some("tessera-demo scene"),
-            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                view,
-                depth_slice: None,
-                resolve_target,
-                ops: wgpu::Operations {
-                    load: wgpu::LoadOp::Clear(wgpu::Color { r, g, b, a: 1.0 }),
-                    store: wgpu::StoreOp::Store,
-                },
-            })],
-            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                view: &targets.depth,
-                depth_ops: Some(wgpu::Operations {
-                    load: wgpu::LoadOp::Clear(1.0),
-                    store: wgpu::StoreOp::Discard,
-                }),
-                stencil_ops: None,
-            }),
-            ..Default::default()
-        });
+        let mut pass = begin_scene_pass(encoder, view, resolve_target, &targets.depth);
         let [x, y, w, h] = viewport;
         if let Some(mesh) = mesh.filter(|_| w >= 1.0 && h >= 1.0) {
             pass.set_viewport(x, y, w, h, 0.0, 1.0);

@@ -79,7 +79,7 @@ struct Args {
     #[arg(long)]
     screenshot: Option<PathBuf>,
     /// Window size in pixels, WIDTHxHEIGHT (default 1280x800).
-    #[arg(long, value_parser = parse_size)]
+    #[arg(long, value_parser = tessera_wgpu::image_out::parse_size)]
     size: Option<(u32, u32)>,
     /// Scripted mode: actions at frame numbers (see docs/demo.md).
     #[arg(long)]
@@ -97,20 +97,6 @@ struct Args {
     /// --split-non-manifold`).
     #[arg(long)]
     split_non_manifold: bool,
-}
-
-fn parse_size(s: &str) -> Result<(u32, u32), String> {
-    let (w, h) = s
-        .split_once(['x', 'X'])
-        .ok_or_else(|| format!("size {s:?} is not WIDTHxHEIGHT"))?;
-    let parse = |v: &str| {
-        v.trim()
-            .parse::<u32>()
-            .ok()
-            .filter(|&n| (1..=16384).contains(&n))
-            .ok_or_else(|| format!("size {s:?}: {v:?} is not a number in 1..=16384"))
-    };
-    Ok((parse(w)?, parse(h)?))
 }
 
 fn main() -> ExitCode {

@@ -106,32 +106,11 @@ pub fn render_camera_to_rgba(
     let renderer = MeshRenderer::new(device, COLOR_FORMAT, Some(DEPTH_FORMAT), samples);
     renderer.prepare(&gpu.queue, camera, options);
 
-    let [r, g, b] = BACKGROUND.map(|c| srgb_to_linear(c) as f64);
     let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
         label: Some("tessera image"),
     });
     {
-        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some("tessera image"),
-            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                view,
-                depth_slice: None,
-                resolve_target,
-                ops: wgpu::Operations {
-                    load: wgpu::LoadOp::Clear(wgpu::Color { r, g, b, a: 1.0 }),
-                    store: wgpu::StoreOp::Store,
-                },
-            })],
-            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                view: &depth_view,
-                depth_ops: Some(wgpu::Operations {
-                    load: wgpu::LoadOp::Clear(1.0),
-                    store: wgpu::StoreOp::Discard,
-                }),
-                stencil_ops: None,
-            }),
-            ..Default::default()
-        });
+        let mut pass = begin_scene_pass(&mut encoder, view, resolve_target, &depth_view);
         renderer.draw(&mut pass, mesh);
     }
     let readback = TextureReadback::record(device, &mut encoder, &resolved);
@@ -140,6 +119,54 @@ pub fn render_camera_to_rgba(
     gpu.check()?;
     RgbaImage::from_raw(width, height, pixels)
         .ok_or_else(|| Error::Readback("image buffer has the wrong size".into()))
+}
+
+/// The render pass these images are drawn in: `color` cleared to [`BACKGROUND`] (resolved
+/// into `resolve_target` when it is multisampled), `depth` cleared to 1 and discarded.
+/// A window that draws its frames as these images are drawn begins the same pass.
+pub fn begin_scene_pass<'e>(
+    encoder: &'e mut wgpu::CommandEncoder,
+    color: &wgpu::TextureView,
+    resolve_target: Option<&wgpu::TextureView>,
+    depth: &wgpu::TextureView,
+) -> wgpu::RenderPass<'e> {
+    let [r, g, b] = BACKGROUND.map(|c| srgb_to_linear(c) as f64);
+    encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+        label: Some("tessera scene"),
+        color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+            view: color,
+            depth_slice: None,
+            resolve_target,
+            ops: wgpu::Operations {
+                load: wgpu::LoadOp::Clear(wgpu::Color { r, g, b, a: 1.0 }),
+                store: wgpu::StoreOp::Store,
+            },
+        })],
+        depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+            view: depth,
+            depth_ops: Some(wgpu::Operations {
+                load: wgpu::LoadOp::Clear(1.0),
+                store: wgpu::StoreOp::Discard,
+            }),
+            stencil_ops: None,
+        }),
+        ..Default::default()
+    })
+}
+
+/// Parses an image size `WIDTHxHEIGHT` (each in `1..=16384`), as the command lines take it.
+pub fn parse_size(s: &str) -> std::result::Result<(u32, u32), String> {
+    let (w, h) = s
+        .split_once(['x', 'X'])
+        .ok_or_else(|| format!("size {s:?} is not WIDTHxHEIGHT"))?;
+    let parse = |v: &str| {
+        v.trim()
+            .parse::<u32>()
+            .ok()
+            .filter(|&n| (1..=16384).contains(&n))
+            .ok_or_else(|| format!("size {s:?}: {v:?} is not a number in 1..=16384"))
+    };
+    Ok((parse(w)?, parse(h)?))
 }
 
 /// The samples per pixel of [`render_camera_to_rgba`] on `adapter`: 4 where

@@ -360,7 +360,7 @@ fn a_frame_drawn_into_the_callers_target_reads_back_as_the_image() {
             view_formats: &[],
         })
     };
-    use tessera_wgpu::image_out::{srgb_to_linear, COLOR_FORMAT, DEPTH_FORMAT};
+    use tessera_wgpu::image_out::{COLOR_FORMAT, DEPTH_FORMAT};
     let frame = target(COLOR_FORMAT, 1, wgpu::TextureUsages::COPY_SRC);
     let ms = target(COLOR_FORMAT, samples, wgpu::TextureUsages::empty());
     let depth = target(DEPTH_FORMAT, samples, wgpu::TextureUsages::empty());
@@ -371,7 +371,6 @@ fn a_frame_drawn_into_the_callers_target_reads_back_as_the_image() {
     );
     let renderer = MeshRenderer::new(&gpu.device, COLOR_FORMAT, Some(DEPTH_FORMAT), samples);
     renderer.prepare(&gpu.queue, &camera, &wireframe());
-    let [r, g, b] = BACKGROUND.map(|c| srgb_to_linear(c) as f64);
     let mut encoder = gpu.device.create_command_encoder(&Default::default());
     {
         let (view, resolve_target) = if samples > 1 {
@@ -379,26 +378,12 @@ fn a_frame_drawn_into_the_callers_target_reads_back_as_the_image() {
         } else {
             (&frame_view, None)
         };
-        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                view,
-                depth_slice: None,
-                resolve_target,
-                ops: wgpu::Operations {
-                    load: wgpu::LoadOp::Clear(wgpu::Color { r, g, b, a: 1.0 }),
-                    store: wgpu::StoreOp::Store,
-                },
-            })],
-            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                view: &depth_view,
-                depth_ops: Some(wgpu::Operations {
-                    load: wgpu::LoadOp::Clear(1.0),
-                    store: wgpu::StoreOp::Discard,
-                }),
-                stencil_ops: None,
-            }),
-            ..Default::default()
-        });
+        let mut pass = tessera_wgpu::image_out::begin_scene_pass(
+            &mut encoder,
+            view,
+            resolve_target,
+            &depth_view,
+        );
         renderer.draw(&mut pass, &mesh);
     }
     gpu.queue.submit([encoder.finish()]);
