@@ -564,15 +564,8 @@ impl Tessellator {
                     return Err("no stage".into());
                 };
                 if *v != version {
-                    let rest;
-                    let points = match &self.points {
-                        Some(p) => p,
-                        None => {
-                            rest = rest_points(&self.model.surface);
-                            &rest
-                        }
-                    };
-                    stage.update_points(queue, &as_vec3(points)).map_err(e)?;
+                    let points = current_points(&self.points, &self.model.surface);
+                    stage.update_points(queue, &points).map_err(e)?;
                     *v = version;
                 }
                 if *stage.params() != p {
@@ -603,15 +596,8 @@ impl Tessellator {
                     return Err("no stage".into());
                 };
                 if *v != version {
-                    let rest;
-                    let points = match &self.points {
-                        Some(p) => p,
-                        None => {
-                            rest = rest_points(&self.model.surface);
-                            &rest
-                        }
-                    };
-                    stage.update_points(queue, &as_vec3(points)).map_err(e)?;
+                    let points = current_points(&self.points, &self.model.surface);
+                    stage.update_points(queue, &points).map_err(e)?;
                     *v = version;
                 }
                 if stage.params() != p {
@@ -733,6 +719,14 @@ fn rest_points(surface: &Surface) -> Vec<DVec3> {
     match surface {
         Surface::Bezier(m) => m.points.iter().map(|p| p.as_dvec3()).collect(),
         Surface::CatmullClark { rest, .. } => rest.clone(),
+    }
+}
+
+/// The control points the stages draw: the animated ones, or the model's at rest.
+fn current_points(points: &Option<Vec<DVec3>>, surface: &Surface) -> Vec<Vec3> {
+    match points {
+        Some(p) => as_vec3(p),
+        None => as_vec3(&rest_points(surface)),
     }
 }
 
