@@ -300,6 +300,14 @@ impl SurfaceModel {
                 .sum::<usize>()
     }
 
+    /// Exact point of control face `face` at `(u, v)` in the face's own
+    /// parameterisation ([`PatchMesh::face_point`], OpenSubdiv Bfr's); `None` outside
+    /// its domain, or on a hole.
+    pub fn eval_face(&self, face: u32, u: f64, v: f64) -> Option<SurfacePoint> {
+        let (p, pu, pv) = self.mesh.patch_at(face, u, v)?;
+        (!self.mesh.hole[p]).then(|| self.eval(p, pu, pv))
+    }
+
     /// Exact point of patch `p` at `(u, v)`.
     pub fn eval(&self, p: usize, u: f64, v: f64) -> SurfacePoint {
         self.patches[p].eval(u, v)

@@ -162,6 +162,90 @@ impl PatchMesh {
         })
     }
 
+    /// The control face of patch `p` and the point `(u, v)` of the patch in that face's
+    /// own parameterisation, OpenSubdiv Bfr's (and, for quads, Ptex's): a quad's `(0, 0)`
+    /// is its first vertex, `u` runs toward its second and `v` toward its last; a face
+    /// of `n ≠ 4` sides is `n` sub-faces, sub-face `k` (this face's patch `k`) the
+    /// half-unit square at tile `(k mod d, k div d)` with `d` = 2 for triangles, 3 for
+    /// 5 to 9 sides and `1 + ⌊√(n-1)⌋` above, its `(0, 0)` at vertex `k`, `u` toward
+    /// vertex `k+1` and `v` toward vertex `k-1`.
+    ///
+    /// `(u, v)` in units of `1/scale` (a grid point `(i, j)/scale` of the patch) comes
+    /// out in units of `1/(2·scale)`, exactly, so that every patch of a quad face gives
+    /// the same coordinates for a point on their shared side: [`Self::face_point_at`]
+    /// does the division.
+    pub fn face_point(&self, p: usize, i: u64, j: u64, scale: u64) -> (u32, u64, u64) {
+        let (face, k) = self.face_of[p];
+        let sides = self.control_faces[face as usize].len();
+        let m = 2 * scale;
+        let (s, t) = if sides == 4 {
+            match k {
+                0 => (i, j),
+                1 => (m - j, i),
+                2 => (m - i, m - j),
+                _ => (j, m - i),
+            }
+        } else {
+            let d = sub_face_tiles(sides) as u64;
+            let k = k as u64;
+            ((k % d) * m + i, (k / d) * m + j)
+        };
+        (face, s, t)
+    }
+
+    /// [`Self::face_point`] for real `(u, v) ∈ [0, 1]²`: the control face and its
+    /// `(u, v)`.
+    pub fn face_point_at(&self, p: usize, u: f64, v: f64) -> (u32, f64, f64) {
+        let (face, k) = self.face_of[p];
+        let sides = self.control_faces[face as usize].len();
+        let (s, t) = if sides == 4 {
+            match k {
+                0 => (u, v),
+                1 => (2.0 - v, u),
+                2 => (2.0 - u, 2.0 - v),
+                _ => (v, 2.0 - u),
+            }
+        } else {
+            let d = sub_face_tiles(sides);
+            let k = k as usize;
+            ((k % d) as f64 * 2.0 + u, (k / d) as f64 * 2.0 + v)
+        };
+        (face, s / 2.0, t / 2.0)
+    }
+
+    /// The patch holding point `(u, v)` of control face `face` in the parameterisation
+    /// of [`Self::face_point`], and the point's `(u, v)` in that patch; `None` when
+    /// the face does not exist or the point lies outside its domain (for faces of
+    /// `n ≠ 4` sides, outside every sub-face's half-unit square).
+    pub fn patch_at(&self, face: u32, u: f64, v: f64) -> Option<(usize, f64, f64)> {
+        let sides = self.control_faces.get(face as usize)?.len();
+        let first = self.first_patch[face as usize] as usize;
+        if !(u.is_finite() && v.is_finite()) {
+            return None;
+        }
+        if sides == 4 {
+            if !(0.0..=1.0).contains(&u) || !(0.0..=1.0).contains(&v) {
+                return None;
+            }
+            let (s, t) = (2.0 * u, 2.0 * v);
+            let (k, pu, pv) = match (s >= 1.0, t >= 1.0) {
+                (false, false) => (0, s, t),
+                (true, false) => (1, t, 2.0 - s),
+                (true, true) => (2, 2.0 - s, 2.0 - t),
+                (false, true) => (3, 2.0 - t, s),
+            };
+            return Some((first + k, pu, pv));
+        }
+        let d = sub_face_tiles(sides);
+        let (tu, tv) = (u.floor(), v.floor());
+        let (fu, fv) = (u - tu, v - tv);
+        if tu < 0.0 || tv < 0.0 || fu > 0.5 || fv > 0.5 || tu >= d as f64 {
+            return None;
+        }
+        let k = tv as usize * d + tu as usize;
+        (k < sides).then_some((first + k, 2.0 * fu, 2.0 * fv))
+    }
+
     /// Patches (level-1 quads), holes included.
     pub fn patch_count(&self) -> usize {
         self.quads.len()
@@ -170,6 +254,15 @@ impl PatchMesh {
     /// Patches that are tessellated (not holes).
     pub fn surface_patches(&self) -> impl Iterator<Item = usize> + '_ {
         (0..self.quads.len()).filter(|&p| !self.hole[p])
+    }
+}
+
+/// Sub-face tiles per row of a face of `sides ≠ 4` sides in Bfr's parameterisation.
+fn sub_face_tiles(sides: usize) -> usize {
+    if sides < 10 {
+        2 + usize::from(sides > 4)
+    } else {
+        1 + ((sides - 1) as f64).sqrt() as usize
     }
 }
 
@@ -355,4 +448,78 @@ pub fn validate(mesh: &ControlMesh) -> Result<usize> {
         }
     }
     Ok(unreferenced)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A quad, a triangle, a pentagon and a 12-gon side by side (a fan around vertex 0
+    /// is not needed: only the face parameterisation is under test).
+    fn faces_of_sizes(sizes: &[usize]) -> PatchMesh {
+        let mut positions = Vec::new();
+        let mut faces = Vec::new();
+        for (f, &n) in sizes.iter().enumerate() {
+            let base = positions.len() as u32;
+            for k in 0..n {
+                let a = std::f64::consts::TAU * k as f64 / n as f64;
+                positions.push(DVec3::new(3.0 * f as f64 + a.cos(), a.sin(), 0.0));
+            }
+            faces.push((0..n as u32).map(|k| base + k).collect());
+        }
+        PatchMesh::new(&ControlMesh::new(positions, faces)).unwrap()
+    }
+
+    #[test]
+    fn face_points_and_patches_are_inverse() {
+        let mesh = faces_of_sizes(&[4, 3, 5, 12]);
+        let grid = [0.0, 0.125, 0.5, 0.75, 1.0];
+        for p in 0..mesh.patch_count() {
+            for &u in &grid {
+                for &v in &grid {
+                    let (face, fu, fv) = mesh.face_point_at(p, u, v);
+                    assert_eq!(face, mesh.face_of[p].0);
+                    let (q, qu, qv) = mesh.patch_at(face, fu, fv).unwrap();
+                    // Points on a seam between a quad's patches may come back in the
+                    // neighbour: same face point either way.
+                    let back = mesh.face_point_at(q, qu, qv);
+                    assert!((back.1 - fu).abs() < 1e-12 && (back.2 - fv).abs() < 1e-12);
+                    if u < 1.0 && v < 1.0 {
+                        assert_eq!((q, qu, qv), (p, u, v), "patch {p} at ({u}, {v})");
+                    }
+                    // The exact integer form gives the same point.
+                    let (g, s, t) = mesh.face_point(p, (8.0 * u) as u64, (8.0 * v) as u64, 8);
+                    assert_eq!((g, s as f64 / 16.0, t as f64 / 16.0), (face, fu, fv));
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn the_face_parameterisation_follows_bfr() {
+        let mesh = faces_of_sizes(&[4, 3, 5, 12]);
+        // Quad: corners of the face at the patch corners (0, 0).
+        let corner = |p: usize| {
+            let (_, u, v) = mesh.face_point_at(p, 0.0, 0.0);
+            (u, v)
+        };
+        assert_eq!(
+            (0..4).map(corner).collect::<Vec<_>>(),
+            [(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)]
+        );
+        // Quad centre, from every patch.
+        for p in 0..4 {
+            assert_eq!(mesh.face_point_at(p, 1.0, 1.0), (0, 0.5, 0.5));
+        }
+        // Triangle: 2 tiles per row; pentagon: 3; 12-gon: 1 + ⌊√11⌋ = 4.
+        assert_eq!(corner(4 + 2), (0.0, 1.0));
+        assert_eq!(mesh.face_point_at(4 + 2, 1.0, 1.0), (1, 0.5, 1.5));
+        assert_eq!(corner(7 + 4), (1.0, 1.0));
+        assert_eq!(corner(12 + 11), (3.0, 2.0));
+        // Outside every sub-face: no patch.
+        assert_eq!(mesh.patch_at(1, 0.75, 0.25), None);
+        assert_eq!(mesh.patch_at(1, 1.25, 1.25), None);
+        assert_eq!(mesh.patch_at(0, 1.5, 0.5), None);
+        assert_eq!(mesh.patch_at(9, 0.0, 0.0), None);
+    }
 }
