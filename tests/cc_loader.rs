@@ -3,7 +3,7 @@
 
 use std::path::Path;
 
-use tessera_core::catmull_clark::{BoundaryRule, PatchMesh};
+use tessera_core::catmull_clark::{BoundaryRule, CreaseMethod, PatchMesh};
 use tessera_core::io::obj::parse_obj;
 use tessera_tests::control_mesh;
 
@@ -40,13 +40,8 @@ fn reads_every_face_reference_form_and_negative_indices() {
 fn applies_boundary_and_hole_tags_and_warns_about_the_rest() {
     let m = control_mesh("opensubdiv/catmark_edgeonly.obj");
     assert_eq!(m.boundary, BoundaryRule::EdgeOnly);
-    assert!(
-        m.warnings
-            .iter()
-            .any(|w| w.contains("\"corner\"") && w.contains("6 lines")),
-        "{:?}",
-        m.warnings
-    );
+    assert_eq!(m.corners.len(), 6);
+    assert!(m.warnings.is_empty(), "{:?}", m.warnings);
     assert_eq!(
         control_mesh("opensubdiv/catmark_edgecorner.obj").boundary,
         BoundaryRule::EdgeAndCorner
@@ -58,19 +53,88 @@ fn applies_boundary_and_hole_tags_and_warns_about_the_rest() {
     );
     let holes = control_mesh("opensubdiv/catmark_hole_test1.obj");
     assert_eq!(holes.holes, vec![false, true, false, false, false, false]);
-    let car = control_mesh("opensubdiv/catmark_car.obj");
-    let crease = car
+    // Hierarchical edits are not applied, and say so with file and line.
+    let edits = control_mesh("opensubdiv/catmark_square_hedit0.obj");
+    let edit = edits
         .warnings
         .iter()
-        .find(|w| w.contains("\"crease\""))
-        .expect("crease warning");
+        .find(|w| w.contains("edit\""))
+        .expect("edit warning");
     assert!(
-        crease.contains("catmark_car.obj:") && crease.contains("tessellated smooth"),
-        "{crease}"
+        edit.contains("catmark_square_hedit0.obj:") && edit.contains("not supported"),
+        "{edit}"
     );
     assert!(control_mesh("opensubdiv/catmark_cube.obj")
         .warnings
         .is_empty());
+}
+
+#[test]
+fn reads_creases_corners_and_the_subdivision_options() {
+    let car = control_mesh("opensubdiv/catmark_car.obj");
+    assert!(car.warnings.is_empty(), "{:?}", car.warnings);
+    assert_eq!(car.creases.len(), 314);
+    assert!(car.creases.iter().all(|c| c.1 > 0.0));
+    // Indices are 0-based: the first tag of the car is `t crease 2/1/0 16 17 10`.
+    let first = std::fs::read_to_string(tessera_tests::asset("opensubdiv/catmark_car.obj"))
+        .unwrap()
+        .lines()
+        .find(|l| l.starts_with("t crease"))
+        .unwrap()
+        .to_string();
+    let w: Vec<&str> = first.split_whitespace().collect();
+    assert_eq!(
+        car.creases[0],
+        (
+            [w[3].parse().unwrap(), w[4].parse().unwrap()],
+            w[5].parse().unwrap()
+        )
+    );
+    let chaikin = control_mesh("opensubdiv/catmark_chaikin1.obj");
+    assert_eq!(chaikin.crease_method, CreaseMethod::Chaikin);
+    assert_eq!(
+        control_mesh("opensubdiv/catmark_chaikin0.obj").crease_method,
+        CreaseMethod::Normal
+    );
+    assert!(control_mesh("opensubdiv/catmark_smoothtris1.obj").smooth_triangles);
+    assert!(!control_mesh("opensubdiv/catmark_smoothtris0.obj").smooth_triangles);
+    let corners = control_mesh("opensubdiv/catmark_cube_corner1.obj");
+    assert!(!corners.corners.is_empty() && corners.has_creases());
+    // Shared and per-element sharpness; negative is smooth.
+    let square = format!("{SQUARE}v 2 0 0\nv 2 1 0\nf 1 2 3 4\nf 2 5 6 3\n");
+    let m = parse(&format!(
+        "{square}t crease 4/1/0 1 2 0 3 2.5\nt corner 2/2/0 0 4 1 -3\n"
+    ))
+    .unwrap();
+    assert_eq!(m.creases, vec![([1, 2], 2.5), ([0, 3], 2.5)]);
+    assert_eq!(m.corners, vec![(0, 1.0), (4, 0.0)]);
+    let m = parse(&format!("{square}t crease 4/2/0 1 2 0 3 1 2\n")).unwrap();
+    assert_eq!(m.creases, vec![([1, 2], 1.0), ([0, 3], 2.0)]);
+    let mut dropped = m.clone();
+    dropped.drop_creases();
+    assert!(!dropped.has_creases());
+    assert!(dropped.warnings.iter().any(|w| w.contains("--no-creases")));
+}
+
+#[test]
+fn bad_crease_tags_name_the_line() {
+    let square = format!("{SQUARE}f 1 2 3 4\n");
+    for (tag, problem) in [
+        ("t crease 2/1/0 0 2 1", "not an edge"),
+        ("t crease 2/1/0 0 9 1", "out of range"),
+        ("t crease 3/1/0 0 1 2 1", "pairs"),
+        ("t crease 4/3/0 0 1 1 2 1 1 1", "sharpness values"),
+        ("t corner 1/1/0 -1 1", "out of range"),
+        ("t crease 2/1/0 0 1 x", "not a number"),
+        ("t creasemethod 0/0/1 fast", "normal or chaikin"),
+        ("t smoothtriangles 0/0/0", "smooth or catmark"),
+    ] {
+        let e = parse(&format!("{square}{tag}\n")).unwrap_err();
+        assert!(
+            e.starts_with("test.obj:6:") && e.contains(problem),
+            "{tag}: {e}"
+        );
+    }
 }
 
 #[test]

@@ -16,6 +16,23 @@ pub enum BoundaryRule {
     EdgeOnly,
 }
 
+/// How semi-sharp sharpness decays from one subdivision level to the next (OpenSubdiv's
+/// `creasemethod` tag, `Sdc::Options::CreasingMethod`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, serde::Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum CreaseMethod {
+    /// Every sharpness drops by 1 per level (`normal`, OpenSubdiv's `CREASE_UNIFORM`).
+    #[default]
+    Normal,
+    /// Chaikin's rule: an edge's sharpness is first averaged, ¾ its own and ¼ that of the
+    /// other semi-sharp edges at the same end vertex, then drops by 1 (`chaikin`).
+    Chaikin,
+}
+
+/// Sharpness at or above which an edge or vertex is infinitely sharp (OpenSubdiv's
+/// `Sdc::Crease::SHARPNESS_INFINITE`).
+pub const SHARPNESS_INFINITE: f32 = 10.0;
+
 /// A polygon control mesh: faces of any size, counter-clockwise seen from the front.
 #[derive(Clone, Debug, Default)]
 pub struct ControlMesh {
@@ -31,6 +48,19 @@ pub struct ControlMesh {
     pub holes: Vec<bool>,
     /// How open boundaries are subdivided.
     pub boundary: BoundaryRule,
+    /// Sharp edges: the two control vertices (either order) and the sharpness, as
+    /// OpenSubdiv reads it (`t crease`): 0 smooth, up to [`SHARPNESS_INFINITE`]
+    /// semi-sharp (the edge stays sharp for that many levels, fractions blending), at or
+    /// above it infinitely sharp. A later entry for the same edge replaces an earlier one.
+    pub creases: Vec<([u32; 2], f32)>,
+    /// Sharp vertices (`t corner`): the control vertex and its sharpness, as for edges.
+    pub corners: Vec<(u32, f32)>,
+    /// How semi-sharp sharpness decays.
+    pub crease_method: CreaseMethod,
+    /// OpenSubdiv's smooth triangle rule (`t smoothtriangles smooth`,
+    /// `Sdc::Options::TRI_SUB_SMOOTH`): the edge points next to triangles weight their
+    /// face points more, for rounder triangles.
+    pub smooth_triangles: bool,
     /// Things the loader read and ignored (unsupported tags), one line each.
     pub warnings: Vec<String>,
 }
@@ -46,8 +76,32 @@ impl ControlMesh {
             face_lines: vec![0; n],
             holes: vec![false; n],
             boundary: BoundaryRule::default(),
+            creases: Vec::new(),
+            corners: Vec::new(),
+            crease_method: CreaseMethod::default(),
+            smooth_triangles: false,
             warnings: Vec::new(),
         }
+    }
+
+    /// Whether any edge or vertex is sharp (a crease or corner of non-zero sharpness).
+    pub fn has_creases(&self) -> bool {
+        self.creases.iter().any(|c| c.1 > 0.0) || self.corners.iter().any(|c| c.1 > 0.0)
+    }
+
+    /// Drops every crease and corner, so that the smooth surface is tessellated, and
+    /// says so in [`Self::warnings`] when there were any. Boundaries keep their rule.
+    pub fn drop_creases(&mut self) {
+        if self.has_creases() {
+            let sharp_edges = self.creases.iter().filter(|c| c.1 > 0.0).count();
+            let sharp_vertices = self.corners.iter().filter(|c| c.1 > 0.0).count();
+            self.warnings.push(format!(
+                "{}: {sharp_edges} sharp edges and {sharp_vertices} sharp vertices ignored (--no-creases): the smooth surface is tessellated",
+                self.source.display()
+            ));
+        }
+        self.creases.clear();
+        self.corners.clear();
     }
 
     /// Bounds of the vertices that faces use.

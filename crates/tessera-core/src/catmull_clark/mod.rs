@@ -47,7 +47,7 @@ use std::path::Path;
 pub use adaptive::{
     first_splits, tessellate_adaptive, CcParams, CcTessellation, FirstSplit, LeafBound,
 };
-pub use control_mesh::{BoundaryRule, ControlMesh};
+pub use control_mesh::{BoundaryRule, ControlMesh, CreaseMethod, SHARPNESS_INFINITE};
 pub use patch::{PatchSurface, SurfaceModel, SurfacePoint};
 pub use topology::PatchMesh;
 pub use uniform::tessellate_uniform;

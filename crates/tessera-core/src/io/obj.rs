@@ -4,9 +4,11 @@
 //! `f` with `v`, `v/vt`, `v//vn` or `v/vt/vn` references, 1-based or negative (relative
 //! to the vertices read so far), polygons of any size. Tag lines
 //! `t <name> <nint>/<nfloat>/<nstring> <ints> <floats> <strings>` (0-based indices):
-//! `interpolateboundary` (1 edge-and-corner, 2 edge-only) and `hole` are applied; every
-//! other tag (creases, corners, ...) is ignored with a warning in
-//! [`ControlMesh::warnings`]. Other OBJ statements (`o`, `g`, `s`, `usemtl`, ...) carry
+//! `interpolateboundary` (1 edge-and-corner, 2 edge-only), `hole`, `crease` (vertex
+//! pairs, one sharpness for all or one per pair), `corner` (vertices, likewise),
+//! `creasemethod` (`normal`, `chaikin`) and `smoothtriangles` (`smooth`, `catmark`) are
+//! applied with OpenSubdiv's meaning; every other tag (hierarchical edits, face-varying
+//! options, ...) is ignored with a warning in [`ControlMesh::warnings`]. Other OBJ statements (`o`, `g`, `s`, `usemtl`, ...) carry
 //! nothing a surface needs.
 
 use std::collections::BTreeMap;
@@ -14,7 +16,16 @@ use std::path::Path;
 
 use glam::DVec3;
 
-use crate::catmull_clark::{BoundaryRule, ControlMesh};
+use crate::catmull_clark::{BoundaryRule, ControlMesh, CreaseMethod};
+
+/// A tag line: `t <name> <nint>/<nfloat>/<nstring> <ints> <floats> <strings>`.
+struct Tag {
+    line: usize,
+    name: String,
+    ints: Vec<i64>,
+    floats: Vec<f32>,
+    strings: Vec<String>,
+}
 use crate::error::{Error, Result};
 
 /// Reads an OBJ control mesh from disk.
@@ -39,7 +50,7 @@ pub fn parse_obj(path: &Path, bytes: &[u8]) -> Result<ControlMesh> {
     };
     let (mut texcoords, mut normals) = (0usize, 0usize);
     // Tags to apply once all faces are known: (line, name, ints).
-    let mut tags: Vec<(usize, String, Vec<i64>)> = Vec::new();
+    let mut tags: Vec<Tag> = Vec::new();
     let mut ignored: BTreeMap<String, (usize, usize)> = BTreeMap::new();
 
     for (i, raw) in text.lines().enumerate() {
@@ -119,7 +130,26 @@ pub fn parse_obj(path: &Path, bytes: &[u8]) -> Result<ControlMesh> {
                             .map_err(|_| err(format!("tag {name:?}: {w:?} is not an integer")))
                     })
                     .collect::<Result<Vec<_>>>()?;
-                tags.push((line, name.to_string(), ints));
+                let floats = rest[counts[0]..counts[0] + counts[1]]
+                    .iter()
+                    .map(|w| {
+                        w.parse::<f32>()
+                            .ok()
+                            .filter(|x| !x.is_nan())
+                            .ok_or_else(|| err(format!("tag {name:?}: {w:?} is not a number")))
+                    })
+                    .collect::<Result<Vec<_>>>()?;
+                let strings = rest[counts[0] + counts[1]..counts[0] + counts[1] + counts[2]]
+                    .iter()
+                    .map(|w| w.to_string())
+                    .collect();
+                tags.push(Tag {
+                    line,
+                    name: name.to_string(),
+                    ints,
+                    floats,
+                    strings,
+                });
             }
             "vp" | "o" | "g" | "s" | "mtllib" | "usemtl" | "l" | "p" | "cstype" | "deg" => {}
             other => {
@@ -153,8 +183,43 @@ pub fn parse_obj(path: &Path, bytes: &[u8]) -> Result<ControlMesh> {
     }
     mesh.holes = vec![false; mesh.faces.len()];
 
-    for (line, name, ints) in tags {
+    let vertex = |i: i64, line: usize, what: &str| {
+        usize::try_from(i)
+            .ok()
+            .filter(|&i| i < nv)
+            .map(|i| i as u32)
+            .ok_or_else(|| {
+                Error::parse(
+                    path,
+                    line,
+                    format!(
+                        "{what} vertex {i} out of range ({nv} vertices; tag indices start at 0)"
+                    ),
+                )
+            })
+    };
+    let mut edges: Option<std::collections::HashSet<(u32, u32)>> = None;
+    for Tag {
+        line,
+        name,
+        ints,
+        floats,
+        strings,
+    } in tags
+    {
         let err = |msg: String| Error::parse(path, line, msg);
+        // One sharpness for all, or one per element (negative sharpness is smooth, as
+        // OpenSubdiv reads it).
+        let sharpness = |k: usize, elements: usize| -> Result<f32> {
+            match floats.len() {
+                1 => Ok(floats[0].max(0.0)),
+                n if n == elements => Ok(floats[k].max(0.0)),
+                n => Err(err(format!(
+                    "{name} tag with {elements} element{} has {n} sharpness values: expected 1 or {elements}",
+                    if elements == 1 { "" } else { "s" }
+                ))),
+            }
+        };
         match name.as_str() {
             "interpolateboundary" => match ints.first() {
                 Some(1) => mesh.boundary = BoundaryRule::EdgeAndCorner,
@@ -175,6 +240,58 @@ pub fn parse_obj(path: &Path, bytes: &[u8]) -> Result<ControlMesh> {
                     *slot = true;
                 }
             }
+            "crease" => {
+                if ints.len() % 2 != 0 || ints.is_empty() {
+                    return Err(err(format!(
+                        "crease tag with {} vertex indices: expected pairs, one per edge",
+                        ints.len()
+                    )));
+                }
+                let edges = edges.get_or_insert_with(|| {
+                    mesh.faces
+                        .iter()
+                        .flat_map(|f| (0..f.len()).map(|k| (f[k], f[(k + 1) % f.len()])))
+                        .map(|(a, b)| (a.min(b), a.max(b)))
+                        .collect()
+                });
+                for (k, pair) in ints.chunks(2).enumerate() {
+                    let (a, b) = (vertex(pair[0], line, "crease")?, vertex(pair[1], line, "crease")?);
+                    if !edges.contains(&(a.min(b), a.max(b))) {
+                        return Err(err(format!(
+                            "crease {a}-{b} is not an edge of the mesh (tag indices start at 0)"
+                        )));
+                    }
+                    mesh.creases.push(([a, b], sharpness(k, ints.len() / 2)?));
+                }
+            }
+            "corner" => {
+                if ints.is_empty() {
+                    return Err(err("corner tag without a vertex".into()));
+                }
+                for (k, &v) in ints.iter().enumerate() {
+                    mesh.corners.push((vertex(v, line, "corner")?, sharpness(k, ints.len())?));
+                }
+            }
+            "creasemethod" => match strings.first().map(String::as_str) {
+                Some("normal") => mesh.crease_method = CreaseMethod::Normal,
+                Some("chaikin") => mesh.crease_method = CreaseMethod::Chaikin,
+                other => {
+                    return Err(err(format!(
+                        "creasemethod {}: expected normal or chaikin",
+                        other.map_or("without a value".into(), |o| format!("{o:?}"))
+                    )))
+                }
+            },
+            "smoothtriangles" => match strings.first().map(String::as_str) {
+                Some("smooth") => mesh.smooth_triangles = true,
+                Some("catmark") => mesh.smooth_triangles = false,
+                other => {
+                    return Err(err(format!(
+                        "smoothtriangles {}: expected smooth or catmark",
+                        other.map_or("without a value".into(), |o| format!("{o:?}"))
+                    )))
+                }
+            },
             other => {
                 let e = ignored.entry(format!("tag {other:?}")).or_insert((line, 0));
                 e.1 += 1;
@@ -182,8 +299,10 @@ pub fn parse_obj(path: &Path, bytes: &[u8]) -> Result<ControlMesh> {
         }
     }
     for (what, (line, count)) in ignored {
-        let hint = if what.contains("crease") || what.contains("corner") {
-            " (sharpness is not supported yet: the surface is tessellated smooth)"
+        let hint = if what.contains("edit") {
+            " (hierarchical edits are not supported: the surface is tessellated without them)"
+        } else if what.contains("facevarying") {
+            " (face-varying data is not read)"
         } else {
             ""
         };
