@@ -2,7 +2,7 @@
 //! Hbr uniform refinements, and the refined Spot and Blub meshes of Keenan Crane.
 
 use glam::DVec3;
-use tessera_core::catmull_clark::refine::{refine, refine_sharp, Scheme, Sharpness};
+use tessera_core::catmull_clark::refine::{refine_sharp, Scheme, Sharpness};
 use tessera_core::catmull_clark::{BoundaryRule, ControlMesh};
 use tessera_tests::control_mesh;
 

@@ -210,7 +210,7 @@ pub fn tessellate(args: TessellateArgs) -> Result<(), Error> {
             "adaptive"
         },
         backend: if on_gpu { "gpu" } else { "cpu" },
-        boundary: model.mesh.boundary,
+        boundary: model.mesh.boundary(),
         tolerance,
         max_depth: tolerance.map(|_| max_depth),
         first_split: tolerance.map(|_| first_split),
@@ -283,7 +283,7 @@ pub fn info(input: &Path) -> Result<(), Error> {
     println!(
         "  patches: {} (one per face corner), boundary rule {:?}, {} boundary edges after one step",
         mesh.patch_count(),
-        mesh.boundary,
+        mesh.boundary(),
         boundary_edges
     );
     let (lo, hi) = control.bounds();

@@ -3,13 +3,23 @@
 //! Catmull-Clark step of it yields the one-rings of its four children. Repeating that
 //! step is the exact evaluation near extraordinary vertices (the same subdivision that
 //! Stam's method diagonalises), and a regular one-ring is a bicubic B-spline patch.
+//!
+//! Sharpness rides along: the one-ring holds every edge at its target's corners, which
+//! is all the rules read ([`super::refine`]). Where an infinitely sharp edge cuts the
+//! fan at a corner, the target's side of it subdivides on its own, as at an open
+//! boundary, so a corner on a crease between two faces on each side, or a corner whose
+//! two target edges are sharp, is as regular as a boundary vertex: the patch is a
+//! B-spline with phantom points beyond the crease. A semi-sharp feature is subdivided
+//! until its sharpness has decayed.
 
 use std::collections::HashMap;
 
 use glam::DVec3;
 
-use super::control_mesh::BoundaryRule;
-use super::refine::refine;
+use super::control_mesh::{BoundaryRule, SHARPNESS_INFINITE};
+use super::refine::{
+    edge_key, is_semi_sharp, refine_sharp, vertex_rule, Scheme, Sharpness, VertexRule,
+};
 
 /// A quad (always `quads[0]`, the target) with its one-ring. The target's corners
 /// `quads[0][0..4]` sit at parameters `(0,0), (1,0), (1,1), (0,1)`.
@@ -20,29 +30,8 @@ pub struct LocalMesh {
     /// The target quad, then the other quads touching its corners, as indices into
     /// `points` (each counter-clockwise).
     pub quads: Vec<[u32; 4]>,
-}
-
-/// What a corner of the target is.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct CornerInfo {
-    /// Number of edges at the vertex.
-    pub valence: usize,
-    /// Number of faces around it.
-    pub faces: usize,
-    /// Whether the vertex is on an open boundary.
-    pub boundary: bool,
-}
-
-impl CornerInfo {
-    /// Regular corners make the quad a B-spline patch: valence 4 inside, 3 on a
-    /// boundary, 2 (a corner) with the edge-and-corner rule.
-    pub fn is_regular(&self, rule: BoundaryRule) -> bool {
-        match (self.boundary, self.valence) {
-            (false, 4) | (true, 3) => true,
-            (true, 2) => rule == BoundaryRule::EdgeAndCorner,
-            _ => false,
-        }
-    }
+    /// Sharpness of its edges and points (exact for those at the target's corners).
+    pub sharp: Sharpness,
 }
 
 /// Bézier form of the uniform cubic B-spline on one span: row `i` gives Bézier point `i`.
@@ -75,11 +64,13 @@ pub fn bspline_to_bezier(net: &[DVec3; 16]) -> [DVec3; 16] {
 }
 
 impl LocalMesh {
-    /// The one-ring of `target` in a quad mesh with per-point incident quads.
+    /// The one-ring of `target` in a quad mesh with per-point incident quads and the
+    /// mesh's sharpness.
     pub fn gather(
         points: &[DVec3],
         quads: &[[u32; 4]],
         point_quads: &[Vec<u32>],
+        sharp: &Sharpness,
         target: usize,
     ) -> Self {
         let mut faces = vec![target as u32];
@@ -90,15 +81,16 @@ impl LocalMesh {
                 }
             }
         }
-        Self::compact(points, faces.iter().map(|&q| quads[q as usize]))
+        Self::compact(points, faces.iter().map(|&q| quads[q as usize]), sharp)
     }
 
     /// Renumbers the points the given quads use; the first quad becomes the target.
-    fn compact(points: &[DVec3], quads: impl Iterator<Item = [u32; 4]>) -> Self {
+    fn compact(points: &[DVec3], quads: impl Iterator<Item = [u32; 4]>, sharp: &Sharpness) -> Self {
         let mut map: HashMap<u32, u32> = HashMap::new();
         let mut out = LocalMesh {
             points: Vec::new(),
             quads: Vec::new(),
+            sharp: Sharpness::default(),
         };
         for quad in quads {
             out.quads.push(quad.map(|v| {
@@ -107,6 +99,24 @@ impl LocalMesh {
                     out.points.len() as u32 - 1
                 })
             }));
+        }
+        if !sharp.is_empty() {
+            let local = |v: &u32| map.get(v).copied();
+            for (&(a, b), &s) in &sharp.edges {
+                if let (Some(a), Some(b)) = (local(&a), local(&b)) {
+                    out.sharp.edges.insert(edge_key(a, b), s);
+                }
+            }
+            for (&(a, b), &s) in &sharp.next {
+                if let (Some(a), Some(b)) = (local(&a), local(&b)) {
+                    out.sharp.next.insert((a, b), s);
+                }
+            }
+            for (&v, &s) in &sharp.vertices {
+                if let Some(v) = local(&v) {
+                    out.sharp.vertices.insert(v, s);
+                }
+            }
         }
         out
     }
@@ -134,54 +144,167 @@ impl LocalMesh {
         edges
     }
 
-    /// What corner `c` of the target is. Exact: the one-ring holds all quads around it.
-    pub fn corner(&self, c: usize) -> CornerInfo {
+    /// Sharpness of edge `(v, w)` whose use count is `uses`: infinite on an open
+    /// boundary (exact for edges at the target's corners).
+    fn edge_sharpness(&self, v: u32, w: u32, uses: u32) -> f32 {
+        if uses == 1 {
+            SHARPNESS_INFINITE
+        } else {
+            self.sharp.edge(v, w)
+        }
+    }
+
+    /// What the rules see at target corner `c`: its vertex sharpness (infinite at an
+    /// edge-and-corner corner) and its edges with their sharpness.
+    fn corner_sharpness(&self, c: usize, rule: BoundaryRule) -> (f32, Vec<(u32, f32)>) {
         let v = self.quads[0][c];
         let edges = self.edges_at(v);
-        CornerInfo {
-            valence: edges.len(),
-            faces: self.around(v).count(),
-            boundary: edges.iter().any(|&(_, n)| n == 1),
+        let faces = self.around(v).count();
+        let corner = rule == BoundaryRule::EdgeAndCorner && faces == 1 && edges.len() == 2;
+        let vs = if corner {
+            SHARPNESS_INFINITE
+        } else {
+            self.sharp.vertex(v)
+        };
+        let es = edges
+            .iter()
+            .map(|&(w, n)| (w, self.edge_sharpness(v, w, n)))
+            .collect();
+        (vs, es)
+    }
+
+    /// Whether target corner `c` still has semi-sharp sharpness (its vertex or an edge
+    /// at it), which decays with subdivision.
+    pub fn corner_is_semi_sharp(&self, c: usize, rule: BoundaryRule) -> bool {
+        if self.sharp.is_empty() {
+            return false;
+        }
+        let (vs, es) = self.corner_sharpness(c, rule);
+        is_semi_sharp(vs) || es.iter().any(|&(_, s)| is_semi_sharp(s))
+    }
+
+    /// Whether any target corner has semi-sharp sharpness.
+    pub fn has_semi_sharp(&self, rule: BoundaryRule) -> bool {
+        (0..4).any(|c| self.corner_is_semi_sharp(c, rule))
+    }
+
+    /// The faces on the target's side of the infinitely sharp edges at corner `c`
+    /// (all of them where none is sharp): walking around the vertex from the target,
+    /// each way, until a sharp or open edge.
+    fn sheet_size(&self, c: usize, sharp_edge: &dyn Fn(u32) -> bool) -> usize {
+        let v = self.quads[0][c];
+        let mut count = 1;
+        for forward in [true, false] {
+            let mut q = 0usize;
+            loop {
+                let quad = self.quads[q];
+                let k = quad.iter().position(|&w| w == v).expect("quad at v");
+                let w = if forward {
+                    quad[(k + 1) % 4]
+                } else {
+                    quad[(k + 3) % 4]
+                };
+                if sharp_edge(w) {
+                    break;
+                }
+                // The quad across edge v–w runs it the other way.
+                let next = if forward {
+                    self.face_with(w, v)
+                } else {
+                    self.face_with(v, w)
+                };
+                let Some((n, _)) = next else { break };
+                if n == 0 {
+                    return self.around(v).count();
+                }
+                count += 1;
+                q = n;
+            }
+        }
+        count
+    }
+
+    /// Whether target corner `c` lets the target be a B-spline patch: no semi-sharp
+    /// sharpness, and a smooth vertex of valence 4, a crease vertex with two faces on
+    /// the target's side of the crease, or a corner whose two target edges are sharp.
+    pub fn corner_is_regular(&self, c: usize, rule: BoundaryRule) -> bool {
+        let (vs, es) = self.corner_sharpness(c, rule);
+        if is_semi_sharp(vs) || es.iter().any(|&(_, s)| is_semi_sharp(s)) {
+            return false;
+        }
+        let sharp: Vec<f32> = es.iter().map(|e| e.1).collect();
+        let is_sharp = |w: u32| es.iter().any(|&(x, s)| x == w && s > 0.0);
+        match vertex_rule(vs, &sharp) {
+            VertexRule::Smooth => es.len() == 4 && self.around(self.quads[0][c]).count() == 4,
+            VertexRule::Dart => false,
+            VertexRule::Crease => self.sheet_size(c, &is_sharp) == 2,
+            VertexRule::Corner => self.sheet_size(c, &is_sharp) == 1,
         }
     }
 
     /// The first irregular corner of the target, if any.
     pub fn irregular_corner(&self, rule: BoundaryRule) -> Option<usize> {
-        (0..4).find(|&c| !self.corner(c).is_regular(rule))
+        (0..4).find(|&c| !self.corner_is_regular(c, rule))
     }
 
-    /// The limit position of target corner `c` (limit masks). Interior, valence n:
-    /// `(n² P + 4 Σ eᵢ + Σ fᵢ) / (n (n + 5))` over edge neighbours eᵢ and diagonal
-    /// points fᵢ; smooth boundary: `(a + 4P + b)/6`; corner: `P`.
-    pub fn limit_point(&self, c: usize, rule: BoundaryRule) -> DVec3 {
+    /// The limit position of target corner `c`. With semi-sharp sharpness left, that of
+    /// the corner one step down (the same point); otherwise the limit mask of its rule:
+    /// smooth, valence n: `(n² P + 4 Σ eᵢ + Σ fᵢ) / (n (n + 5))` over edge neighbours eᵢ
+    /// and diagonal points fᵢ; crease: `(a + 4P + b)/6` along it; corner: `P`. A dart's
+    /// limit is found by subdividing towards it (its sharp edge changes the eigenvector
+    /// the smooth mask is).
+    pub fn limit_point(&self, c: usize, scheme: &Scheme) -> DVec3 {
+        let rule = scheme.boundary;
+        if self.corner_is_semi_sharp(c, rule) {
+            return self.children(scheme)[c].limit_point(c, scheme);
+        }
         let v = self.quads[0][c];
         let p = self.points[v as usize];
-        let info = self.corner(c);
-        if info.boundary {
-            if info.faces == 1 && rule == BoundaryRule::EdgeAndCorner {
-                return p;
+        let (vs, es) = self.corner_sharpness(c, rule);
+        let sharp: Vec<f32> = es.iter().map(|e| e.1).collect();
+        match vertex_rule(vs, &sharp) {
+            VertexRule::Corner => p,
+            VertexRule::Crease => {
+                let mut ends = es
+                    .iter()
+                    .filter(|e| e.1 > 0.0)
+                    .map(|e| self.points[e.0 as usize]);
+                let (a, b) = (ends.next().unwrap_or(p), ends.next().unwrap_or(p));
+                (a + 4.0 * p + b) / 6.0
             }
-            let b: Vec<u32> = self
-                .edges_at(v)
-                .into_iter()
-                .filter(|&(_, n)| n == 1)
-                .map(|(w, _)| w)
-                .collect();
-            return (self.points[b[0] as usize] + 4.0 * p + self.points[b[1] as usize]) / 6.0;
+            VertexRule::Smooth => {
+                let n = es.len() as f64;
+                let mut sum = n * n * p;
+                for (q, k) in self.around(v) {
+                    let quad = self.quads[q];
+                    sum += 4.0 * self.points[quad[(k + 1) % 4] as usize]
+                        + self.points[quad[(k + 2) % 4] as usize];
+                }
+                sum / (n * (n + 5.0))
+            }
+            VertexRule::Dart => {
+                // The one-ring shrinks onto the limit by the subdominant eigenvalue each
+                // step (below 0.8 for every valence accepted): stop when it is within
+                // rounding of a point.
+                let mut ring = self.clone();
+                let start = ring.hull_radius(p).max(f64::MIN_POSITIVE);
+                for _ in 0..200 {
+                    let q = ring.points[ring.quads[0][c] as usize];
+                    if ring.hull_radius(q) <= 1e-15 * start {
+                        return q;
+                    }
+                    ring = ring.children(scheme)[c].clone();
+                }
+                ring.points[ring.quads[0][c] as usize]
+            }
         }
-        let n = info.valence as f64;
-        let mut sum = n * n * p;
-        for (q, k) in self.around(v) {
-            let quad = self.quads[q];
-            sum += 4.0 * self.points[quad[(k + 1) % 4] as usize]
-                + self.points[quad[(k + 2) % 4] as usize];
-        }
-        sum / (n * (n + 5.0))
     }
 
     /// The largest distance from `center` to a point of the mesh. The limit surface over
-    /// the target lies in the convex hull of these points (every Catmull-Clark weight is
-    /// non-negative for the valences accepted), so this bounds `|S(u,v) - center|`.
+    /// the target lies in the convex hull of these points wherever every subdivision
+    /// weight is non-negative (every rule here, for the valences accepted, except
+    /// Chaikin's decay of a sharpness above 1 to 0, which extrapolates), so this bounds
+    /// `|S(u,v) - center|` there.
     pub fn hull_radius(&self, center: DVec3) -> f64 {
         self.points
             .iter()
@@ -192,9 +315,9 @@ impl LocalMesh {
     /// One Catmull-Clark step; returns the one-rings of the four children, child `c`
     /// covering the quadrant at target corner `c` (`[0,½]², [½,1]×[0,½], [½,1]², [0,½]×[½,1]`),
     /// each with its corners in the same order as the target's.
-    pub fn children(&self, rule: BoundaryRule) -> [LocalMesh; 4] {
+    pub fn children(&self, scheme: &Scheme) -> [LocalMesh; 4] {
         let faces: Vec<Vec<u32>> = self.quads.iter().map(|q| q.to_vec()).collect();
-        let r = refine(&self.points, &faces, rule);
+        let (r, sharp) = refine_sharp(&self.points, &faces, scheme, &self.sharp);
         std::array::from_fn(|c| {
             // Sub-quad of the target at corner c, rotated so that the child's corner 0
             // (its lower-left) comes first.
@@ -207,7 +330,7 @@ impl LocalMesh {
                     faces.push(*quad);
                 }
             }
-            LocalMesh::compact(&r.points, faces.into_iter())
+            LocalMesh::compact(&r.points, faces.into_iter(), &sharp)
         })
     }
 
@@ -220,9 +343,19 @@ impl LocalMesh {
         })
     }
 
+    /// The face across the edge `b → a` of a face, unless that edge is infinitely
+    /// sharp: the neighbour the B-spline net may read through.
+    fn across(&self, a: u32, b: u32) -> Option<(usize, usize)> {
+        if self.sharp.edge(a, b) >= SHARPNESS_INFINITE {
+            return None;
+        }
+        self.face_with(a, b)
+    }
+
     /// The 4×4 B-spline net (row-major, `i` along u) when every target corner is
-    /// regular. Missing points beyond a boundary are phantoms `2P - Q` (reflections),
-    /// which make the tensor-product spline follow the boundary rules exactly.
+    /// regular. Missing points beyond a boundary or an infinitely sharp crease are
+    /// phantoms `2P - Q` (reflections), which make the tensor-product spline follow the
+    /// boundary rules exactly (a crease subdivides its sides as boundaries).
     pub fn regular_net(&self, rule: BoundaryRule) -> Option<[DVec3; 16]> {
         if self.irregular_corner(rule).is_some() {
             return None;
@@ -239,7 +372,7 @@ impl LocalMesh {
         for k in 0..4 {
             let (a, b) = (t[k], t[(k + 1) % 4]);
             // The neighbour across edge k runs b → a: [b, a, x, y], x next to a.
-            let Some((n, pos)) = self.face_with(b, a) else {
+            let Some((n, pos)) = self.across(b, a) else {
                 continue;
             };
             let quad = self.quads[n];
@@ -247,9 +380,8 @@ impl LocalMesh {
             let (ca, cb) = (CORNER[k], CORNER[(k + 1) % 4]);
             net[at(ca.0 + OUT[k].0, ca.1 + OUT[k].1)] = Some(self.points[x as usize]);
             net[at(cb.0 + OUT[k].0, cb.1 + OUT[k].1)] = Some(self.points[y as usize]);
-            // Diagonal at a (interior corners only): across the edge a–x, [x, a, z, w].
-            if !self.corner(k).boundary {
-                let (d, dpos) = self.face_with(x, a)?;
+            // Diagonal at a, across the edge a–x: [x, a, z, w].
+            if let Some((d, dpos)) = self.across(x, a) {
                 let w = self.quads[d][(dpos + 3) % 4];
                 let prev = OUT[(k + 3) % 4];
                 net[at(ca.0 + OUT[k].0 + prev.0, ca.1 + OUT[k].1 + prev.1)] =
@@ -294,12 +426,13 @@ impl LocalMesh {
     /// vertex). The one-ring is subdivided towards the vertex with the limit point
     /// subtracted and the scale renormalised each step, so it converges (in f64, without
     /// underflow) to an affine image of the subdominant eigenvectors, which span the
-    /// tangent plane; the normal is the sum of the fan's cross products.
-    pub fn corner_normal(&self, c: usize, rule: BoundaryRule) -> DVec3 {
+    /// tangent plane; the normal is the sum of the fan's cross products (on a crease or
+    /// at a corner, where the surface has no tangent plane, an average of its sides').
+    pub fn corner_normal(&self, c: usize, scheme: &Scheme) -> DVec3 {
         let mut ring = self.clone();
         let mut normal = DVec3::ZERO;
         for _ in 0..48 {
-            let s = ring.limit_point(c, rule);
+            let s = ring.limit_point(c, scheme);
             let scale = ring.hull_radius(s).max(f64::MIN_POSITIVE);
             for p in &mut ring.points {
                 *p = (*p - s) / scale;
@@ -319,7 +452,7 @@ impl LocalMesh {
                 return next;
             }
             normal = next;
-            ring = ring.children(rule)[c].clone();
+            ring = ring.children(scheme)[c].clone();
         }
         normal
     }

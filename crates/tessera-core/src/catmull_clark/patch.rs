@@ -16,8 +16,9 @@
 use glam::DVec3;
 
 use super::bicubic::{self, Net};
-use super::control_mesh::BoundaryRule;
+use super::control_mesh::CreaseMethod;
 use super::local::{bspline_to_bezier, LocalMesh};
+use super::refine::Scheme;
 use super::topology::PatchMesh;
 
 /// A node of a patch's quadtree.
@@ -64,8 +65,8 @@ pub struct PatchSurface {
     pub nodes: Vec<Node>,
     /// Per node: for split nodes with one extraordinary corner, its ball.
     pub balls: Vec<Option<Ball>>,
-    /// The boundary rule the one-rings are subdivided with.
-    pub rule: BoundaryRule,
+    /// The rules the one-rings are subdivided with.
+    pub scheme: Scheme,
 }
 
 /// A point of the limit surface with its unit normal.
@@ -80,11 +81,17 @@ pub struct SurfacePoint {
 impl PatchSurface {
     /// Builds the quadtree of patch `p`, subdividing at most `depth ≥ 1` times.
     pub fn build(mesh: &PatchMesh, p: usize, depth: u32) -> Self {
-        let ring = LocalMesh::gather(&mesh.points, &mesh.quads, &mesh.point_quads, p);
+        let ring = LocalMesh::gather(
+            &mesh.points,
+            &mesh.quads,
+            &mesh.point_quads,
+            &mesh.sharpness,
+            p,
+        );
         let mut s = PatchSurface {
             nodes: Vec::new(),
             balls: Vec::new(),
-            rule: mesh.boundary,
+            scheme: mesh.scheme,
         };
         s.add(ring, 0, depth.max(1), None);
         s
@@ -94,8 +101,9 @@ impl PatchSurface {
     /// (deeper one-rings are too small for double precision to give it accurately).
     fn add(&mut self, ring: LocalMesh, level: u32, depth: u32, chain_normal: Option<DVec3>) -> u32 {
         let id = self.nodes.len() as u32;
+        let (scheme, rule) = (self.scheme, self.scheme.boundary);
         self.balls.push(None);
-        if let Some(net) = ring.regular_net(self.rule) {
+        if let Some(net) = ring.regular_net(rule) {
             self.nodes
                 .push(Node::Bezier(Box::new(bspline_to_bezier(&net))));
             return id;
@@ -103,12 +111,16 @@ impl PatchSurface {
         // Below `depth`, only the chain of squares shrinking onto an extraordinary
         // vertex goes on (three Bézier pieces per level), down to `CORNER_DEPTH`: the
         // flatness bound then reads stored pieces only, on the CPU as on the GPU.
+        // Semi-sharp sharpness is subdivided away first (at most 10 levels), so that
+        // every piece that is not a chain is a B-spline.
+        let semi_sharp = ring.has_semi_sharp(rule);
         let chain_ends = level >= super::CORNER_DEPTH || {
             level >= depth
+                && !semi_sharp
                 && ring
-                    .children(self.rule)
+                    .children(&scheme)
                     .iter()
-                    .filter(|c| c.regular_net(self.rule).is_none())
+                    .filter(|c| c.regular_net(rule).is_none())
                     .count()
                     != 1
         };
@@ -116,12 +128,12 @@ impl PatchSurface {
             // The extraordinary corner (0 if a regular-looking one-ring failed to give a
             // net, which the validated topologies do not produce: the node stays sound,
             // its bound is the convex hull around that corner's limit).
-            let corner = ring.irregular_corner(self.rule).unwrap_or(0);
-            let limit = ring.limit_point(corner, self.rule);
+            let corner = ring.irregular_corner(rule).unwrap_or(0);
+            let limit = ring.limit_point(corner, &scheme);
             self.nodes.push(Node::Corner(Box::new(CornerNode {
                 corner,
                 limit,
-                normal: chain_normal.unwrap_or_else(|| ring.corner_normal(corner, self.rule)),
+                normal: chain_normal.unwrap_or_else(|| ring.corner_normal(corner, &scheme)),
                 hull_radius: ring.hull_radius(limit),
                 ring,
             })));
@@ -129,23 +141,26 @@ impl PatchSurface {
         }
         self.nodes.push(Node::Split([0; 4]));
         let irregular: Vec<usize> = (0..4)
-            .filter(|&c| !ring.corner(c).is_regular(self.rule))
+            .filter(|&c| !ring.corner_is_regular(c, rule))
             .collect();
-        if let [corner] = irregular[..] {
-            let limit = ring.limit_point(corner, self.rule);
+        // The ball is the one-ring's convex hull, which holds the surface only where
+        // every weight is non-negative: not while Chaikin's rule may still extrapolate.
+        let hull_holds = !(semi_sharp && scheme.creasing == CreaseMethod::Chaikin);
+        if let ([corner], true) = (&irregular[..], hull_holds) {
+            let limit = ring.limit_point(*corner, &scheme);
             self.balls[id as usize] = Some(Ball {
                 limit,
                 radius: ring.hull_radius(limit),
             });
         }
         // Below `depth` only the chain goes on: its normal is the one computed here.
-        let normal = (level >= depth).then(|| {
+        let normal = (level >= depth && !semi_sharp).then(|| {
             chain_normal.unwrap_or_else(|| {
-                let corner = ring.irregular_corner(self.rule).unwrap_or(0);
-                ring.corner_normal(corner, self.rule)
+                let corner = ring.irregular_corner(rule).unwrap_or(0);
+                ring.corner_normal(corner, &scheme)
             })
         });
-        let children = ring.children(self.rule);
+        let children = ring.children(&scheme);
         let mut ids = [0u32; 4];
         for (c, child) in children.into_iter().enumerate() {
             ids[c] = self.add(child, level + 1, depth, normal);
@@ -178,7 +193,7 @@ impl PatchSurface {
                     node = children[c] as usize;
                     (u, v) = (cu, cv);
                 }
-                Node::Corner(corner) => return eval_corner(corner, self.rule, u, v),
+                Node::Corner(corner) => return eval_corner(corner, &self.scheme, u, v),
             }
         }
     }
@@ -216,7 +231,7 @@ pub fn eval_net(net: &Net, u: f64, v: f64) -> SurfacePoint {
 
 /// Evaluation inside a corner node: the vertex itself, or further subdivision of its
 /// one-ring until `(u, v)` falls in a regular child.
-fn eval_corner(node: &CornerNode, rule: BoundaryRule, u: f64, v: f64) -> SurfacePoint {
+fn eval_corner(node: &CornerNode, scheme: &Scheme, u: f64, v: f64) -> SurfacePoint {
     let at_vertex = |u: f64, v: f64, c: usize| {
         let (cu, cv) = [(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)][c];
         u == cu && v == cv
@@ -227,20 +242,20 @@ fn eval_corner(node: &CornerNode, rule: BoundaryRule, u: f64, v: f64) -> Surface
             normal: node.normal,
         };
     }
-    let (mut ring, mut u, mut v) = (node.ring.children(rule), u, v);
+    let (mut ring, mut u, mut v) = (node.ring.children(scheme), u, v);
     // Each step halves the distance to the vertex; f64 runs out after ~1000 halvings,
     // long before which the point is in a regular child.
     for _ in 0..1100 {
         let (c, cu, cv) = quadrant(u, v);
         let child = &ring[c];
-        if let Some(net) = child.regular_net(rule) {
+        if let Some(net) = child.regular_net(scheme.boundary) {
             return eval_net(&bspline_to_bezier(&net), cu, cv);
         }
         (u, v) = (cu, cv);
         if at_vertex(u, v, node.corner) {
             break;
         }
-        ring = child.children(rule);
+        ring = child.children(scheme);
     }
     SurfacePoint {
         position: node.limit,

@@ -24,7 +24,7 @@ use std::collections::HashMap;
 use glam::DVec3;
 
 use super::control_mesh::{BoundaryRule, ControlMesh};
-use super::refine::{edge_key, refine};
+use super::refine::{edge_key, refine_sharp, Scheme, Sharpness};
 use crate::error::{Error, Result};
 
 /// The largest vertex valence (and face size) accepted. The evaluation has no limit of
@@ -34,8 +34,12 @@ pub const MAX_VALENCE: usize = 64;
 /// A validated mesh after its first Catmull-Clark step: all quads, one patch each.
 #[derive(Clone, Debug)]
 pub struct PatchMesh {
-    /// How open boundaries are subdivided (the control mesh's rule).
-    pub boundary: BoundaryRule,
+    /// How the mesh is subdivided: its boundary rule, crease method and triangle rule.
+    pub scheme: Scheme,
+    /// Sharpness of the control mesh's edges and vertices (its creases and corners).
+    pub control_sharpness: Sharpness,
+    /// Sharpness of the level-1 edges and points, after the first step.
+    pub sharpness: Sharpness,
     /// Level-1 points: `[vertex points] [edge points] [face points]` of the control mesh.
     pub points: Vec<DVec3>,
     /// Level-1 quads, one per patch, counter-clockwise. Holes included (see `hole`).
@@ -87,7 +91,14 @@ impl PatchMesh {
                 "every face is tagged as a hole: there is no surface to tessellate",
             ));
         }
-        let level1 = refine(&mesh.positions, &mesh.faces, mesh.boundary);
+        let scheme = Scheme {
+            boundary: mesh.boundary,
+            creasing: mesh.crease_method,
+            smooth_triangles: mesh.smooth_triangles,
+        };
+        let control_sharpness = Sharpness::from_tags(&mesh.creases, &mesh.corners);
+        let (level1, sharpness) =
+            refine_sharp(&mesh.positions, &mesh.faces, &scheme, &control_sharpness);
         let mut face_of = Vec::with_capacity(level1.quads.len());
         let mut hole = Vec::with_capacity(level1.quads.len());
         for (f, face) in mesh.faces.iter().enumerate() {
@@ -117,7 +128,9 @@ impl PatchMesh {
             quad_edges.push(ids);
         }
         Ok(PatchMesh {
-            boundary: mesh.boundary,
+            scheme,
+            control_sharpness,
+            sharpness,
             points: level1.points,
             quads: level1.quads,
             face_of,
@@ -155,7 +168,12 @@ impl PatchMesh {
                 crate::io::MAX_COORDINATE
             )));
         }
-        let level1 = refine(positions, &self.control_faces, self.boundary);
+        let (level1, _) = refine_sharp(
+            positions,
+            &self.control_faces,
+            &self.scheme,
+            &self.control_sharpness,
+        );
         Ok(PatchMesh {
             points: level1.points,
             ..self.clone()
@@ -244,6 +262,17 @@ impl PatchMesh {
         }
         let k = tv as usize * d + tu as usize;
         (k < sides).then_some((first + k, 2.0 * fu, 2.0 * fv))
+    }
+
+    /// Whether any control edge or vertex is sharp (creases or corners; open
+    /// boundaries do not count).
+    pub fn has_creases(&self) -> bool {
+        !self.control_sharpness.is_empty()
+    }
+
+    /// How open boundaries are subdivided.
+    pub fn boundary(&self) -> BoundaryRule {
+        self.scheme.boundary
     }
 
     /// Patches (level-1 quads), holes included.
