@@ -5,6 +5,7 @@ use std::path::PathBuf;
 use tessera_core::bezier::BezierModel;
 
 pub mod fuzz;
+pub mod osd;
 
 /// Path of a shipped asset (never `../shared`).
 pub fn asset(rel: &str) -> PathBuf {

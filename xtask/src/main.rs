@@ -139,6 +139,46 @@ fn ensure_xvfb() -> Result<(), String> {
     ])
 }
 
+/// OpenSubdiv (Debian's `libosd-dev`), the reference the Catmull-Clark surface is tested
+/// against, then its helper `tests/osd/osd_eval.cpp` built into
+/// `target/osd-eval/osd_eval` (again whenever the source is newer). Returns its path.
+fn ensure_osd_eval() -> Result<PathBuf, String> {
+    const HEADER: &str = "/usr/include/opensubdiv/version.h";
+    if !Path::new(HEADER).exists() {
+        eprintln!(
+            "xtask: installing OpenSubdiv (libosd-dev) for the Catmull-Clark reference tests"
+        );
+        apt_install(&["libosd-dev"]).map_err(|e| {
+            format!("the tests need OpenSubdiv, and `apt-get install libosd-dev` failed: {e}")
+        })?;
+        if !Path::new(HEADER).exists() {
+            return Err(format!("libosd-dev installed but {HEADER} is missing"));
+        }
+    }
+    let src = root().join("tests/osd/osd_eval.cpp");
+    let target = std::env::var_os("CARGO_TARGET_DIR")
+        .map(|d| root().join(d))
+        .unwrap_or_else(|| root().join("target"));
+    let out = target.join("osd-eval/osd_eval");
+    let modified = |p: &Path| std::fs::metadata(p).and_then(|m| m.modified()).ok();
+    if matches!((modified(&src), modified(&out)), (Some(s), Some(o)) if o >= s) {
+        return Ok(out);
+    }
+    let dir = out.parent().expect("a file in a folder");
+    std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+    // Built under a private name and renamed: a test running meanwhile never starts a
+    // half-written binary.
+    let tmp = out.with_file_name(format!("osd_eval.{}", std::process::id()));
+    run(Command::new("g++")
+        .args(["-O2", "-std=c++14"])
+        .arg(&src)
+        .arg("-o")
+        .arg(&tmp)
+        .arg("-losdCPU"))?;
+    std::fs::rename(&tmp, &out).map_err(|e| format!("{}: {e}", out.display()))?;
+    Ok(out)
+}
+
 /// The main job on a fresh machine: a Vulkan driver if there is none, then the CLI's
 /// `tessera render` with the given arguments, in the caller's directory (paths are the
 /// caller's), exiting as the CLI exits.
@@ -171,6 +211,7 @@ fn render(args: &[String]) -> Result<(), String> {
 fn test(extra: &[String]) -> Result<(), String> {
     ensure_vulkan()?;
     ensure_xvfb()?;
+    let osd_eval = ensure_osd_eval()?;
     run(cargo().args(["fmt", "--all", "--", "--check"]))?;
     run(cargo().args([
         "clippy",
@@ -205,7 +246,8 @@ fn test(extra: &[String]) -> Result<(), String> {
         ])
         .env("RUSTDOCFLAGS", "-D warnings"))?;
     let mut t = cargo();
-    t.args(["test", "--workspace", "--locked"]);
+    t.args(["test", "--workspace", "--locked"])
+        .env("TESSERA_OSD_EVAL", &osd_eval);
     if !extra.is_empty() {
         t.args(extra.iter().skip_while(|a| *a == "--"));
     }

@@ -1,0 +1,318 @@
+// osd_eval: limit points of a Catmull-Clark control mesh, computed by OpenSubdiv's Bfr, for
+// tests/osd_compare.rs (which runs it through tests/osd.rs).
+//
+// Build: g++ -O2 -std=c++14 osd_eval.cpp -o osd_eval -losdCPU   (Debian: libosd-dev)
+//
+// Input on stdin, one item per line (blank lines are skipped), in this order:
+//
+//   boundary edge-and-corner|edge-only     Sdc VTX_BOUNDARY_EDGE_AND_CORNER / _EDGE_ONLY
+//   creasing normal|chaikin                Sdc CREASE_UNIFORM / CREASE_CHAIKIN
+//   triangles catmark|smooth               Sdc TRI_SUB_CATMARK / TRI_SUB_SMOOTH
+//   vertices N      then N lines  x y z
+//   faces F         then F lines  n v0 ... v(n-1)      (0-based vertex indices)
+//   holes H         then H lines  face
+//   creases C       then C lines  a b sharpness        (an edge by its two vertices)
+//   corners K       then K lines  v sharpness
+//   points P        then P lines  face u v
+//
+// Each point is in the face's own parameterisation (Bfr::Parameterization, as in
+// opensubdiv/bfr/parameterization.h): a quad's (0,0) is its first vertex, u runs toward the
+// second and v toward the last; a face of n != 4 sides is n quad sub-faces, sub-face k the
+// half-unit square at tile (k mod d, k div d), d from the parameterisation.
+//
+// Output on stdout, one line per point, in order: "x y z" (%.17g), or "outside" for a point
+// outside its face's domain (Bfr does not check: its results there are undefined), or
+// "hole" for a face without a limit surface. Bad input (or any warning from Far while
+// building the topology) prints one line "osd_eval: line L: problem" on stderr and exits 1.
+//
+// Option: -l LEVEL sets both approximation levels (default: the most, 10).
+
+#include <opensubdiv/bfr/limits.h>
+#include <opensubdiv/bfr/refinerSurfaceFactory.h>
+#include <opensubdiv/bfr/surface.h>
+#include <opensubdiv/far/error.h>
+#include <opensubdiv/far/topologyDescriptor.h>
+#include <opensubdiv/far/topologyRefinerFactory.h>
+
+#include <cerrno>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <iostream>
+#include <memory>
+#include <sstream>
+#include <string>
+#include <vector>
+
+using namespace OpenSubdiv;
+
+namespace {
+
+// Bfr approximates the limit surface of irregular (smooth) and sharp regions by refining
+// them adaptively to these levels (defaults 2 and 6, opensubdiv/bfr/surfaceFactory.h).
+// The sub-patches it builds are addressed by Far::PatchParam, whose 10-bit u and v
+// indices "represent up through 10 levels of refinement" (opensubdiv/far/patchParam.h),
+// and Far caps adaptive isolation at 10 (far/patchTableFactory.h): 10 is the most.
+const int kMaxApproxLevel = 10;
+
+int g_line = 0;
+
+[[noreturn]] void fail(const std::string& msg) {
+    std::fprintf(stderr, "osd_eval: line %d: %s\n", g_line, msg.c_str());
+    std::exit(1);
+}
+
+// The next non-blank line, split into words.
+std::vector<std::string> next_line() {
+    std::string line;
+    while (std::getline(std::cin, line)) {
+        ++g_line;
+        std::istringstream in(line);
+        std::vector<std::string> words;
+        std::string w;
+        while (in >> w) words.push_back(w);
+        if (!words.empty()) return words;
+    }
+    ++g_line;
+    fail("unexpected end of input");
+}
+
+long parse_int(const std::string& s, long lo, long hi, const char* what) {
+    errno = 0;
+    char* end = nullptr;
+    long v = std::strtol(s.c_str(), &end, 10);
+    if (errno != 0 || end == s.c_str() || *end != '\0' || v < lo || v > hi) {
+        fail(std::string(what) + " '" + s + "' is not an integer in " + std::to_string(lo) +
+             ".." + std::to_string(hi));
+    }
+    return v;
+}
+
+double parse_double(const std::string& s, const char* what) {
+    errno = 0;
+    char* end = nullptr;
+    double v = std::strtod(s.c_str(), &end);
+    if (errno != 0 || end == s.c_str() || *end != '\0' || !std::isfinite(v)) {
+        fail(std::string(what) + " '" + s + "' is not a finite number");
+    }
+    return v;
+}
+
+// Sharpness is a float in Far: parsed as one, so that the shortest decimal of an f32
+// comes back as that f32.
+float parse_sharpness(const std::string& s) {
+    errno = 0;
+    char* end = nullptr;
+    float v = std::strtof(s.c_str(), &end);
+    if (errno != 0 || end == s.c_str() || *end != '\0' || !std::isfinite(v) || v < 0.0f) {
+        fail("sharpness '" + s + "' is not a finite number >= 0");
+    }
+    return v;
+}
+
+// "KEY VALUE" where VALUE is one of `choices`; returns its index.
+int keyword(const char* key, std::vector<const char*> choices) {
+    std::vector<std::string> w = next_line();
+    if (w.size() != 2 || w[0] != key) fail(std::string("expected '") + key + " ...'");
+    for (size_t i = 0; i < choices.size(); ++i) {
+        if (w[1] == choices[i]) return (int)i;
+    }
+    fail(std::string(key) + " '" + w[1] + "' is not known");
+}
+
+// "KEY COUNT".
+long count(const char* key) {
+    std::vector<std::string> w = next_line();
+    if (w.size() != 2 || w[0] != key) fail(std::string("expected '") + key + " COUNT'");
+    return parse_int(w[1], 0, 100000000, "count");
+}
+
+std::vector<std::string> row(size_t words, const char* what) {
+    std::vector<std::string> w = next_line();
+    if (w.size() != words) {
+        fail(std::string(what) + ": expected " + std::to_string(words) + " values, got " +
+             std::to_string(w.size()));
+    }
+    return w;
+}
+
+std::string g_far_warning;
+
+void on_far_warning(const char* msg) {
+    if (g_far_warning.empty()) g_far_warning = msg;
+}
+
+void on_far_error(Far::ErrorType, const char* msg) {
+    if (g_far_warning.empty()) g_far_warning = msg;
+}
+
+// Tiles per row of a face's quad sub-faces: vertex k sits at tile (k mod d, k div d), so d
+// is the first vertex in the second row (Parameterization::GetVertexCoord).
+int sub_face_tiles(const Bfr::Parameterization& p) {
+    for (int k = 1; k < p.GetFaceSize(); ++k) {
+        double uv[2];
+        p.GetVertexCoord(k, uv);
+        if (uv[1] == 1.0) return k;
+    }
+    return p.GetFaceSize();
+}
+
+// Whether (u, v) lies in the face's domain: the unit square for a quad, one sub-face's
+// half-unit square otherwise.
+bool in_domain(const Bfr::Parameterization& p, double u, double v) {
+    if (!std::isfinite(u) || !std::isfinite(v)) return false;
+    if (!p.HasSubFaces()) return u >= 0.0 && u <= 1.0 && v >= 0.0 && v <= 1.0;
+    double tu = std::floor(u), tv = std::floor(v);
+    int d = sub_face_tiles(p);
+    if (tu < 0.0 || tv < 0.0 || u - tu > 0.5 || v - tv > 0.5 || tu >= d) return false;
+    return tv * d + tu < p.GetFaceSize();
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+    int level = kMaxApproxLevel;
+    for (int i = 1; i < argc; ++i) {
+        if (std::strcmp(argv[i], "-l") == 0 && i + 1 < argc) {
+            level = (int)parse_int(argv[++i], 0, kMaxApproxLevel, "-l");
+        } else {
+            fail(std::string("unknown argument '") + argv[i] + "' (usage: osd_eval [-l LEVEL] < input)");
+        }
+    }
+
+    Sdc::Options sdc;
+    sdc.SetVtxBoundaryInterpolation(keyword("boundary", {"edge-and-corner", "edge-only"}) == 0
+                                        ? Sdc::Options::VTX_BOUNDARY_EDGE_AND_CORNER
+                                        : Sdc::Options::VTX_BOUNDARY_EDGE_ONLY);
+    sdc.SetCreasingMethod(keyword("creasing", {"normal", "chaikin"}) == 0
+                              ? Sdc::Options::CREASE_UNIFORM
+                              : Sdc::Options::CREASE_CHAIKIN);
+    sdc.SetTriangleSubdivision(keyword("triangles", {"catmark", "smooth"}) == 0
+                                   ? Sdc::Options::TRI_SUB_CATMARK
+                                   : Sdc::Options::TRI_SUB_SMOOTH);
+
+    long nv = count("vertices");
+    std::vector<double> positions;
+    positions.reserve(3 * nv);
+    for (long i = 0; i < nv; ++i) {
+        std::vector<std::string> w = row(3, "vertex");
+        for (const std::string& s : w) positions.push_back(parse_double(s, "coordinate"));
+    }
+
+    long nf = count("faces");
+    std::vector<int> sizes;
+    std::vector<int> indices;
+    for (long f = 0; f < nf; ++f) {
+        std::vector<std::string> w = next_line();
+        long n = parse_int(w[0], 3, Bfr::Limits::MaxFaceSize(), "face size");
+        if ((long)w.size() != n + 1) fail("face: expected " + std::to_string(n) + " vertex indices");
+        sizes.push_back((int)n);
+        for (long k = 1; k <= n; ++k) indices.push_back((int)parse_int(w[k], 0, nv - 1, "vertex index"));
+    }
+
+    long nh = count("holes");
+    std::vector<int> holes;
+    for (long i = 0; i < nh; ++i) holes.push_back((int)parse_int(row(1, "hole")[0], 0, nf - 1, "hole face"));
+
+    long nc = count("creases");
+    std::vector<int> crease_pairs;
+    std::vector<float> crease_weights;
+    for (long i = 0; i < nc; ++i) {
+        std::vector<std::string> w = row(3, "crease");
+        crease_pairs.push_back((int)parse_int(w[0], 0, nv - 1, "crease vertex"));
+        crease_pairs.push_back((int)parse_int(w[1], 0, nv - 1, "crease vertex"));
+        crease_weights.push_back(parse_sharpness(w[2]));
+    }
+
+    long nk = count("corners");
+    std::vector<int> corner_vertices;
+    std::vector<float> corner_weights;
+    for (long i = 0; i < nk; ++i) {
+        std::vector<std::string> w = row(2, "corner");
+        corner_vertices.push_back((int)parse_int(w[0], 0, nv - 1, "corner vertex"));
+        corner_weights.push_back(parse_sharpness(w[1]));
+    }
+
+    long np = count("points");
+    struct Query {
+        int face;
+        double u, v;
+    };
+    std::vector<Query> queries;
+    for (long i = 0; i < np; ++i) {
+        std::vector<std::string> w = row(3, "point");
+        queries.push_back({(int)parse_int(w[0], 0, nf - 1, "point face"), parse_double(w[1], "u"),
+                           parse_double(w[2], "v")});
+    }
+    if (std::cin.peek() != EOF) {
+        std::string rest;
+        while (std::getline(std::cin, rest)) {
+            ++g_line;
+            if (rest.find_first_not_of(" \t\r") != std::string::npos) fail("unexpected input after the points");
+        }
+    }
+
+    Far::TopologyDescriptor desc;
+    desc.numVertices = (int)nv;
+    desc.numFaces = (int)nf;
+    desc.numVertsPerFace = sizes.data();
+    desc.vertIndicesPerFace = indices.data();
+    desc.numCreases = (int)nc;
+    desc.creaseVertexIndexPairs = crease_pairs.data();
+    desc.creaseWeights = crease_weights.data();
+    desc.numCorners = (int)nk;
+    desc.cornerVertexIndices = corner_vertices.data();
+    desc.cornerWeights = corner_weights.data();
+    desc.numHoles = (int)nh;
+    desc.holeIndices = holes.data();
+    desc.isLeftHanded = false;
+
+    // Far reports a crease on an edge that does not exist, and invalid topology, as
+    // warnings and carries on: here they are bad input.
+    Far::SetWarningCallback(on_far_warning);
+    Far::SetErrorCallback(on_far_error);
+    typedef Far::TopologyRefinerFactory<Far::TopologyDescriptor> Factory;
+    std::unique_ptr<Far::TopologyRefiner> refiner(
+        Factory::Create(desc, Factory::Options(Sdc::SCHEME_CATMARK, sdc)));
+    if (!g_far_warning.empty()) fail("Far: " + g_far_warning);
+    if (!refiner) fail("Far could not build the topology");
+
+    Bfr::SurfaceFactory::Options options;
+    options.SetApproxLevelSmooth(level);
+    options.SetApproxLevelSharp(level);
+    Bfr::RefinerSurfaceFactory<> factory(*refiner, options);
+
+    typedef Bfr::Surface<double> Surface;
+    Surface::PointDescriptor xyz(3);
+    struct FaceSurface {
+        bool built = false;
+        Surface surface;
+        std::vector<double> patch_points;
+    };
+    std::vector<FaceSurface> surfaces(nf);
+    for (const Query& q : queries) {
+        Bfr::Parameterization param(Sdc::SCHEME_CATMARK, sizes[q.face]);
+        if (!in_domain(param, q.u, q.v)) {
+            std::puts("outside");
+            continue;
+        }
+        FaceSurface& fs = surfaces[q.face];
+        if (!fs.built) {
+            fs.built = true;
+            if (factory.InitVertexSurface<double>(q.face, &fs.surface)) {
+                fs.patch_points.resize(3 * (size_t)fs.surface.GetNumPatchPoints());
+                fs.surface.PreparePatchPoints(positions.data(), xyz, fs.patch_points.data(), xyz);
+            }
+        }
+        if (!fs.surface.IsValid()) {
+            std::puts("hole");
+            continue;
+        }
+        double uv[2] = {q.u, q.v};
+        double p[3];
+        fs.surface.Evaluate(uv, fs.patch_points.data(), xyz, p);
+        std::printf("%.17g %.17g %.17g\n", p[0], p[1], p[2]);
+    }
+    return std::fflush(stdout) == 0 ? 0 : 1;
+}

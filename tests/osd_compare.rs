@@ -1,0 +1,369 @@
+//! tessera's limit surface against OpenSubdiv's own (Bfr, through `tests/osd.rs`): the
+//! same control mesh, the same options, the same `(face, u, v)`, positions within
+//! [`TOLERANCE`] of the bounding-box diagonal. Then the comparison itself: it fails on a
+//! different surface, and it reports points outside a face and on holes.
+
+use glam::DVec3;
+use tessera_core::catmull_clark::{
+    patch_mesh, BoundaryRule, ControlMesh, SurfaceModel, TREE_DEPTH,
+};
+use tessera_tests::control_mesh;
+use tessera_tests::fuzz::Rng;
+use tessera_tests::osd::{self, NoPoint};
+
+/// tessera's surface is exact in double precision; Bfr's, at its deepest level (10), is
+/// exact but for Gregory patches in the last squares at extraordinary vertices and
+/// irregular infinitely sharp vertices, whose limit it only approaches (to a few 1e-6 of
+/// the diagonal on `catmark_cubes_infsharp`).
+const TOLERANCE: f64 = 1e-5;
+
+const SEED: u64 = 0x05d_c0de_2024;
+
+/// tessera's surface of `mesh`, cut along non-manifold edges first as the tools'
+/// `--split-non-manifold` does (OpenSubdiv takes such edges as they are, so the
+/// comparison checks the cut too). Faces keep their order, so `(face, u, v)` is the same.
+fn model_of(mesh: &ControlMesh) -> SurfaceModel {
+    let patches = patch_mesh(&mut mesh.clone(), true)
+        .unwrap_or_else(|e| panic!("{}: {e}", mesh.source.display()));
+    SurfaceModel::new(patches, TREE_DEPTH)
+}
+
+/// `n` random points of shape `rel` (under `assets/`) evaluated by both, within tolerance.
+fn agrees(rel: &str, n: usize) {
+    agrees_on(rel, &control_mesh(rel), n);
+}
+
+/// [`agrees`] for a mesh read from `rel` and then changed.
+fn agrees_on(rel: &str, mesh: &ControlMesh, n: usize) {
+    let model = model_of(mesh);
+    let points = osd::sample_points(mesh, n, &mut Rng::new(SEED));
+    let c = osd::compare(mesh, &model, &points);
+    println!("{rel}: {c}");
+    assert!(
+        c.disagreements.is_empty() && c.relative() <= TOLERANCE,
+        "{rel}: {c} (tolerance {TOLERANCE:e})"
+    );
+    assert!(c.evaluated > n / 2, "{rel}: {c}");
+}
+
+// Smooth shapes.
+
+#[test]
+fn cube() {
+    agrees("opensubdiv/catmark_cube.obj", 300);
+}
+
+#[test]
+fn torus() {
+    agrees("opensubdiv/catmark_torus.obj", 300);
+}
+
+#[test]
+fn pyramid_triangles() {
+    agrees("opensubdiv/catmark_pyramid.obj", 300);
+}
+
+#[test]
+fn nonquads() {
+    agrees("opensubdiv/catmark_nonquads.obj", 300);
+}
+
+#[test]
+fn boundary_edge_and_corner() {
+    let mesh = control_mesh("opensubdiv/catmark_edgecorner.obj");
+    assert_eq!(mesh.boundary, BoundaryRule::EdgeAndCorner);
+    agrees("opensubdiv/catmark_edgecorner.obj", 300);
+}
+
+#[test]
+fn boundary_edge_only() {
+    // The file's corners are left to `edge_only_corners`.
+    let mut mesh = control_mesh("opensubdiv/catmark_edgeonly.obj");
+    assert_eq!(mesh.boundary, BoundaryRule::EdgeOnly);
+    mesh.drop_creases();
+    agrees_on(
+        "opensubdiv/catmark_edgeonly.obj without corners",
+        &mesh,
+        300,
+    );
+}
+
+#[test]
+fn pole8() {
+    agrees("opensubdiv/catmark_pole8.obj", 300);
+}
+
+#[test]
+fn fan() {
+    agrees("opensubdiv/catmark_fan.obj", 300);
+}
+
+#[test]
+fn holes() {
+    agrees("opensubdiv/catmark_hole_test1.obj", 300);
+}
+
+#[test]
+fn spot() {
+    agrees("catmull_clark/spot_control_mesh.obj", 300);
+}
+
+// Sharp features: creases (fractional, infinite, Chaikin), corners, on quads, triangles,
+// pentagons and boundaries.
+
+#[test]
+fn cube_creases0() {
+    agrees("opensubdiv/catmark_cube_creases0.obj", 200);
+}
+
+#[test]
+fn cube_creases1() {
+    agrees("opensubdiv/catmark_cube_creases1.obj", 200);
+}
+
+#[test]
+fn cube_creases2() {
+    agrees("opensubdiv/catmark_cube_creases2.obj", 200);
+}
+
+#[test]
+fn cube_corner0() {
+    agrees("opensubdiv/catmark_cube_corner0.obj", 200);
+}
+
+#[test]
+fn cube_corner1() {
+    agrees("opensubdiv/catmark_cube_corner1.obj", 200);
+}
+
+#[test]
+fn cube_corner2() {
+    agrees("opensubdiv/catmark_cube_corner2.obj", 200);
+}
+
+#[test]
+fn cube_corner3() {
+    agrees("opensubdiv/catmark_cube_corner3.obj", 200);
+}
+
+#[test]
+fn cube_corner4() {
+    agrees("opensubdiv/catmark_cube_corner4.obj", 200);
+}
+
+#[test]
+fn edge_only_corners() {
+    agrees("opensubdiv/catmark_edgeonly.obj", 200);
+}
+
+#[test]
+fn chaikin0() {
+    agrees("opensubdiv/catmark_chaikin0.obj", 200);
+}
+
+#[test]
+fn chaikin1() {
+    agrees("opensubdiv/catmark_chaikin1.obj", 200);
+}
+
+#[test]
+fn chaikin2() {
+    agrees("opensubdiv/catmark_chaikin2.obj", 200);
+}
+
+#[test]
+fn smooth_triangles0() {
+    agrees("opensubdiv/catmark_smoothtris0.obj", 200);
+}
+
+#[test]
+fn smooth_triangles1() {
+    agrees("opensubdiv/catmark_smoothtris1.obj", 200);
+}
+
+#[test]
+fn dart_edgecorner() {
+    agrees("opensubdiv/catmark_dart_edgecorner.obj", 200);
+}
+
+#[test]
+fn inf_crease0() {
+    agrees("opensubdiv/catmark_inf_crease0.obj", 200);
+}
+
+#[test]
+fn inf_crease1() {
+    agrees("opensubdiv/catmark_inf_crease1.obj", 200);
+}
+
+#[test]
+fn tent_creases0() {
+    agrees("opensubdiv/catmark_tent_creases0.obj", 200);
+}
+
+#[test]
+fn tent_creases1() {
+    agrees("opensubdiv/catmark_tent_creases1.obj", 200);
+}
+
+#[test]
+fn pyramid_creases0() {
+    agrees("opensubdiv/catmark_pyramid_creases0.obj", 200);
+}
+
+#[test]
+fn pyramid_creases1() {
+    agrees("opensubdiv/catmark_pyramid_creases1.obj", 200);
+}
+
+#[test]
+fn single_crease() {
+    agrees("opensubdiv/catmark_single_crease.obj", 200);
+}
+
+#[test]
+fn torus_creases0() {
+    agrees("opensubdiv/catmark_torus_creases0.obj", 200);
+}
+
+#[test]
+fn car() {
+    agrees("opensubdiv/catmark_car.obj", 150);
+}
+
+/// Every shipped shape with creases or corners, as a table (`-- --ignored --nocapture`).
+#[test]
+#[ignore = "a report of all 38 sharp shapes, not a check"]
+fn report_every_sharp_shape() {
+    let mut failed = 0;
+    for rel in osd::sharp_shapes() {
+        let mesh = control_mesh(rel);
+        let patches = match patch_mesh(&mut mesh.clone(), true) {
+            Ok(p) => p,
+            Err(e) => {
+                println!("FAIL {rel}: tessera refuses it: {e}");
+                failed += 1;
+                continue;
+            }
+        };
+        let model = SurfaceModel::new(patches, TREE_DEPTH);
+        let points = osd::sample_points(&mesh, 200, &mut Rng::new(SEED));
+        let c = osd::compare(&mesh, &model, &points);
+        let pass = c.disagreements.is_empty() && c.relative() <= TOLERANCE;
+        failed += usize::from(!pass);
+        println!("{} {rel}: {c}", if pass { "pass" } else { "FAIL" });
+    }
+    println!("{failed} of 38 fail");
+}
+
+// The comparison itself.
+
+#[test]
+fn a_different_boundary_rule_fails() {
+    // OpenSubdiv with the file's edge-and-corner rule, tessera with edge-only.
+    let mesh = control_mesh("opensubdiv/catmark_edgecorner.obj");
+    let mut other = mesh.clone();
+    other.boundary = BoundaryRule::EdgeOnly;
+    let points = osd::sample_points(&mesh, 200, &mut Rng::new(SEED));
+    let c = osd::compare(&mesh, &model_of(&other), &points);
+    println!("edge-only against edge-and-corner: {c}");
+    assert!(c.relative() > 100.0 * TOLERANCE, "{c}");
+}
+
+#[test]
+fn a_control_point_moved_by_ten_times_the_tolerance_fails() {
+    let mesh = control_mesh("opensubdiv/catmark_cube.obj");
+    let mut moved = mesh.clone();
+    let v = mesh.faces[0][0] as usize;
+    moved.positions[v] += DVec3::new(1.0, -2.0, 2.0) / 3.0 * (10.0 * TOLERANCE * mesh.bbox_diag());
+    let points = osd::sample_points(&mesh, 200, &mut Rng::new(SEED));
+    let c = osd::compare(&moved, &model_of(&mesh), &points);
+    println!("one control point moved: {c}");
+    assert!(c.relative() > TOLERANCE, "{c}");
+}
+
+#[test]
+fn points_outside_a_face_and_on_holes_are_reported() {
+    // catmark_nonquads has quads, triangles and pentagons.
+    let mesh = control_mesh("opensubdiv/catmark_nonquads.obj");
+    let model = model_of(&mesh);
+    let face_of = |sides: usize| mesh.faces.iter().position(|f| f.len() == sides).unwrap() as u32;
+    let (quad, tri, penta) = (face_of(4), face_of(3), face_of(5));
+    let outside = [
+        (quad, 1.5, 0.2),
+        (quad, -0.1, 0.5),
+        (quad, 0.5, 1.0 + 1e-9),
+        // A triangle's sub-faces are the squares at tiles (0,0), (1,0), (0,1).
+        (tri, 0.7, 0.2),
+        (tri, 0.2, 0.5 + 1e-9),
+        (tri, 1.2, 1.2),
+        (tri, 2.1, 0.1),
+        // A pentagon's: (0,0), (1,0), (2,0), (0,1), (1,1).
+        (penta, 2.1, 1.1),
+        (penta, 3.1, 0.1),
+        (penta, 1.6, 0.0),
+    ];
+    let inside = [
+        (quad, 1.0, 1.0),
+        (tri, 0.5, 0.5),
+        (tri, 0.0, 1.0),
+        (penta, 1.3, 1.4),
+    ];
+    let points: Vec<_> = outside.iter().chain(&inside).copied().collect();
+    let got = osd::limit_points(&mesh, &points);
+    for (p, r) in points.iter().zip(&got) {
+        let is_outside = outside.contains(p);
+        assert_eq!(r.is_err(), is_outside, "{p:?}: {r:?}");
+        if is_outside {
+            assert_eq!(*r, Err(NoPoint::Outside), "{p:?}");
+        }
+        assert_eq!(
+            model.eval_face(p.0, p.1, p.2).is_none(),
+            is_outside,
+            "{p:?}"
+        );
+    }
+
+    let mesh = control_mesh("opensubdiv/catmark_hole_test1.obj");
+    let hole = mesh.holes.iter().position(|&h| h).unwrap() as u32;
+    assert_eq!(
+        osd::limit_points(&mesh, &[(hole, 0.5, 0.5)]),
+        [Err(NoPoint::Hole)]
+    );
+    assert!(model_of(&mesh).eval_face(hole, 0.5, 0.5).is_none());
+}
+
+#[test]
+fn bad_input_is_one_line_and_an_exit_status() {
+    let cube = control_mesh("opensubdiv/catmark_cube.obj");
+    let good = osd::input(&cube, &[(0, 0.5, 0.5)]);
+    let no_edge = {
+        let mut m = cube.clone();
+        m.creases.push(([0, 7], 2.0));
+        osd::input(&m, &[(0, 0.5, 0.5)])
+    };
+    for (input, says) in [
+        (
+            "boundary sideways\n".to_owned(),
+            "line 1: boundary 'sideways'",
+        ),
+        (
+            good.replace("points 1\n0 0.5 0.5\n", "points 2\n0 0.5 0.5\n"),
+            "end of input",
+        ),
+        (good.replace("faces 6\n4 ", "faces 6\n2 "), "face size"),
+        (good.replace("points 1\n0 ", "points 1\n6 "), "point face"),
+        (good.clone() + "more\n", "after the points"),
+        (no_edge, "does not exist"),
+    ] {
+        let (ok, stdout, stderr) = osd::run_helper(&input, &[]);
+        assert!(!ok, "{says}: {stdout}");
+        assert_eq!(stderr.lines().count(), 1, "{stderr}");
+        assert!(
+            stderr.starts_with("osd_eval: line ") && stderr.contains(says),
+            "{says}: {stderr}"
+        );
+    }
+    let (ok, stdout, _) = osd::run_helper(&good, &[]);
+    assert!(ok && stdout.lines().count() == 1, "{stdout}");
+}
