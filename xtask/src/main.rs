@@ -140,16 +140,26 @@ fn ensure_xvfb() -> Result<(), String> {
 }
 
 /// OpenSubdiv (Debian's `libosd-dev`), the reference the Catmull-Clark surface is tested
-/// against, then its helper `tests/osd/osd_eval.cpp` built into
+/// against, and g++ when missing, then its helper `tests/osd/osd_eval.cpp` built into
 /// `target/osd-eval/osd_eval` (again whenever the source is newer). Returns its path.
 fn ensure_osd_eval() -> Result<PathBuf, String> {
     const HEADER: &str = "/usr/include/opensubdiv/version.h";
+    let have_gxx = Command::new("g++")
+        .arg("--version")
+        .output()
+        .is_ok_and(|o| o.status.success());
+    let mut missing = Vec::new();
     if !Path::new(HEADER).exists() {
-        eprintln!(
-            "xtask: installing OpenSubdiv (libosd-dev) for the Catmull-Clark reference tests"
-        );
-        apt_install(&["libosd-dev"]).map_err(|e| {
-            format!("the tests need OpenSubdiv, and `apt-get install libosd-dev` failed: {e}")
+        missing.push("libosd-dev");
+    }
+    if !have_gxx {
+        missing.push("g++");
+    }
+    if !missing.is_empty() {
+        let list = missing.join(" ");
+        eprintln!("xtask: installing {list} for the tests against OpenSubdiv");
+        apt_install(&missing).map_err(|e| {
+            format!("the tests need OpenSubdiv and g++, and `apt-get install {list}` failed: {e}")
         })?;
         if !Path::new(HEADER).exists() {
             return Err(format!("libosd-dev installed but {HEADER} is missing"));
