@@ -2,7 +2,8 @@
 //! at equal measured max error, any segment count per patch, and the paper's own
 //! subdivision (midpoint splits alone, [`FirstSplit::Midpoint`]) against uniform the same
 //! way. Writes
-//! `OUT/catmull_clark_cpu.{json,md}`.
+//! `OUT/catmull_clark_cpu.{json,md}`. Creases and corners are dropped (`--no-creases`):
+//! [`super::cc_creased`] measures the creased surfaces.
 
 use std::path::Path;
 
@@ -77,6 +78,9 @@ pub fn run(assets: &Path, out_dir: &Path, quick: bool) {
     for (file, detailed) in MODELS {
         let path = assets.join(file);
         let mut control = load_control_mesh(&path).expect("shipped mesh");
+        // The smooth surfaces (`--no-creases`), comparable across the tables and with
+        // the GPU stage; the creased ones have their own table.
+        control.drop_creases();
         let cut = control.split_non_manifold().expect("sheets that meet");
         let model = SurfaceModel::new(PatchMesh::new(&control).expect("valid mesh"), TREE_DEPTH);
         let samples = surface_samples(&model, 32);

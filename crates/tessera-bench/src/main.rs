@@ -3,6 +3,7 @@
 //! and `OUT/bezier_cpu.md`. Medians of repeated runs; no assertions.
 
 mod cc;
+mod cc_creased;
 mod cc_gpu;
 mod gpu;
 
@@ -116,13 +117,16 @@ fn main() {
         .and_then(|i| args.get(i + 1))
         .cloned();
     std::fs::create_dir_all(&out_dir).expect("create bench output folder");
-    // `--only gpu|cpu|cc|ccgpu`: one part of the bench (cpu is the Bézier CPU table).
+    // `--only gpu|cpu|cc|creased|ccgpu`: one part of the bench (cpu is the Bézier CPU table).
     let part = |name: &str| only.as_deref().is_none_or(|o| o == name);
     if part("gpu") {
         gpu::run(&assets, &out_dir, quick);
     }
     if part("cc") {
         cc::run(&assets.join(".."), &out_dir, quick);
+    }
+    if part("creased") {
+        cc_creased::run(&assets.join(".."), &out_dir, quick, model.as_deref());
     }
     if part("ccgpu") {
         cc_gpu::run(&assets.join(".."), &out_dir, quick, model.as_deref());

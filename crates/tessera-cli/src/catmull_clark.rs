@@ -122,6 +122,9 @@ pub fn tessellate(args: TessellateArgs) -> Result<(), Error> {
 
     let t = Instant::now();
     let mut control = load_control_mesh(&args.input)?;
+    if args.no_creases {
+        control.drop_creases();
+    }
     for w in &control.warnings {
         eprintln!("warning: {w}");
     }

@@ -131,10 +131,16 @@ pub struct TessellateArgs {
     /// without it such edges are an error.
     #[arg(long)]
     pub split_non_manifold: bool,
+    /// Catmull-Clark: ignore the mesh's creases and corners (`t crease`, `t corner`) and
+    /// tessellate the smooth surface, with a warning.
+    #[arg(long)]
+    pub no_creases: bool,
     /// Search the threshold (or the uniform segment count) for this many triangles (±2%).
     #[arg(long, conflicts_with = "threshold")]
     pub target_triangles: Option<usize>,
-    /// Where the tessellation runs. Default: gpu when an adapter exists, else cpu.
+    /// Where the tessellation runs. Default: gpu when an adapter exists, else cpu, for
+    /// Bézier surfaces; cpu for Catmull-Clark meshes (the GPU stages take smooth ones
+    /// only: a mesh with creases or corners needs cpu, or --no-creases).
     #[arg(long, value_enum)]
     pub backend: Option<Backend>,
     /// Output mesh (.obj or .ply).
@@ -187,6 +193,15 @@ pub struct RenderArgs {
     /// Catmull-Clark: cut the mesh along its non-manifold edges (see `tessellate`).
     #[arg(long)]
     pub split_non_manifold: bool,
+    /// Catmull-Clark: ignore creases and corners and draw the smooth surface (see
+    /// `tessellate`).
+    #[arg(long)]
+    pub no_creases: bool,
+    /// Where a Catmull-Clark mesh is tessellated before it is drawn. Default: gpu, or cpu
+    /// for a mesh with creases or corners (the GPU stages take smooth ones only). Bézier
+    /// surfaces are tessellated on the GPU.
+    #[arg(long, value_enum)]
+    pub backend: Option<Backend>,
     /// Draw the triangle edges over the shading.
     #[arg(long)]
     pub wireframe: bool,

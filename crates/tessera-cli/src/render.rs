@@ -1,5 +1,5 @@
-//! `tessera render`: tessellate on the GPU (Bézier or Catmull-Clark) and draw the result
-//! headless into a PNG.
+//! `tessera render`: tessellate on the GPU (Bézier or Catmull-Clark; a creased
+//! Catmull-Clark mesh with the CPU reference) and draw the result headless into a PNG.
 
 use std::time::Instant;
 
@@ -16,7 +16,7 @@ use tessera_wgpu::catmull_clark::{CcStage, CcUniformStage, UniformParams};
 use tessera_wgpu::glam::DVec3;
 use tessera_wgpu::MeshBuffers;
 
-use crate::cli::{Axis, Method, RenderArgs};
+use crate::cli::{Axis, Backend, Method, RenderArgs};
 use crate::gpu::GpuTimings;
 
 /// The stage whose output buffers are drawn.
@@ -24,6 +24,8 @@ enum StageOutput {
     Bezier(Box<BezierStage>),
     Cc(Box<CcStage>),
     CcUniform(Box<CcUniformStage>),
+    /// A mesh tessellated by the CPU reference, uploaded to be drawn.
+    Cpu(Box<MeshBuffers>),
 }
 
 impl StageOutput {
@@ -32,6 +34,7 @@ impl StageOutput {
             StageOutput::Bezier(s) => s.output(),
             StageOutput::Cc(s) => s.output(),
             StageOutput::CcUniform(s) => s.output(),
+            StageOutput::Cpu(m) => m,
         }
     }
 }
@@ -78,10 +81,14 @@ pub fn render(args: RenderArgs) -> Result<(), Error> {
         .into());
     }
     if !cc
-        && (args.tolerance_rel.is_some() || args.first_split.is_some() || args.split_non_manifold)
+        && (args.tolerance_rel.is_some()
+            || args.first_split.is_some()
+            || args.split_non_manifold
+            || args.no_creases
+            || args.backend.is_some())
     {
         return Err(CoreError::Param(
-            "--tolerance-rel, --first-split and --split-non-manifold are Catmull-Clark options; Bézier surfaces take --threshold".into(),
+            "--tolerance-rel, --first-split, --split-non-manifold, --no-creases and --backend are Catmull-Clark options; Bézier surfaces take --threshold and are tessellated on the GPU".into(),
         )
         .into());
     }
@@ -101,9 +108,16 @@ pub fn render(args: RenderArgs) -> Result<(), Error> {
     let mut timings = GpuTimings::default();
     let (gpu, output, (lo, hi), what, (triangles, vertices)) = if cc {
         let mut control = tessera_core::io::load_control_mesh(&args.input)?;
+        if args.no_creases {
+            control.drop_creases();
+        }
         for w in &control.warnings {
             eprintln!("warning: {w}");
         }
+        let on_cpu = match args.backend {
+            Some(b) => b == Backend::Cpu,
+            None => control.has_creases(),
+        };
         let mesh = tessera_core::catmull_clark::patch_mesh(&mut control, args.split_non_manifold)?;
         let model = SurfaceModel::new(mesh, TREE_DEPTH);
         let (lo, hi) = control.positions.iter().fold(
@@ -123,7 +137,32 @@ pub fn render(args: RenderArgs) -> Result<(), Error> {
         let gpu = crate::gpu::open(&mut timings)?;
         let kernels = Kernels::new(&gpu.device);
         let bounds = (lo.as_vec3(), hi.as_vec3());
-        if uniform {
+        if on_cpu {
+            let t = Instant::now();
+            let out = if uniform {
+                tessera_core::catmull_clark::tessellate_uniform(&model, args.segments.unwrap_or(8))?
+            } else {
+                tessera_core::catmull_clark::tessellate_adaptive(&model, &params)?
+            };
+            timings.tessellate = t.elapsed().as_secs_f64() * 1e3;
+            let counts = (
+                out.mesh.triangle_count() as u32,
+                out.mesh.vertices.len() as u32,
+            );
+            let buffers = MeshBuffers::from_mesh(&gpu.device, &out.mesh);
+            let what = if uniform {
+                "uniform (cpu)"
+            } else {
+                "adaptive (cpu)"
+            };
+            (
+                gpu,
+                StageOutput::Cpu(Box::new(buffers)),
+                bounds,
+                what,
+                counts,
+            )
+        } else if uniform {
             let n = args.segments.unwrap_or(8);
             let (stage, ()) = crate::gpu::run(&gpu, &mut timings, || {
                 CcUniformStage::new(

@@ -16,6 +16,10 @@
 //! sides, from the control points of the Bézier pieces, and for the innermost square the
 //! convex-hull radius of its one-ring plus the distance from the limit point to `B` (the
 //! paper's `m_ε` argument: that square shrinks to the vertex).
+//! That second form holds on any cell (it needs no derivatives); on patches shaped by a
+//! crease or corner it is taken wherever it is the smaller, since a semi-sharp crease is
+//! a band of curvature as high as the sharpness is large but only as wide as it decays,
+//! which bends the surface little in distance.
 //!
 //! **Slab (geometric).** A parametric bound also counts how unevenly the parameter runs
 //! over the surface, which costs nothing in distance: near an extraordinary vertex it can
@@ -126,6 +130,10 @@ pub struct BoundSum {
     /// Whether the box may reach a vertex, so that `dev` is needed (never on a patch
     /// without one, whose cells then skip the 16 deviations per piece).
     track_dev: bool,
+    /// Whether the deviation form of the parametric bound is taken wherever it is
+    /// smaller, not only at a vertex: on creased patches, whose narrow bands of high
+    /// curvature along semi-sharp creases bend little in distance.
+    dev_everywhere: bool,
     // Slab.
     slab: bool,
     normal: DVec3,
@@ -173,6 +181,7 @@ impl BoundSum {
             dev_side: 0.0,
             has_vertex: false,
             track_dev: true,
+            dev_everywhere: false,
             slab,
             normal,
             plane,
@@ -315,9 +324,14 @@ impl BoundSum {
     /// the rounding allowance.
     pub fn finish(&self) -> f64 {
         let c = &self.corners;
-        let parametric = if self.has_vertex {
+        let deviation = || {
             let twist = c[0] - c[1] + c[2] - c[3];
             self.dev + self.dev_side + 0.25 * twist.length()
+        };
+        let parametric = if self.has_vertex {
+            deviation()
+        } else if self.dev_everywhere && self.track_dev {
+            deviation().min(0.25 * bicubic::hessian_bound(self.second))
         } else {
             0.25 * bicubic::hessian_bound(self.second)
         };
@@ -496,6 +510,7 @@ pub fn box_bound(surface: &PatchSurface, bx: [u32; 4], corners: [DVec3; 4]) -> f
     let mut sum = BoundSum {
         // A patch without a vertex is one Bézier piece.
         track_dev: !matches!(surface.nodes[0], Node::Bezier(_)),
+        dev_everywhere: surface.creased,
         ..BoundSum::new(corners)
     };
     if walk_pieces(surface, bx, corners, &mut sum) {

@@ -67,6 +67,8 @@ pub struct PatchSurface {
     pub balls: Vec<Option<Ball>>,
     /// The rules the one-rings are subdivided with.
     pub scheme: Scheme,
+    /// Whether a sharp edge or vertex shapes the patch (one at its corners).
+    pub creased: bool,
 }
 
 /// A point of the limit surface with its unit normal.
@@ -88,10 +90,12 @@ impl PatchSurface {
             &mesh.sharpness,
             p,
         );
+        let creased = !ring.sharp.is_empty();
         let mut s = PatchSurface {
             nodes: Vec::new(),
             balls: Vec::new(),
             scheme: mesh.scheme,
+            creased,
         };
         s.add(ring, 0, depth.max(1), None);
         s

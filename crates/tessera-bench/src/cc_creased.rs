@@ -1,0 +1,209 @@
+//! Catmull-Clark with creases: every shipped OpenSubdiv shape with crease or corner tags,
+//! tessellated adaptively with its creases. Per shape: the measured max error against
+//! the exact (creased) surface beside the tolerance it must stay under, and the triangles
+//! against uniform tessellation at equal measured max error; on car, bishop and rook at
+//! three tolerances. With `TESSERA_OSD_EVAL` set (as `cargo xtask bench` sets it), also
+//! the largest distance from OpenSubdiv's own limit surface (Bfr) at random `(face, u, v)`.
+//! Writes `OUT/catmull_clark_creased.{json,md}`.
+
+use std::path::Path;
+use std::time::Instant;
+
+use serde::Serialize;
+use tessera_core::catmull_clark::{
+    patch_mesh, surface_samples, tessellate_adaptive, tessellate_uniform, CcParams, SurfaceModel,
+    MAX_DEPTH, TREE_DEPTH,
+};
+use tessera_core::io::load_control_mesh;
+use tessera_core::measure::{measure_error, ErrorStats};
+use tessera_core::Tolerance;
+
+#[derive(Serialize)]
+struct Row {
+    model: String,
+    patches: usize,
+    sharp_edges: usize,
+    sharp_vertices: usize,
+    prepare_ms: f64,
+    tolerance_rel: f64,
+    tolerance: f64,
+    triangles: usize,
+    unmet: usize,
+    guaranteed_error: f64,
+    max_error: f64,
+    /// `max_error ≤ tolerance`.
+    within_tolerance: bool,
+    time_ms: f64,
+    uniform_segments: u32,
+    uniform_triangles: usize,
+    uniform_max_error: f64,
+    ratio_to_uniform: f64,
+    /// The same shape with `--no-creases`, same tolerance: its triangles.
+    smooth_triangles: usize,
+    /// Largest distance from OpenSubdiv's limit surface at random `(face, u, v)`,
+    /// relative to the bounding-box diagonal (when the OpenSubdiv helper is available).
+    opensubdiv_max_rel: Option<f64>,
+    opensubdiv_points: usize,
+}
+
+/// Shapes with many patches, measured at three tolerances.
+const DETAILED: [&str; 3] = ["catmark_car", "catmark_bishop", "catmark_rook"];
+
+pub fn run(assets: &Path, out_dir: &Path, quick: bool, filter: Option<&str>) {
+    let mut rows = Vec::new();
+    for path in creased_shapes(&assets.join("opensubdiv")) {
+        let name = path.file_stem().unwrap().to_string_lossy().to_string();
+        if filter.is_some_and(|f| !name.contains(f)) {
+            continue;
+        }
+        let mut control = load_control_mesh(&path).expect("shipped mesh");
+        let t = Instant::now();
+        let model = SurfaceModel::new(
+            patch_mesh(&mut control, true).expect("valid mesh"),
+            TREE_DEPTH,
+        );
+        let prepare_ms = t.elapsed().as_secs_f64() * 1e3;
+        let mut smooth_control = control.clone();
+        smooth_control.drop_creases();
+        let smooth = SurfaceModel::new(
+            patch_mesh(&mut smooth_control, true).expect("valid mesh"),
+            TREE_DEPTH,
+        );
+        let detailed = DETAILED.contains(&name.as_str());
+        let tolerances: &[f64] = match (detailed, quick) {
+            (true, false) => &[3e-3, 1e-3, 3e-4],
+            _ => &[1e-3],
+        };
+        let osd = opensubdiv_agreement(&control, &model, if quick { 100 } else { 400 });
+        let samples = surface_samples(&model, 32);
+        let mut uniform: Vec<(usize, ErrorStats)> = Vec::new();
+        for &rel in tolerances {
+            let params = CcParams {
+                tolerance: Tolerance::Relative(rel),
+                max_depth: MAX_DEPTH,
+                first_split: Default::default(),
+                leaf_bound: Default::default(),
+            };
+            let tolerance = params.epsilon(&model);
+            let (ms, out) = crate::median_time(if quick { 1 } else { 3 }, || {
+                tessellate_adaptive(&model, &params).expect("adaptive")
+            });
+            let e = measure_error(&samples, &out.mesh, model.mesh.control_diag);
+            let mut n = 1;
+            loop {
+                while uniform.len() < n as usize {
+                    let k = uniform.len() as u32 + 1;
+                    let t = tessellate_uniform(&model, k).expect("uniform");
+                    uniform.push((
+                        t.mesh.triangle_count(),
+                        measure_error(&samples, &t.mesh, model.mesh.control_diag),
+                    ));
+                }
+                if uniform[n as usize - 1].1.max_error <= e.max_error || n >= 256 {
+                    break;
+                }
+                n += 1;
+            }
+            let (ut, ue) = uniform[n as usize - 1];
+            let smooth_out = tessellate_adaptive(&smooth, &params).expect("smooth");
+            let row = Row {
+                model: name.clone(),
+                patches: model.mesh.surface_patches().count(),
+                sharp_edges: model.mesh.control_sharpness.edges.len(),
+                sharp_vertices: model.mesh.control_sharpness.vertices.len(),
+                prepare_ms,
+                tolerance_rel: rel,
+                tolerance,
+                triangles: out.mesh.triangle_count(),
+                unmet: out.unmet,
+                guaranteed_error: out.max_bound,
+                max_error: e.max_error,
+                within_tolerance: e.max_error <= tolerance,
+                time_ms: ms,
+                uniform_segments: n,
+                uniform_triangles: ut,
+                uniform_max_error: ue.max_error,
+                ratio_to_uniform: out.mesh.triangle_count() as f64 / ut as f64,
+                smooth_triangles: smooth_out.mesh.triangle_count(),
+                opensubdiv_max_rel: osd.map(|o| o.0),
+                opensubdiv_points: osd.map_or(0, |o| o.1),
+            };
+            eprintln!(
+                "creased {} {rel:e}: {} tris, max {:.3e} ≤ ε {:.3e}: {}, uniform n={n} {} tris: {:.3}×; OpenSubdiv {:?}",
+                row.model,
+                row.triangles,
+                row.max_error,
+                row.tolerance,
+                row.within_tolerance,
+                row.uniform_triangles,
+                row.ratio_to_uniform,
+                row.opensubdiv_max_rel
+            );
+            rows.push(row);
+        }
+    }
+    crate::write_results(out_dir, "catmull_clark_creased", &rows, table(&rows));
+}
+
+/// The shipped OpenSubdiv shapes with crease or corner tags, by name.
+fn creased_shapes(dir: &Path) -> Vec<std::path::PathBuf> {
+    let mut out: Vec<_> = std::fs::read_dir(dir)
+        .expect("assets")
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.extension().is_some_and(|e| e == "obj"))
+        .filter(|p| {
+            std::fs::read_to_string(p).is_ok_and(|t| {
+                t.lines()
+                    .any(|l| l.starts_with("t crease") || l.starts_with("t corner"))
+            })
+        })
+        .collect();
+    out.sort();
+    out
+}
+
+/// Largest distance from OpenSubdiv's surface at `n` random points, relative to the
+/// bounding-box diagonal, and how many points were compared; `None` without the helper.
+fn opensubdiv_agreement(
+    control: &tessera_core::catmull_clark::ControlMesh,
+    model: &SurfaceModel,
+    n: usize,
+) -> Option<(f64, usize)> {
+    std::env::var_os("TESSERA_OSD_EVAL")?;
+    let points = tessera_tests::osd::sample_points(
+        control,
+        n,
+        &mut tessera_tests::fuzz::Rng::new(0x05d_be4c),
+    );
+    let c = tessera_tests::osd::compare(control, model, &points);
+    Some((c.relative(), c.evaluated))
+}
+
+fn table(rows: &[Row]) -> String {
+    let mut s = String::from(
+        "| model | patches | sharp edges | sharp vertices | prepare ms | ε (of diagonal) | tris | unmet | measured max (model units) | ≤ ε | time ms | uniform n | uniform tris | **ratio** | smooth tris | OpenSubdiv max (of diagonal) |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
+    );
+    for r in rows {
+        s += &format!(
+            "| {} | {} | {} | {} | {:.0} | {:.0e} | {} | {} | {:.2e} | {} | {:.1} | {} | {} | **{:.2}** | {} | {} |\n",
+            r.model,
+            r.patches,
+            r.sharp_edges,
+            r.sharp_vertices,
+            r.prepare_ms,
+            r.tolerance_rel,
+            r.triangles,
+            r.unmet,
+            r.max_error,
+            if r.within_tolerance { "yes" } else { "**no**" },
+            r.time_ms,
+            r.uniform_segments,
+            r.uniform_triangles,
+            r.ratio_to_uniform,
+            r.smooth_triangles,
+            r.opensubdiv_max_rel
+                .map_or("—".to_string(), |e| format!("{e:.1e} ({} points)", r.opensubdiv_points)),
+        );
+    }
+    s
+}
