@@ -9,7 +9,8 @@
 //! Protocol (the comment at the top of `osd_eval.cpp` is the reference): on stdin the
 //! options (`boundary`, `creasing`, `triangles`), then `vertices`, `faces`, `holes`,
 //! `creases`, `corners` and `points` sections, each a count line and one line per item;
-//! on stdout one line per point, `x y z` with 17 significant digits, `outside` or `hole`.
+//! on stdout one line per point, `x y z` with 17 significant digits, `outside` or `hole`
+//! (and with `-far`, `not-a-vertex`).
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -17,7 +18,9 @@ use std::process::{Command, Stdio};
 use std::sync::OnceLock;
 
 use glam::DVec3;
-use tessera_core::catmull_clark::{BoundaryRule, ControlMesh, CreaseMethod, SurfaceModel};
+use tessera_core::catmull_clark::{
+    BoundaryRule, ControlMesh, CreaseMethod, SurfaceModel, SHARPNESS_INFINITE,
+};
 
 use crate::fuzz::Rng;
 
@@ -36,6 +39,8 @@ pub enum NoPoint {
     Outside,
     /// The face has no limit surface (a hole).
     Hole,
+    /// [`far_limit_points`] only: the point is not a vertex of the first refinement.
+    NotAVertex,
 }
 
 /// The helper's path, built on first use when `TESSERA_OSD_EVAL` is unset.
@@ -204,6 +209,7 @@ pub fn limit_points_with(
         .map(|line| match line {
             "outside" => Err(NoPoint::Outside),
             "hole" => Err(NoPoint::Hole),
+            "not-a-vertex" => Err(NoPoint::NotAVertex),
             _ => {
                 let xyz: Vec<f64> = line
                     .split_whitespace()
@@ -218,6 +224,57 @@ pub fn limit_points_with(
         })
         .collect();
     assert_eq!(out.len(), points.len(), "one line per point");
+    out
+}
+
+/// OpenSubdiv's limit points of `mesh` by Far instead of Bfr: the mesh refined uniformly
+/// [`far_level`] times and the limit masks applied there. Only at the vertices of the
+/// first refinement ([`first_level_points`]), and exact there except at darts (one
+/// infinitely sharp edge), where Sdc applies the smooth limit mask: a second reference
+/// where Bfr's local refinement departs from Far's.
+pub fn far_limit_points(
+    mesh: &ControlMesh,
+    points: &[(u32, f64, f64)],
+) -> Vec<Result<DVec3, NoPoint>> {
+    limit_points_with(mesh, points, &["-far", &far_level(mesh).to_string()])
+}
+
+/// The uniform refinements after which every semi-sharp feature of `mesh` has decayed
+/// (each level takes 1 off a sharpness, and Chaikin's average never exceeds the
+/// largest), so that Far's limit masks are exact.
+pub fn far_level(mesh: &ControlMesh) -> u32 {
+    let finite = mesh
+        .creases
+        .iter()
+        .map(|c| c.1)
+        .chain(mesh.corners.iter().map(|c| c.1))
+        .filter(|&s| s < SHARPNESS_INFINITE)
+        .fold(0.0f32, f32::max);
+    (finite.ceil() as u32).max(1)
+}
+
+/// Every vertex of the first refinement, by face: a quad's corners, edge midpoints and
+/// centre, each sub-face's `(0, 0)`, `(½, 0)`, `(0, ½)` and `(½, ½)` otherwise.
+pub fn first_level_points(mesh: &ControlMesh) -> Vec<(u32, f64, f64)> {
+    let mut out = Vec::new();
+    for (f, face) in mesh.faces.iter().enumerate() {
+        let f = f as u32;
+        if face.len() == 4 {
+            for j in 0..3 {
+                for i in 0..3 {
+                    out.push((f, i as f64 / 2.0, j as f64 / 2.0));
+                }
+            }
+        } else {
+            let d = sub_face_tiles(face.len());
+            for k in 0..face.len() {
+                let (tu, tv) = ((k % d) as f64, (k / d) as f64);
+                for (a, b) in [(0.0, 0.0), (0.5, 0.0), (0.0, 0.5), (0.5, 0.5)] {
+                    out.push((f, tu + a, tv + b));
+                }
+            }
+        }
+    }
     out
 }
 
@@ -380,7 +437,22 @@ pub fn compare(
     model: &SurfaceModel,
     points: &[(u32, f64, f64)],
 ) -> Comparison {
-    let theirs = limit_points(osd_mesh, points);
+    compare_with(
+        osd_mesh,
+        |f, u, v| model.eval_face(f, u, v).map(|p| p.position),
+        points,
+        limit_points(osd_mesh, points),
+    )
+}
+
+/// [`compare`] of tessera's points `ours(face, u, v)` (`None` outside the face or on a
+/// hole) with given reference points (`theirs`, one per point).
+pub fn compare_with(
+    osd_mesh: &ControlMesh,
+    mut ours: impl FnMut(u32, f64, f64) -> Option<DVec3>,
+    points: &[(u32, f64, f64)],
+    theirs: Vec<Result<DVec3, NoPoint>>,
+) -> Comparison {
     let mut c = Comparison {
         points: points.len(),
         evaluated: 0,
@@ -390,23 +462,22 @@ pub fn compare(
         diag: osd_mesh.bbox_diag(),
     };
     for (&(face, u, v), theirs) in points.iter().zip(theirs) {
-        match (model.eval_face(face, u, v), theirs) {
+        match (ours(face, u, v), theirs) {
             (Some(ours), Ok(theirs)) => {
                 c.evaluated += 1;
                 // A NaN must not pass as agreement.
-                let e = match (ours.position - theirs).length() {
+                let e = match (ours - theirs).length() {
                     e if e.is_nan() => f64::INFINITY,
                     e => e,
                 };
                 if e > c.max_error || c.worst.is_none() {
                     c.max_error = e;
-                    c.worst = Some(((face, u, v), ours.position, theirs));
+                    c.worst = Some(((face, u, v), ours, theirs));
                 }
             }
             (None, Err(_)) => {}
             (ours, theirs) => c.disagreements.push(format!(
-                "face {face} ({u}, {v}): tessera {:?}, OpenSubdiv {theirs:?}",
-                ours.map(|p| p.position)
+                "face {face} ({u}, {v}): tessera {ours:?}, OpenSubdiv {theirs:?}"
             )),
         }
     }

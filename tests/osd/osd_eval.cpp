@@ -1,5 +1,5 @@
-// osd_eval: limit points of a Catmull-Clark control mesh, computed by OpenSubdiv's Bfr, for
-// tests/osd_compare.rs (which runs it through tests/osd.rs).
+// osd_eval: limit points of a Catmull-Clark control mesh, computed by OpenSubdiv's Bfr (or
+// its Far, with -far), for tests/osd_compare.rs (which runs it through tests/osd.rs).
 //
 // Build: g++ -O2 -std=c++14 osd_eval.cpp -o osd_eval -losdCPU   (Debian: libosd-dev)
 //
@@ -25,12 +25,22 @@
 // "hole" for a face without a limit surface. Bad input (or any warning from Far while
 // building the topology) prints one line "osd_eval: line L: problem" on stderr and exits 1.
 //
-// Option: -l LEVEL sets both approximation levels (default: the most, 10).
+// Options:
+//   -l LEVEL   Bfr's approximation levels, smooth and sharp (default: the most, 10).
+//   -far LEVEL instead of Bfr, Far: the mesh refined uniformly LEVEL times and the limit
+//              masks applied there (PrimvarRefiner::Limit), exact once every semi-sharp
+//              feature has decayed, i.e. for LEVEL >= the largest finite sharpness, except
+//              at darts (one infinitely sharp edge), which Sdc gives the smooth limit mask
+//              (opensubdiv/sdc/scheme.h, ComputeVertexLimitMask). Only points that are
+//              vertices of the first refinement have a limit point this way: a face's
+//              corners, its edges' midpoints and its centre (a sub-face's (0,0), (1/2,0),
+//              (0,1/2), (1/2,1/2)); any other point prints "not-a-vertex".
 
 #include <opensubdiv/bfr/limits.h>
 #include <opensubdiv/bfr/refinerSurfaceFactory.h>
 #include <opensubdiv/bfr/surface.h>
 #include <opensubdiv/far/error.h>
+#include <opensubdiv/far/primvarRefiner.h>
 #include <opensubdiv/far/topologyDescriptor.h>
 #include <opensubdiv/far/topologyRefinerFactory.h>
 
@@ -53,7 +63,8 @@ namespace {
 // them adaptively to these levels (defaults 2 and 6, opensubdiv/bfr/surfaceFactory.h).
 // The sub-patches it builds are addressed by Far::PatchParam, whose 10-bit u and v
 // indices "represent up through 10 levels of refinement" (opensubdiv/far/patchParam.h),
-// and Far caps adaptive isolation at 10 (far/patchTableFactory.h): 10 is the most.
+// and Far caps adaptive isolation at 10 (far/patchTableFactory.h): 10 is the most (at 11
+// Bfr 3.5 crashes on points near a quad's (1,1) corner).
 const int kMaxApproxLevel = 10;
 
 int g_line = 0;
@@ -169,15 +180,153 @@ bool in_domain(const Bfr::Parameterization& p, double u, double v) {
     return tv * d + tu < p.GetFaceSize();
 }
 
+struct Query {
+    int face;
+    double u, v;
+};
+
+const double* no_point(const char* why) {
+    std::puts(why);
+    return nullptr;
+}
+
+void print_point(const double p[3]) { std::printf("%.17g %.17g %.17g\n", p[0], p[1], p[2]); }
+
+// Bfr: each face's limit surface, built on first use, evaluated at its (u, v).
+void eval_bfr(const Far::TopologyRefiner& refiner, int level, const std::vector<double>& positions,
+              const std::vector<Query>& queries) {
+    Bfr::SurfaceFactory::Options options;
+    options.SetApproxLevelSmooth(level);
+    options.SetApproxLevelSharp(level);
+    Bfr::RefinerSurfaceFactory<> factory(refiner, options);
+
+    typedef Bfr::Surface<double> Surface;
+    Surface::PointDescriptor xyz(3);
+    struct FaceSurface {
+        bool built = false;
+        Surface surface;
+        std::vector<double> patch_points;
+    };
+    std::vector<FaceSurface> surfaces(refiner.GetLevel(0).GetNumFaces());
+    for (const Query& q : queries) {
+        Bfr::Parameterization param(Sdc::SCHEME_CATMARK, refiner.GetLevel(0).GetFaceVertices(q.face).size());
+        if (!in_domain(param, q.u, q.v)) {
+            no_point("outside");
+            continue;
+        }
+        FaceSurface& fs = surfaces[q.face];
+        if (!fs.built) {
+            fs.built = true;
+            if (factory.InitVertexSurface<double>(q.face, &fs.surface)) {
+                fs.patch_points.resize(3 * (size_t)fs.surface.GetNumPatchPoints());
+                fs.surface.PreparePatchPoints(positions.data(), xyz, fs.patch_points.data(), xyz);
+            }
+        }
+        if (!fs.surface.IsValid()) {
+            no_point("hole");
+            continue;
+        }
+        double uv[2] = {q.u, q.v};
+        double p[3];
+        fs.surface.Evaluate(uv, fs.patch_points.data(), xyz, p);
+        print_point(p);
+    }
+}
+
+// A point for Far's PrimvarRefiner (its Clear and AddWithWeight interface).
+struct Point {
+    double p[3];
+    void Clear(void* = nullptr) { p[0] = p[1] = p[2] = 0.0; }
+    void AddWithWeight(const Point& src, double w) {
+        for (int i = 0; i < 3; ++i) p[i] += w * src.p[i];
+    }
+};
+
+// The vertex of the first refinement at (u, v) of face f, or -1: a corner's vertex child,
+// an edge's or the face's child vertex (Far::TopologyLevel's child queries).
+int level1_vertex(const Far::TopologyLevel& base, int f, double u, double v) {
+    Far::ConstIndexArray verts = base.GetFaceVertices(f);
+    Far::ConstIndexArray edges = base.GetFaceEdges(f);  // edge k joins vertices k and k+1
+    int n = verts.size();
+    if (n == 4) {
+        // (u, v) in units of the first refinement's grid.
+        double a = 2.0 * u, b = 2.0 * v;
+        if (a == 2.0 * std::floor(a / 2.0) && b == 2.0 * std::floor(b / 2.0)) {
+            // A corner: (0,0), (1,0), (1,1), (0,1) are vertices 0, 1, 2, 3.
+            int k = a == 0.0 ? (b == 0.0 ? 0 : 3) : (b == 0.0 ? 1 : 2);
+            return base.GetVertexChildVertex(verts[k]);
+        }
+        if (a == 1.0 && b == 1.0) return base.GetFaceChildVertex(f);
+        if (a == 1.0 && (b == 0.0 || b == 2.0)) return base.GetEdgeChildVertex(edges[b == 0.0 ? 0 : 2]);
+        if (b == 1.0 && (a == 0.0 || a == 2.0)) return base.GetEdgeChildVertex(edges[a == 0.0 ? 3 : 1]);
+        return -1;
+    }
+    // Sub-face k: (0,0) at vertex k, u toward vertex k+1 (edge k), v toward vertex k-1.
+    Bfr::Parameterization param(Sdc::SCHEME_CATMARK, n);
+    double local[2], uv[2] = {u, v};
+    int k = param.ConvertCoordToSubFace(uv, local);
+    double a = 2.0 * local[0], b = 2.0 * local[1];
+    if (a == 0.0 && b == 0.0) return base.GetVertexChildVertex(verts[k]);
+    if (a == 1.0 && b == 0.0) return base.GetEdgeChildVertex(edges[k]);
+    if (a == 0.0 && b == 1.0) return base.GetEdgeChildVertex(edges[(k + n - 1) % n]);
+    if (a == 1.0 && b == 1.0) return base.GetFaceChildVertex(f);
+    return -1;
+}
+
+// Far: uniform refinement to `level`, then limit masks at the first refinement's vertices.
+void eval_far(Far::TopologyRefiner& refiner, int level, const std::vector<double>& positions,
+              const std::vector<Query>& queries) {
+    Far::TopologyRefiner::UniformOptions uniform(level);
+    uniform.fullTopologyInLastLevel = true;  // the limit masks read the last level's edges
+    refiner.RefineUniform(uniform);
+    Far::PrimvarRefinerReal<double> primvar(refiner);
+    std::vector<Point> points(positions.size() / 3);
+    for (size_t i = 0; i < points.size(); ++i) {
+        for (int k = 0; k < 3; ++k) points[i].p[k] = positions[3 * i + k];
+    }
+    for (int l = 1; l <= level; ++l) {
+        std::vector<Point> next(refiner.GetLevel(l).GetNumVertices());
+        primvar.Interpolate(l, points, next);
+        points.swap(next);
+    }
+    std::vector<Point> limit(points.size());
+    primvar.Limit(points, limit);
+
+    const Far::TopologyLevel& base = refiner.GetLevel(0);
+    for (const Query& q : queries) {
+        Bfr::Parameterization param(Sdc::SCHEME_CATMARK, base.GetFaceVertices(q.face).size());
+        if (!in_domain(param, q.u, q.v)) {
+            no_point("outside");
+            continue;
+        }
+        if (base.IsFaceHole(q.face)) {
+            no_point("hole");
+            continue;
+        }
+        int v = level1_vertex(base, q.face, q.u, q.v);
+        if (v < 0) {
+            no_point("not-a-vertex");
+            continue;
+        }
+        for (int l = 1; l < level; ++l) v = refiner.GetLevel(l).GetVertexChildVertex(v);
+        print_point(limit[v].p);
+    }
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
     int level = kMaxApproxLevel;
+    int far_level = 0;
     for (int i = 1; i < argc; ++i) {
         if (std::strcmp(argv[i], "-l") == 0 && i + 1 < argc) {
             level = (int)parse_int(argv[++i], 0, kMaxApproxLevel, "-l");
+        } else if (std::strcmp(argv[i], "-far") == 0 && i + 1 < argc) {
+            // UniformOptions keeps 4 bits of the level.
+            far_level = (int)parse_int(argv[++i], 1, 15, "-far");
         } else {
-            fail(std::string("unknown argument '") + argv[i] + "' (usage: osd_eval [-l LEVEL] < input)");
+            fail(std::string("unknown argument '") + argv[i] +
+                 "' (usage: osd_eval [-l LEVEL | -far LEVEL] < input)");
         }
     }
 
@@ -235,10 +384,6 @@ int main(int argc, char** argv) {
     }
 
     long np = count("points");
-    struct Query {
-        int face;
-        double u, v;
-    };
     std::vector<Query> queries;
     for (long i = 0; i < np; ++i) {
         std::vector<std::string> w = row(3, "point");
@@ -278,41 +423,10 @@ int main(int argc, char** argv) {
     if (!g_far_warning.empty()) fail("Far: " + g_far_warning);
     if (!refiner) fail("Far could not build the topology");
 
-    Bfr::SurfaceFactory::Options options;
-    options.SetApproxLevelSmooth(level);
-    options.SetApproxLevelSharp(level);
-    Bfr::RefinerSurfaceFactory<> factory(*refiner, options);
-
-    typedef Bfr::Surface<double> Surface;
-    Surface::PointDescriptor xyz(3);
-    struct FaceSurface {
-        bool built = false;
-        Surface surface;
-        std::vector<double> patch_points;
-    };
-    std::vector<FaceSurface> surfaces(nf);
-    for (const Query& q : queries) {
-        Bfr::Parameterization param(Sdc::SCHEME_CATMARK, sizes[q.face]);
-        if (!in_domain(param, q.u, q.v)) {
-            std::puts("outside");
-            continue;
-        }
-        FaceSurface& fs = surfaces[q.face];
-        if (!fs.built) {
-            fs.built = true;
-            if (factory.InitVertexSurface<double>(q.face, &fs.surface)) {
-                fs.patch_points.resize(3 * (size_t)fs.surface.GetNumPatchPoints());
-                fs.surface.PreparePatchPoints(positions.data(), xyz, fs.patch_points.data(), xyz);
-            }
-        }
-        if (!fs.surface.IsValid()) {
-            std::puts("hole");
-            continue;
-        }
-        double uv[2] = {q.u, q.v};
-        double p[3];
-        fs.surface.Evaluate(uv, fs.patch_points.data(), xyz, p);
-        std::printf("%.17g %.17g %.17g\n", p[0], p[1], p[2]);
+    if (far_level > 0) {
+        eval_far(*refiner, far_level, positions, queries);
+    } else {
+        eval_bfr(*refiner, level, positions, queries);
     }
     return std::fflush(stdout) == 0 ? 0 : 1;
 }
