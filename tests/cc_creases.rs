@@ -76,7 +76,7 @@ fn the_creases_change_the_surface_and_the_measure_sees_it() {
     let name = shape("catmark_cube_creases2");
     let creased = cc_model(&name);
     let mut control = control_mesh(&name);
-    control.drop_creases();
+    control.drop_creases("--no-creases");
     let smooth = SurfaceModel::new(
         tessera_core::catmull_clark::PatchMesh::new(&control).unwrap(),
         tessera_core::catmull_clark::TREE_DEPTH,

@@ -114,7 +114,7 @@ fn evaluation_equals_limit_masks_at_every_refined_vertex() {
             mesh.boundary = r;
         }
         // The smooth masks: creased limits are compared with OpenSubdiv's own.
-        mesh.drop_creases();
+        mesh.drop_creases("--no-creases");
         meshes.push((name.to_string(), mesh, m));
     }
     for (name, mesh, m) in meshes {

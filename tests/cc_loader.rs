@@ -111,7 +111,7 @@ fn reads_creases_corners_and_the_subdivision_options() {
     let m = parse(&format!("{square}t crease 4/2/0 1 2 0 3 1 2\n")).unwrap();
     assert_eq!(m.creases, vec![([1, 2], 1.0), ([0, 3], 2.0)]);
     let mut dropped = m.clone();
-    dropped.drop_creases();
+    dropped.drop_creases("--no-creases");
     assert!(!dropped.has_creases());
     assert!(dropped.warnings.iter().any(|w| w.contains("--no-creases")));
 }

@@ -145,7 +145,7 @@ fn the_creases_matter_and_the_comparison_sees_them() {
         let reference = control_mesh(&format!(
             "opensubdiv/reference_hbr_uniform/{shape}_level1.obj"
         ));
-        mesh.drop_creases();
+        mesh.drop_creases("--no-creases");
         let (points, faces) = subdivide(&mesh, 2);
         let d = point_set_distance(&used_points(&points, &faces), &reference.positions);
         assert!(d > 1e-4 * mesh.bbox_diag(), "{shape}: {d}");

@@ -80,7 +80,7 @@ pub fn run(assets: &Path, out_dir: &Path, quick: bool) {
         let mut control = load_control_mesh(&path).expect("shipped mesh");
         // The smooth surfaces (`--no-creases`), comparable across the tables and with
         // the GPU stage; the creased ones have their own table.
-        control.drop_creases();
+        control.drop_creases("--no-creases");
         let cut = control.split_non_manifold().expect("sheets that meet");
         let model = SurfaceModel::new(PatchMesh::new(&control).expect("valid mesh"), TREE_DEPTH);
         let samples = surface_samples(&model, 32);

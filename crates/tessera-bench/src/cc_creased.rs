@@ -64,7 +64,7 @@ pub fn run(assets: &Path, out_dir: &Path, quick: bool, filter: Option<&str>) {
         );
         let prepare_ms = t.elapsed().as_secs_f64() * 1e3;
         let mut smooth_control = control.clone();
-        smooth_control.drop_creases();
+        smooth_control.drop_creases("--no-creases");
         let smooth = SurfaceModel::new(
             patch_mesh(&mut smooth_control, true).expect("valid mesh"),
             TREE_DEPTH,

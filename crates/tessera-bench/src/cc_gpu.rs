@@ -265,7 +265,7 @@ pub fn run(assets: &Path, out_dir: &Path, quick: bool, model_filter: Option<&str
     {
         let mut control = load_control_mesh(&assets.join(file)).expect("shipped mesh");
         // The GPU stages tessellate smooth surfaces.
-        control.drop_creases();
+        control.drop_creases("--no-creases");
         let model = SurfaceModel::new(PatchMesh::new(&control).expect("valid"), TREE_DEPTH);
         let diag = control.bbox_diag();
         let samples = surface_samples(&model, 32);

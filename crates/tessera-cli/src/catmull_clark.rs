@@ -123,7 +123,7 @@ pub fn tessellate(args: TessellateArgs) -> Result<(), Error> {
     let t = Instant::now();
     let mut control = load_control_mesh(&args.input)?;
     if args.no_creases {
-        control.drop_creases();
+        control.drop_creases("--no-creases");
     }
     for w in &control.warnings {
         eprintln!("warning: {w}");

@@ -109,7 +109,7 @@ pub fn render(args: RenderArgs) -> Result<(), Error> {
     let (gpu, output, (lo, hi), what, (triangles, vertices)) = if cc {
         let mut control = tessera_core::io::load_control_mesh(&args.input)?;
         if args.no_creases {
-            control.drop_creases();
+            control.drop_creases("--no-creases");
         }
         for w in &control.warnings {
             eprintln!("warning: {w}");

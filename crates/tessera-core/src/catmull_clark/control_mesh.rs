@@ -90,13 +90,14 @@ impl ControlMesh {
     }
 
     /// Drops every crease and corner, so that the smooth surface is tessellated, and
-    /// says so in [`Self::warnings`] when there were any. Boundaries keep their rule.
-    pub fn drop_creases(&mut self) {
+    /// says so in [`Self::warnings`], with `why`, when there were any. Boundaries keep
+    /// their rule.
+    pub fn drop_creases(&mut self, why: &str) {
         if self.has_creases() {
             let sharp_edges = self.creases.iter().filter(|c| c.1 > 0.0).count();
             let sharp_vertices = self.corners.iter().filter(|c| c.1 > 0.0).count();
             self.warnings.push(format!(
-                "{}: {sharp_edges} sharp edges and {sharp_vertices} sharp vertices ignored (--no-creases): the smooth surface is tessellated",
+                "{}: {sharp_edges} sharp edges and {sharp_vertices} sharp vertices ignored ({why}): the smooth surface is tessellated",
                 self.source.display()
             ));
         }
