@@ -290,6 +290,18 @@ const TABLES: &[(&str, &str, &str)] = &[
          own-triangles leaf bound at the same ε, each against uniform the same way.",
     ),
     (
+        "catmull_clark_creased",
+        "Catmull-Clark with creases: every shipped creased shape (CPU)",
+        "Every shipped OpenSubdiv shape with crease or corner tags, with its creases: the \
+         measured max error (32×32 exact samples per patch) beside ε, the triangles against \
+         the smallest uniform grid at or under the same measured error (`uniform n = 1`, two \
+         triangles per patch, is the floor of both), the triangles of the same shape \
+         without creases at the same ε, and the largest distance from OpenSubdiv's own \
+         limit surface (Bfr at its deepest level; Far's limit masks on `catmark_chaikin1`, \
+         where Bfr departs from Far) at random `(face, u, v)`. Car, bishop and rook at \
+         three tolerances.",
+    ),
+    (
         "catmull_clark_gpu",
         "Catmull-Clark: the GPU stages against the CPU and uniform peers",
         "Per model, tolerance and first split: the adaptive stage on the GPU, the CPU \
@@ -301,17 +313,20 @@ const TABLES: &[(&str, &str, &str)] = &[
 ];
 
 /// `cargo xtask bench [ARGS]` runs the bench (ARGS go to `tessera-bench`: `--quick`,
-/// `--only gpu|cpu|cc|ccgpu`, ...), which writes `bench/NAME.{json,md}`, then assembles
+/// `--only gpu|cpu|cc|creased|ccgpu`, ...), which writes `bench/NAME.{json,md}`, then assembles
 /// `bench/RESULTS.md`; `cargo xtask bench --assemble-only` only assembles it.
 fn bench(extra: &[String]) -> Result<(), String> {
     let out = root().join("bench");
     let assemble_only = extra.iter().any(|a| a == "--assemble-only");
     if !assemble_only {
+        // The creased table compares with OpenSubdiv through the tests' helper.
+        let osd_eval = ensure_osd_eval()?;
         run(cargo()
             .args(["run", "--release", "--locked", "-p", "tessera-bench", "--"])
             .arg("--out")
             .arg(&out)
-            .args(extra))?;
+            .args(extra)
+            .env("TESSERA_OSD_EVAL", &osd_eval))?;
     }
     let command = std::iter::once("cargo xtask bench")
         .chain(extra.iter().map(String::as_str))

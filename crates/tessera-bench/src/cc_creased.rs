@@ -44,6 +44,8 @@ struct Row {
     /// relative to the bounding-box diagonal (when the OpenSubdiv helper is available).
     opensubdiv_max_rel: Option<f64>,
     opensubdiv_points: usize,
+    /// Bfr, or Far where Bfr departs from it.
+    opensubdiv_reference: Option<&'static str>,
 }
 
 /// Shapes with many patches, measured at three tolerances.
@@ -74,7 +76,7 @@ pub fn run(assets: &Path, out_dir: &Path, quick: bool, filter: Option<&str>) {
             (true, false) => &[3e-3, 1e-3, 3e-4],
             _ => &[1e-3],
         };
-        let osd = opensubdiv_agreement(&control, &model, if quick { 100 } else { 400 });
+        let osd = opensubdiv_agreement(&name, &control, &model, if quick { 100 } else { 400 });
         let samples = surface_samples(&model, 32);
         let mut uniform: Vec<(usize, ErrorStats)> = Vec::new();
         for &rel in tolerances {
@@ -127,6 +129,7 @@ pub fn run(assets: &Path, out_dir: &Path, quick: bool, filter: Option<&str>) {
                 smooth_triangles: smooth_out.mesh.triangle_count(),
                 opensubdiv_max_rel: osd.map(|o| o.0),
                 opensubdiv_points: osd.map_or(0, |o| o.1),
+                opensubdiv_reference: osd.map(|o| o.2),
             };
             eprintln!(
                 "creased {} {rel:e}: {} tris, max {:.3e} ≤ ε {:.3e}: {}, uniform n={n} {} tris: {:.3}×; OpenSubdiv {:?}",
@@ -162,21 +165,31 @@ fn creased_shapes(dir: &Path) -> Vec<std::path::PathBuf> {
     out
 }
 
-/// Largest distance from OpenSubdiv's surface at `n` random points, relative to the
-/// bounding-box diagonal, and how many points were compared; `None` without the helper.
+/// Largest distance from OpenSubdiv's surface, relative to the bounding-box diagonal,
+/// how many points were compared, and the reference: Bfr at `n` random points, or, on
+/// `catmark_chaikin1`, where Bfr departs from Far's own refinement, Far's limit masks at
+/// the first refinement's vertices. `None` without the helper.
 fn opensubdiv_agreement(
+    name: &str,
     control: &tessera_core::catmull_clark::ControlMesh,
     model: &SurfaceModel,
     n: usize,
-) -> Option<(f64, usize)> {
+) -> Option<(f64, usize, &'static str)> {
+    use tessera_tests::osd;
     std::env::var_os("TESSERA_OSD_EVAL")?;
-    let points = tessera_tests::osd::sample_points(
-        control,
-        n,
-        &mut tessera_tests::fuzz::Rng::new(0x05d_be4c),
-    );
-    let c = tessera_tests::osd::compare(control, model, &points);
-    Some((c.relative(), c.evaluated))
+    if name == "catmark_chaikin1" {
+        let points = osd::first_level_points(control);
+        let c = osd::compare_with(
+            control,
+            |f, u, v| model.eval_face(f, u, v).map(|p| p.position),
+            &points,
+            osd::far_limit_points(control, &points),
+        );
+        return Some((c.relative(), c.evaluated, "Far"));
+    }
+    let points = osd::sample_points(control, n, &mut tessera_tests::fuzz::Rng::new(0x05d_be4c));
+    let c = osd::compare(control, model, &points);
+    Some((c.relative(), c.evaluated, "Bfr"))
 }
 
 fn table(rows: &[Row]) -> String {
@@ -201,8 +214,11 @@ fn table(rows: &[Row]) -> String {
             r.uniform_triangles,
             r.ratio_to_uniform,
             r.smooth_triangles,
-            r.opensubdiv_max_rel
-                .map_or("—".to_string(), |e| format!("{e:.1e} ({} points)", r.opensubdiv_points)),
+            r.opensubdiv_max_rel.map_or("—".to_string(), |e| format!(
+                "{e:.1e} ({} points, {})",
+                r.opensubdiv_points,
+                r.opensubdiv_reference.unwrap_or("")
+            )),
         );
     }
     s
