@@ -289,6 +289,16 @@ pub fn info(input: &Path) -> Result<(), Error> {
         mesh.boundary(),
         boundary_edges
     );
+    let sharp = &mesh.control_sharpness;
+    let infinite = |s: &f32| *s >= tessera_core::catmull_clark::SHARPNESS_INFINITE;
+    println!(
+        "  creases: {} sharp edges ({} infinitely sharp), {} sharp vertices, {:?} crease method, smooth triangles {}",
+        sharp.edges.len(),
+        sharp.edges.values().filter(|s| infinite(s)).count(),
+        sharp.vertices.len(),
+        mesh.scheme.creasing,
+        if mesh.scheme.smooth_triangles { "on" } else { "off" }
+    );
     let (lo, hi) = control.bounds();
     println!("  bounds: {lo} .. {hi} (diagonal {})", (hi - lo).length());
     for w in &control.warnings {
