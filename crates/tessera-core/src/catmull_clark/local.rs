@@ -12,7 +12,7 @@
 //! B-spline with phantom points beyond the crease. A semi-sharp feature is subdivided
 //! until its sharpness has decayed.
 
-use std::collections::HashMap;
+use rustc_hash::FxHashMap as HashMap;
 
 use glam::DVec3;
 
@@ -86,7 +86,7 @@ impl LocalMesh {
 
     /// Renumbers the points the given quads use; the first quad becomes the target.
     fn compact(points: &[DVec3], quads: impl Iterator<Item = [u32; 4]>, sharp: &Sharpness) -> Self {
-        let mut map: HashMap<u32, u32> = HashMap::new();
+        let mut map: HashMap<u32, u32> = HashMap::default();
         let mut out = LocalMesh {
             points: Vec::new(),
             quads: Vec::new(),

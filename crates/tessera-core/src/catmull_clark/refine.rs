@@ -15,7 +15,7 @@
 //! vertices on its outer rim see only part of their faces; their new points come out
 //! wrong and are never used, but computing them must not fail.
 
-use std::collections::HashMap;
+use rustc_hash::FxHashMap as HashMap;
 
 use glam::DVec3;
 
@@ -227,7 +227,7 @@ struct Incidence {
 }
 
 fn incidence(vertex_count: usize, faces: &[Vec<u32>]) -> Incidence {
-    let mut edges: HashMap<(u32, u32), (u32, u32)> = HashMap::new();
+    let mut edges: HashMap<(u32, u32), (u32, u32)> = HashMap::default();
     let mut vertex_faces = vec![Vec::new(); vertex_count];
     let mut vertex_neighbors: Vec<Vec<u32>> = vec![Vec::new(); vertex_count];
     for (f, face) in faces.iter().enumerate() {
