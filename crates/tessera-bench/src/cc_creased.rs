@@ -53,6 +53,7 @@ const DETAILED: [&str; 3] = ["catmark_car", "catmark_bishop", "catmark_rook"];
 
 pub fn run(assets: &Path, out_dir: &Path, quick: bool, filter: Option<&str>) {
     let mut rows = Vec::new();
+    let mut refused = Vec::new();
     for path in creased_shapes(&assets.join("opensubdiv")) {
         let name = path.file_stem().unwrap().to_string_lossy().to_string();
         if filter.is_some_and(|f| !name.contains(f)) {
@@ -60,10 +61,18 @@ pub fn run(assets: &Path, out_dir: &Path, quick: bool, filter: Option<&str>) {
         }
         let mut control = load_control_mesh(&path).expect("shipped mesh");
         let t = Instant::now();
-        let model = SurfaceModel::new(
-            patch_mesh(&mut control, true).expect("valid mesh"),
-            TREE_DEPTH,
-        );
+        let mesh = match patch_mesh(&mut control, true) {
+            Ok(mesh) => mesh,
+            Err(e) => {
+                eprintln!("creased {name}: refused: {e}");
+                refused.push(Refused {
+                    model: name,
+                    error: e.to_string(),
+                });
+                continue;
+            }
+        };
+        let model = SurfaceModel::new(mesh, TREE_DEPTH);
         let prepare_ms = t.elapsed().as_secs_f64() * 1e3;
         let mut smooth_control = control.clone();
         smooth_control.drop_creases("--no-creases");
@@ -145,7 +154,33 @@ pub fn run(assets: &Path, out_dir: &Path, quick: bool, filter: Option<&str>) {
             rows.push(row);
         }
     }
-    crate::write_results(out_dir, "catmull_clark_creased", &rows, table(&rows));
+    let mut md = table(&rows);
+    for r in &refused {
+        md += &format!(
+            "\nRefused: `{}` ({}; the topology check turns it away before anything is tessellated).\n",
+            r.model,
+            r.error.rsplit(": ").next().unwrap_or(&r.error)
+        );
+    }
+    crate::write_results(
+        out_dir,
+        "catmull_clark_creased",
+        &Results { rows, refused },
+        md,
+    );
+}
+
+#[derive(Serialize)]
+struct Refused {
+    model: String,
+    error: String,
+}
+
+#[derive(Serialize)]
+struct Results {
+    rows: Vec<Row>,
+    /// Shapes the topology check refuses (with the reason).
+    refused: Vec<Refused>,
 }
 
 /// The shipped OpenSubdiv shapes with crease or corner tags, by name.
