@@ -174,3 +174,82 @@ fn a_regular_patch_beside_an_infinitely_sharp_crease_is_one_bspline() {
     );
     assert!(model.patches.iter().all(|p| !p.is_regular()));
 }
+
+/// A roof: two planes of control points meeting at a ridge along `x = 0`, seven columns
+/// by four rows, with the ridge's edges given `sharpness` (none when 0).
+fn roof(sharpness: f32) -> tessera_core::catmull_clark::ControlMesh {
+    let (cols, rows) = (7u32, 4u32);
+    let positions = (0..rows)
+        .flat_map(|j| {
+            (0..cols).map(move |i| {
+                let x = i as f64 - 3.0;
+                DVec3::new(x, j as f64, 1.0 - 0.5 * x.abs())
+            })
+        })
+        .collect();
+    let at = |i: u32, j: u32| j * cols + i;
+    let faces = (0..rows - 1)
+        .flat_map(|j| {
+            (0..cols - 1).map(move |i| vec![at(i, j), at(i + 1, j), at(i + 1, j + 1), at(i, j + 1)])
+        })
+        .collect();
+    let mut mesh = tessera_core::catmull_clark::ControlMesh::new(positions, faces);
+    if sharpness > 0.0 {
+        mesh.creases = (0..rows - 1)
+            .map(|j| ([at(3, j), at(3, j + 1)], sharpness))
+            .collect();
+    }
+    mesh
+}
+
+#[test]
+fn detail_goes_along_the_crease_and_nowhere_else() {
+    // Away from the ridge every one-ring lies in one plane, so the surface there is flat
+    // and needs one leaf (two triangles) per patch; at the ridge a semi-sharp crease
+    // bends it in a band that needs more. Infinitely sharp, the ridge cuts the surface
+    // into two flat halves: no detail anywhere.
+    let count = |sharpness: f32| {
+        let control = roof(sharpness);
+        let model = SurfaceModel::new(
+            tessera_core::catmull_clark::PatchMesh::new(&control).unwrap(),
+            tessera_core::catmull_clark::TREE_DEPTH,
+        );
+        let tol = 1e-3 * control.bbox_diag();
+        let out = tessellate_adaptive(&model, &params(tol)).unwrap();
+        let e = measure_error(
+            &surface_samples(&model, 16),
+            &out.mesh,
+            model.mesh.control_diag,
+        );
+        assert!(e.max_error <= tol, "sharpness {sharpness}: {}", e.max_error);
+        let positions: Vec<DVec3> = out.mesh.positions().map(|p| p.as_dvec3()).collect();
+        let (mut near, mut far) = (0, 0);
+        for t in out.mesh.indices.chunks(3) {
+            let x =
+                (positions[t[0] as usize] + positions[t[1] as usize] + positions[t[2] as usize]).x
+                    / 3.0;
+            if x.abs() < 1.0 {
+                near += 1;
+            } else {
+                far += 1;
+            }
+        }
+        (near, far)
+    };
+    // 18 faces, 72 patches; 24 patches on faces beside the ridge, 48 away from it.
+    let (near, far) = count(2.5);
+    assert_eq!(far, 2 * 48, "semi-sharp: away from the ridge");
+    assert!(
+        near > 4 * 2 * 24,
+        "semi-sharp: {near} triangles beside the ridge"
+    );
+    let (near, far) = count(10.0);
+    assert_eq!(
+        (near, far),
+        (2 * 24, 2 * 48),
+        "infinitely sharp: two flat halves"
+    );
+    let (smooth_near, smooth_far) = count(0.0);
+    assert_eq!(smooth_far, 2 * 48, "smooth: away from the ridge");
+    assert!(smooth_near > 2 * 24, "smooth: {smooth_near}");
+}
