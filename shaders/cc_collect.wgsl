@@ -49,9 +49,9 @@ fn finish() {
     if cc_state.leaves > cc_params.leaf_capacity {
         atomicOr(&cc_state.overflow, 1u);
     }
-    // The leaf kernels run over min(leaves, capacity); the hash over their four corner
-    // keys each, at least one invocation, which writes the counts even when there are none.
+    // The leaf kernels run over min(leaves, capacity); the hash over their eight items
+    // each, at least one invocation, which writes the counts even when there are none.
     let n = min(cc_state.leaves, cc_params.leaf_capacity);
     cc_write_args(3u, n);
-    cc_write_args(6u, max(4u * n, 1u));
+    cc_write_args(6u, max(8u * n, 1u));
 }

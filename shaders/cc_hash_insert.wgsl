@@ -2,7 +2,8 @@
 // word is claimed by compare-exchange, then the low word; whoever sets the low word owns
 // the slot for that key, and a slot holding another key's word is passed over. Nobody
 // waits on anybody (a weak compare-exchange is retried only when it failed spuriously).
-// Out of probes: the overflow flag is set and the host grows the table and reruns.
+// Out of probes: the overflow flag is set and the host grows the table and reruns. An
+// item without a key (CC_NO_KEY) gets no slot and is no overflow.
 // Twin of `tessera_core::catmull_clark::vertex_hash::hash_insert`.
 
 #include "shared/cc_hash.wgsl"
@@ -41,6 +42,10 @@ fn main(@builtin(global_invocation_id) gid: vec3u, @builtin(num_workgroups) grou
         return;
     }
     let key = cc_keys[item];
+    if all(key == CC_NO_KEY) {
+        cc_item_slot[item] = CC_NO_SLOT;
+        return;
+    }
     let hi = ~key.x;
     let lo = ~key.y;
     let capacity = arrayLength(&cc_table);

@@ -36,25 +36,29 @@ fn assign(@builtin(global_invocation_id) gid: vec3u, @builtin(num_workgroups) gr
         return;
     }
     let slot = cc_item_slot[item];
+    var first = CC_NO_SLOT;
+    if slot != CC_NO_SLOT {
+        first = first_of(slot);
+    }
+    let is_first = first == item;
+    // The last item counts the keys, whether it has one or not.
+    if item == cc_hash_status.items - 1u {
+        cc_hash_status.unique = cc_offsets[item] + select(0u, 1u, is_first);
+    }
     if slot == CC_NO_SLOT {
         cc_ids[item] = CC_NO_SLOT;
         return;
     }
-    let first = first_of(slot);
     cc_ids[item] = cc_offsets[first];
-    let is_first = first == item;
     if is_first && cc_offsets[item] < arrayLength(&cc_unique_keys) {
         cc_unique_keys[cc_offsets[item]] = cc_keys[item];
     }
-    if item == cc_hash_status.items - 1u {
-        cc_hash_status.unique = cc_offsets[item] + select(0u, 1u, is_first);
-    }
 }
 
-// After `assign`: the point of each distinct key (from its first item) for the vertex
+// After `assign`: the vertex of each distinct key (from its first item) for the vertex
 // evaluation, and how many there are.
-@group(0) @binding(60) var<storage, read> item_points: array<CcPoint>;
-@group(0) @binding(30) var<storage, read_write> vertex_points: array<CcPoint>;
+@group(0) @binding(60) var<storage, read> item_points: array<CcVertexPoint>;
+@group(0) @binding(30) var<storage, read_write> vertex_points: array<CcVertexPoint>;
 @group(0) @binding(32) var<storage, read_write> vertex_count: array<u32>;
 
 @compute @workgroup_size(64)

@@ -1,5 +1,6 @@
 // Base-quadrilateral replacement, one invocation per leaf: each side of the leaf is
-// replaced by the marked points on it, found by looking them up in the vertex hash.
+// replaced by the marked points on it, found by looking them up in the vertex hash in
+// the leaf's chart (`cc_leaf_keys` puts a point marked across a seam in both charts).
 // `count` writes how many points each side gets (and the polygon's size, scanned by the
 // host); `emit` writes the polygon: corner 0, the points of side 0 in order, corner 1, ...
 //
@@ -84,7 +85,7 @@ fn line_point(x: u32) -> vec2u {
 
 fn line_slot(x: u32) -> u32 {
     let q = line_point(x);
-    return cc_find(cc_point_key(line_topo, line.patch_id, q.x, q.y));
+    return cc_find(cc_chart_key(line_topo, line.patch_id, q.x, q.y));
 }
 
 fn found_point(x: u32, slot: u32) {
@@ -248,10 +249,10 @@ fn emit_leaf(l: u32) {
     var at = poly_offsets[l];
     emitting = true;
     for (var s = 0u; s < 4u; s++) {
-        // The corner's vertex is its item's number (items 4·leaf + corner).
+        // The corner's vertex is its item's number (items 8·leaf + corner).
         if at < arrayLength(&poly_verts) && at < cc_params.poly_capacity {
             let c = cc_cell_corner(cell, s);
-            poly_verts[at] = vec4u(ids[4u * l + s], c.x, c.y, 0u);
+            poly_verts[at] = vec4u(ids[8u * l + s], c.x, c.y, 0u);
         }
         // `count` found the side's points: a side without any is not walked again.
         if counts[s] > 0u {

@@ -1,10 +1,11 @@
-// One invocation per point: position, normal, parameter and patch of each output vertex.
-// Twin of `tessera_core::catmull_clark::gpu_model::vertex_eval`.
+// One invocation per vertex: position and normal evaluated at its point's home (so that
+// every chart's copy of a point gets the same bits), and the face and face (u, v) it
+// carries. Twin of `tessera_core::catmull_clark::gpu_model::vertex_eval`.
 
 #include "shared/types.wgsl"
 #include "shared/cc_patch.wgsl"
 
-@group(0) @binding(30) var<storage, read> cc_points: array<CcPoint>;
+@group(0) @binding(30) var<storage, read> cc_points: array<CcVertexPoint>;
 @group(0) @binding(31) var<storage, read_write> out_vertices: array<OutVertex>;
 // [0]: how many points (written by the GPU in the adaptive pipeline).
 @group(0) @binding(32) var<storage, read> cc_counts: array<u32>;
@@ -16,12 +17,11 @@ fn main(@builtin(global_invocation_id) gid: vec3u, @builtin(num_workgroups) grou
         return;
     }
     let point = cc_points[v];
-    let s = cc_eval(point);
-    let one = f32(CC_PARAM_ONE);
+    let s = cc_eval(CcPoint(point.patch_id, point.u, point.v));
     out_vertices[v] = OutVertex(
         array<f32, 3>(s.position.x, s.position.y, s.position.z),
         array<f32, 3>(s.normal.x, s.normal.y, s.normal.z),
-        array<f32, 2>(f32(point.u) / one, f32(point.v) / one),
-        point.patch_id,
+        array<f32, 2>(point.face_u, point.face_v),
+        point.face,
     );
 }

@@ -1,6 +1,6 @@
 // Lit rendering of a tessellation stage's output (`render::MeshRenderer`).
 //
-// Vertex layout: `MeshBuffers::VERTEX_LAYOUT` (position, normal, patch uv, patch id).
+// Vertex layout: `MeshBuffers::VERTEX_LAYOUT` (position, normal, the face's uv, face id).
 // Entry points: `vs_main` + `fs_shaded` for the surface, `vs_wire` + `fs_wire` for the
 // wireframe overlay, which the renderer draws with a `PolygonMode::Line` pipeline over
 // the same indexed triangles. Colours are computed in linear space; `flags.y` asks for
@@ -24,7 +24,7 @@ struct Uniforms {
     back: vec4<f32>,
     // rgba: linear wire colour and its opacity.
     wire: vec4<f32>,
-    // x: tint by patch id; y: encode sRGB in the shader.
+    // x: tint by face id; y: encode sRGB in the shader.
     flags: vec4<u32>,
 };
 
@@ -34,7 +34,7 @@ struct VertexIn {
     @location(0) position: vec3<f32>,
     @location(1) normal: vec3<f32>,
     @location(2) uv: vec2<f32>,
-    @location(3) patch_id: u32,
+    @location(3) face: u32,
 };
 
 struct VertexOut {
@@ -42,7 +42,7 @@ struct VertexOut {
     @location(0) world: vec3<f32>,
     @location(1) normal: vec3<f32>,
     @location(2) uv: vec2<f32>,
-    @location(3) @interpolate(flat) patch_id: u32,
+    @location(3) @interpolate(flat) face: u32,
 };
 
 // `v` drawn at `at` (its own position, or one moved toward the eye).
@@ -52,7 +52,7 @@ fn vertex_at(v: VertexIn, at: vec3<f32>) -> VertexOut {
     o.world = v.position;
     o.normal = v.normal;
     o.uv = v.uv;
-    o.patch_id = v.patch_id;
+    o.face = v.face;
     return o;
 }
 
@@ -79,8 +79,8 @@ fn hash_u32(x0: u32) -> u32 {
     return x;
 }
 
-// A soft, fully saturated hue for patch `id` (golden-ratio steps around the hue circle).
-fn patch_hue(id: u32) -> vec3<f32> {
+// A soft, fully saturated hue for face `id` (golden-ratio steps around the hue circle).
+fn face_hue(id: u32) -> vec3<f32> {
     let h = fract(f32(id) * 0.618034 + f32(hash_u32(id) & 255u) / 2048.0);
     let k = vec3<f32>(0.0, 2.0 / 3.0, 1.0 / 3.0);
     return clamp(abs(fract(h + k) * 6.0 - 3.0) - 1.0, vec3<f32>(0.0), vec3<f32>(1.0));
@@ -114,7 +114,7 @@ fn fs_shaded(i: VertexOut, @builtin(front_facing) front: bool) -> @location(0) v
     // normals) has its own colour, so holes and flipped patches show.
     var albedo = select(u.back.rgb, u.base.rgb, front);
     if u.flags.x != 0u {
-        albedo = mix(albedo, patch_hue(i.patch_id) * 0.8 + 0.1, 0.35);
+        albedo = mix(albedo, face_hue(i.face) * 0.8 + 0.1, 0.35);
     }
     let key_l = normalize(u.key.xyz);
     let fill_l = normalize(u.fill.xyz);

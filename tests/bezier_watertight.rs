@@ -194,8 +194,8 @@ fn victim() -> (BezierModel, Tessellation, u32) {
                 .filter(|tri| tri.contains(&(i as u32)))
                 .map(|tri| {
                     t.mesh.vertices[tri[0] as usize]
-                        .patch
-                        .max(t.mesh.vertices[tri[1] as usize].patch)
+                        .face
+                        .max(t.mesh.vertices[tri[1] as usize].face)
                 })
                 .collect();
             if patches.len() > 1 {

@@ -433,8 +433,8 @@ fn polygons_with_points_on_every_side_triangulate_without_slivers() {
 }
 
 /// The uniform pipeline of the GPU (its CPU twin, `gpu_uniform`) makes the reference's
-/// uniform mesh: the same vertices (matched by patch and grid point, positions within
-/// 1e-5 of the diagonal), the same triangles in the same order.
+/// uniform mesh: the same vertices (matched by face and face coordinates, positions
+/// within 1e-5 of the diagonal), the same triangles in the same order.
 #[test]
 fn gpu_uniform_twin_makes_the_uniform_reference_mesh() {
     use tessera_core::catmull_clark::gpu_model::CcGpuModel;
@@ -457,10 +457,11 @@ fn gpu_uniform_twin_makes_the_uniform_reference_mesh() {
             "{name} n={n}"
         );
         assert_eq!(twin.indices.len(), reference.indices.len(), "{name} n={n}");
-        // A vertex is a grid point of the patch that evaluates it in both.
+        // A vertex is a point of a face at its exact coordinates (units of 1/(2n)): one
+        // per chart, as both number them.
         let grid = |v: &tessera_core::gpu_types::OutVertex| {
-            let g = |x: f32| (x as f64 * n as f64).round() as u32;
-            (v.patch, g(v.uv[0]), g(v.uv[1]))
+            let g = |x: f32| (x as f64 * 2.0 * n as f64).round() as u32;
+            (v.face, g(v.uv[0]), g(v.uv[1]))
         };
         let by_point: std::collections::HashMap<_, _> = reference
             .vertices

@@ -209,7 +209,7 @@ pub fn glb_input() -> Input {
                     position,
                     normal,
                     uv: [(k % 2) as f32, (k / 2 % 2) as f32],
-                    patch: (k / 4) as u32,
+                    face: (k / 4) as u32,
                 },
             )
             .collect(),
@@ -422,7 +422,7 @@ const KEYS: &[&str] = &[
     "\"POSITION\":",
     "\"NORMAL\":",
     "\"TEXCOORD_0\":",
-    "\"_PATCH\":",
+    "\"_FACE\":",
     "\"indices\":",
     "\"bufferView\":",
     "\"buffer\":",

@@ -1,10 +1,11 @@
 // What the kernels of the adaptive Catmull-Clark pipeline share (bindings 50-59): the
 // parameters, the counters, the first-split trials, grid parameters and point keys.
 // Twins: `tessera_core::gpu_types::{cc_trial_split, cc_trial_round}`,
-// `tessera_core::catmull_clark::keys::point_key`.
+// `tessera_core::catmull_clark::keys::topo_chart_key`.
 
 #include "shared/types.wgsl"
 #include "shared/cc_patch.wgsl"
+#include "shared/cc_face.wgsl"
 
 // `tessera_core::gpu_types::CcState`, then per (patch, trial) three arrays of
 // `patch_count · CC_TRIALS` words: splits so far, the largest leaf bound (f32 bits) and
@@ -31,7 +32,7 @@ struct CcCounters {
 // Per patch: (leaves, trial) of the best first split so far.
 @group(0) @binding(56) var<storage, read_write> best: array<vec2u>;
 // Indirect dispatch arguments: [0..3] the current cell list, [3..6] the leaves, [6..9]
-// the hash items (four corner keys per leaf).
+// the hash items (eight per leaf: `cc_leaf_keys`).
 @group(0) @binding(58) var<storage, read_write> args: array<u32>;
 
 fn cc_invocation(gid: vec3u, groups: vec3u) -> u32 {
@@ -95,38 +96,20 @@ fn cc_grid_fixed(i: u32) -> u32 {
     return r;
 }
 
-// `keys::point_key` as `[hi, lo]` words: the same point from every patch gets the same key.
-fn cc_point_key(topo: CcPatchTopo, p: u32, i: u32, j: u32) -> vec2u {
+// `keys::topo_chart_key` as `[hi, lo]` words: the same point in the same chart gets the
+// same key from every patch. A level-1 point's key holds its chart, an edge point's key
+// the side of a seam it is on (bit 31: the patch runs the edge from its smaller end).
+fn cc_chart_key(topo: CcPatchTopo, p: u32, i: u32, j: u32) -> vec2u {
     let n = cc_params.grid;
-    if i == 0u && j == 0u {
-        return vec2u(0u, topo.quad[0]);
+    let place = grid_place(i, j, n);
+    if place.kind == GRID_CORNER {
+        return vec2u(cc_chart(topo.face_corner, p), topo.quad[place.k]);
     }
-    if i == n && j == 0u {
-        return vec2u(0u, topo.quad[1]);
-    }
-    if i == n && j == n {
-        return vec2u(0u, topo.quad[2]);
-    }
-    if i == 0u && j == n {
-        return vec2u(0u, topo.quad[3]);
-    }
-    var k = 4u;
-    var t = 0u;
-    if j == 0u {
-        k = 0u;
-        t = i;
-    } else if i == n {
-        k = 1u;
-        t = j;
-    } else if j == n {
-        k = 2u;
-        t = n - i;
-    } else if i == 0u {
-        k = 3u;
-        t = n - j;
-    }
-    if k < 4u {
-        return vec2u((1u << 30u) | topo.edges[k], cc_edge_canonical(topo, k, t));
+    if place.kind == GRID_EDGE {
+        let k = place.k;
+        let forward = topo.quad[k] < topo.quad[(k + 1u) % 4u];
+        let side = select(0u, 1u << 31u, forward && cc_seam(topo.face_corner, k));
+        return vec2u((1u << 30u) | topo.edges[k], side | cc_edge_canonical(topo, k, place.t));
     }
     return vec2u((2u << 30u) | (p << 8u) | (i >> 12u), ((i & 0xfffu) << 20u) | j);
 }

@@ -1,52 +1,15 @@
-// The numbering of the uniform Catmull-Clark grid points, shared by the points and the
-// cells kernels (bindings 70-71). Twin: `grid_place` and `grid_vertex` in
-// `tessera_core::catmull_clark::gpu_uniform`.
+// The numbering of the uniform Catmull-Clark vertices (a grid point in a chart), shared
+// by the points and the cells kernels (bindings 70-71). Twin: `grid_vertex` in
+// `tessera_core::catmull_clark::gpu_uniform` (`grid_place` is in `shared/cc_face.wgsl`).
 
 #include "shared/types.wgsl"
+#include "shared/cc_face.wgsl"
 
 @group(0) @binding(70) var<uniform> uniform_params: CcUniformParams;
 @group(0) @binding(71) var<storage, read> uniform_patches: array<CcUniformPatch>;
 
-const GRID_CORNER: u32 = 0u;
-const GRID_EDGE: u32 = 1u;
-const GRID_INSIDE: u32 = 2u;
-
-// Corner k, point t (from corner k) of edge k, or inside.
-struct GridPlace {
-    kind: u32,
-    k: u32,
-    t: u32,
-}
-
-fn grid_place(i: u32, j: u32, n: u32) -> GridPlace {
-    if j == 0u {
-        if i == 0u {
-            return GridPlace(GRID_CORNER, 0u, 0u);
-        }
-        if i == n {
-            return GridPlace(GRID_CORNER, 1u, 0u);
-        }
-        return GridPlace(GRID_EDGE, 0u, i);
-    }
-    if j == n {
-        if i == n {
-            return GridPlace(GRID_CORNER, 2u, 0u);
-        }
-        if i == 0u {
-            return GridPlace(GRID_CORNER, 3u, 0u);
-        }
-        return GridPlace(GRID_EDGE, 2u, n - i);
-    }
-    if i == n {
-        return GridPlace(GRID_EDGE, 1u, j);
-    }
-    if i == 0u {
-        return GridPlace(GRID_EDGE, 3u, n - j);
-    }
-    return GridPlace(GRID_INSIDE, 0u, 0u);
-}
-
-// The output vertex of grid point (i, j) of dense patch d, and whether d evaluates it.
+// The output vertex of grid point (i, j) of dense patch d in its chart, and whether d
+// writes it.
 struct GridVertex {
     index: u32,
     owned: bool,

@@ -44,11 +44,13 @@ struct VertexRecord {
     v: f32,
 }
 
+// `uv` is the point's (u, v) on `face`: the Bézier patch, or the Catmull-Clark control
+// face in OpenSubdiv Bfr's parameterisation (`tessera_core::gpu_types::OutVertex`).
 struct OutVertex {
     position: array<f32, 3>,
     normal: array<f32, 3>,
     uv: array<f32, 2>,
-    patch_id: u32,
+    face: u32,
 }
 
 struct DrawIndexedIndirectArgs {
@@ -177,8 +179,23 @@ struct CcPoint {
     v: u32,
 }
 
+// An output vertex to write: evaluated at its point's home (patch_id, u, v), carrying
+// its face and face (u, v).
+struct CcVertexPoint {
+    patch_id: u32,
+    u: u32,
+    v: u32,
+    face: u32,
+    face_u: f32,
+    face_v: f32,
+}
+
+const CC_NO_HOME: u32 = 0xffffffffu;
+
 const CC_HASH_MAX_PROBES: u32 = 64u;
 const CC_NO_SLOT: u32 = 0xffffffffu;
+// An item without a key: the hash passes it over.
+const CC_NO_KEY: vec2u = vec2u(0xffffffffu, 0xffffffffu);
 
 // Adaptive Catmull-Clark tessellation (`tessera_core::gpu_types::{CcCell, ...}`).
 const CC_TRIALS: u32 = 18u;
@@ -192,10 +209,15 @@ struct CcCell {
     j: u32,
 }
 
+// `face_corner`: the patch's corner in its control face | the face's sides << 8.
 struct CcPatchTopo {
     quad: vec4u,
     edges: vec4u,
     across: vec4u,
+    face: u32,
+    face_corner: u32,
+    pad0: u32,
+    pad1: u32,
 }
 
 struct CcTessParams {
@@ -209,7 +231,7 @@ struct CcTessParams {
     index_capacity: u32,
     search_leaf_capacity: u32,
     search_rounds: u32,
-    pad1: u32,
+    points: u32,
     pad2: u32,
 }
 
@@ -224,8 +246,10 @@ struct CcUniformPatch {
     corners: array<u32, 4>,
     edges: array<u32, 4>,
     flags: u32,
-    pad0: u32,
-    pad1: u32,
+    face: u32,
+    face_corner: u32,
+    corner_homes: array<u32, 4>,
+    edge_homes: array<u32, 4>,
 }
 
 struct CcUniformParams {

@@ -390,6 +390,16 @@ pub struct VertexRecord {
 }
 
 /// One output vertex, 36 bytes (the layer-strip paper's figure too).
+///
+/// `face` and `uv` say where on the input the vertex lies. Bézier path: the patch (in
+/// the file's order) and its `(u, v)` in `[0, 1]²`. Catmull-Clark path: the control face
+/// (in the input's order) and the face's own `(u, v)` in OpenSubdiv Bfr's
+/// parameterisation ([`PatchMesh::face_point`](crate::catmull_clark::PatchMesh::face_point);
+/// Ptex's for quads: `(0, 0)` at the face's first vertex, `u` toward its second, `v`
+/// toward its last). A point on an edge between two control faces, or between the
+/// sub-faces of a face that is not a quad, has one vertex per face or sub-face: the
+/// copies have the same position and normal, bit for bit, and each its own `face` and
+/// `uv`, so that every triangle lies in one face.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
 pub struct OutVertex {
@@ -397,10 +407,10 @@ pub struct OutVertex {
     pub position: [f32; 3],
     /// Unit surface normal, facing the front of the patch.
     pub normal: [f32; 3],
-    /// The patch parameter `(u, v)` of the point, in `[0, 1]²`.
+    /// The point's `(u, v)` on its face.
     pub uv: [f32; 2],
-    /// Index of the patch the point was evaluated on (`patch_id` in WGSL).
-    pub patch: u32,
+    /// The face the vertex lies in: the Bézier patch or the Catmull-Clark control face.
+    pub face: u32,
 }
 
 /// `wgpu`'s indexed indirect draw arguments, as the GPU writes them.
@@ -534,6 +544,9 @@ mod tests {
         assert_eq!(std::mem::size_of::<GpuCurve>(), 16);
         assert_eq!(std::mem::size_of::<VertexRecord>(), 12);
         assert_eq!(std::mem::size_of::<OutVertex>(), 36);
+        assert_eq!(std::mem::size_of::<CcPatchTopo>(), 64);
+        assert_eq!(std::mem::size_of::<CcUniformPatch>(), 80);
+        assert_eq!(std::mem::size_of::<CcVertexPoint>(), 24);
         assert_eq!(std::mem::size_of::<DrawIndexedIndirectArgs>(), 20);
     }
 
@@ -685,10 +698,39 @@ pub struct CcPoint {
     pub v: u32,
 }
 
+/// An output vertex to write (`cc_vertex_eval`): where its position and normal are
+/// evaluated, and the face and face `(u, v)` it carries ([`OutVertex`]). The point
+/// evaluated is the surface point's home (the same patch and parameter for every chart's
+/// copy of it, so that the copies get the same bits), not necessarily a patch of the
+/// vertex's own face.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable, PartialEq)]
+pub struct CcVertexPoint {
+    /// Patch of the point's home.
+    pub patch_id: u32,
+    /// Parameter along that patch's u, fixed point.
+    pub u: u32,
+    /// Parameter along that patch's v, fixed point.
+    pub v: u32,
+    /// The vertex's control face.
+    pub face: u32,
+    /// The vertex's `(u, v)` on its face.
+    pub face_u: f32,
+    /// See `face_u`.
+    pub face_v: f32,
+}
+
+/// A level-1 point or edge that no surface patch touches has no home
+/// ([`crate::catmull_clark::gpu_model::point_homes`]).
+pub const CC_NO_HOME: u32 = u32::MAX;
+
 /// Probes an insertion into the vertex hash makes before it reports an overflow.
 pub const CC_HASH_MAX_PROBES: u32 = 64;
-/// An item whose key found no slot (the table overflowed).
+/// An item whose key found no slot (the table overflowed), or that has no key.
 pub const CC_NO_SLOT: u32 = u32::MAX;
+/// An item without a key (`[hi, lo]`), which the hash passes over: no point key has a
+/// word equal to `u32::MAX`.
+pub const CC_NO_KEY: [u32; 2] = [u32::MAX; 2];
 
 /// A slot of the vertex hash. Every field is stored bit-inverted so that an all-zero
 /// buffer is an empty table (`clear_buffer` is all the reset there is): a word is
@@ -770,8 +812,9 @@ pub fn cc_trial_round(t: u32) -> u32 {
         .unwrap_or(0)
 }
 
-/// Connectivity of a patch for the GPU: its level-1 points, edge ids, and per edge the
-/// patch across it and that patch's edge index (`q << 2 | k`, or [`CC_NO_NEIGHBOUR`]).
+/// Connectivity of a patch for the GPU: its level-1 points, edge ids, per edge the
+/// patch across it and that patch's edge index (`q << 2 | k`, or [`CC_NO_NEIGHBOUR`]),
+/// and its control face.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable, PartialEq, Eq)]
 pub struct CcPatchTopo {
@@ -784,25 +827,42 @@ pub struct CcPatchTopo {
     /// Per edge: `q << 2 | k` of the patch `q` across it and its edge `k`, or
     /// [`CC_NO_NEIGHBOUR`].
     pub across: [u32; 4],
+    /// The control face.
+    pub face: u32,
+    /// The patch's corner in its face and the face's sides, `corner | sides << 8`
+    /// ([`crate::catmull_clark::keys::face_corner`]).
+    pub face_corner: u32,
+    /// Padding to a multiple of 16 bytes (`pad0`, `pad1` in WGSL).
+    pub pad: [u32; 2],
 }
 
 /// A surface patch as the uniform Catmull-Clark kernels see it
-/// ([`crate::catmull_clark::gpu_uniform`]): its id, the dense ids of its corners and
-/// edges, and which of them it evaluates.
+/// ([`crate::catmull_clark::gpu_uniform`]): its id, the dense ids of its corners' and
+/// edges' vertices in its chart, which of them it writes, its face, and where the
+/// points of its corners and edges are evaluated.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable, PartialEq, Eq)]
 pub struct CcUniformPatch {
     /// Patch index in the mesh.
     pub patch_id: u32,
-    /// Dense ids of the corner points, numbered first in the output vertices.
+    /// Dense ids of the corner vertices (a level-1 point in this patch's chart),
+    /// numbered first in the output vertices.
     pub corners: [u32; 4],
-    /// Dense ids of the level-1 edges, edge `k` from corner `k` to corner `k + 1`.
+    /// Dense ids of the edge vertex rows (a level-1 edge on this patch's side of it),
+    /// edge `k` from corner `k` to corner `k + 1`.
     pub edges: [u32; 4],
-    /// Bits `k` (evaluates corner `k`), `4 + k` (evaluates edge `k`'s points) and `8 + k`
+    /// Bits `k` (writes corner `k`), `4 + k` (writes edge `k`'s points) and `8 + k`
     /// (edge `k` runs from its larger end point).
     pub flags: u32,
-    /// Padding to a multiple of 16 bytes (`pad0`, `pad1` in WGSL).
-    pub pad: [u32; 2],
+    /// The control face.
+    pub face: u32,
+    /// The patch's corner in its face and the face's sides, `corner | sides << 8`.
+    pub face_corner: u32,
+    /// Homes of the corners' level-1 points
+    /// ([`crate::catmull_clark::gpu_model::point_homes`]).
+    pub corner_homes: [u32; 4],
+    /// Homes of the level-1 edges.
+    pub edge_homes: [u32; 4],
 }
 
 /// Uniform parameters of the uniform Catmull-Clark kernels.
@@ -844,8 +904,10 @@ pub struct CcTessParams {
     pub search_leaf_capacity: u32,
     /// Rounds of the first-split search run ([`crate::catmull_clark::FirstSplit::search_rounds`]).
     pub search_rounds: u32,
-    /// Padding to a multiple of 16 bytes (`pad1`, `pad2` in WGSL).
-    pub pad: [u32; 2],
+    /// Level-1 points: where the edges' homes start in the homes (binding 67).
+    pub points: u32,
+    /// Padding to a multiple of 16 bytes (`pad2` in WGSL).
+    pub pad: u32,
 }
 
 /// Counters of the adaptive Catmull-Clark kernels, read back to check capacities. In

@@ -3,8 +3,16 @@
 //! An edge used by one triangle only is a boundary edge. It is legitimate only where the
 //! surface itself has an open boundary (a patch side no other patch shares), given here
 //! as polylines; anywhere else it is a crack. A vertex lying inside a boundary edge is a
-//! T-junction. The edge analysis runs twice: by index (vertices must be shared by index,
-//! as the tessellators promise) and after welding vertices by position.
+//! T-junction. The edge analysis runs twice: by index (vertices must be shared as the
+//! tessellators promise) and after welding vertices by position.
+//!
+//! "By index" counts vertices of bit-identical position as one: the Catmull-Clark
+//! output has one vertex per control face (or sub-face) at a point on a seam between
+//! them, each copy with the same position bits and its own face coordinates
+//! ([`OutVertex`](crate::gpu_types::OutVertex)). Such copies are counted in
+//! [`WatertightReport::seam_copies`], not as cracks; a copy off by a single bit is a
+//! crack by index (and a duplicate vertex), one moved further a crack by position too.
+//! The Bézier path shares every vertex by index: it makes no copies.
 
 use std::collections::HashMap;
 
@@ -19,7 +27,8 @@ pub struct WatertightReport {
     pub degenerate_triangles: usize,
     /// Edges (after welding) used by more than two triangles.
     pub non_manifold_edges: usize,
-    /// Boundary edges (by index) that do not lie on an open boundary of the surface.
+    /// Boundary edges (by index, vertices of bit-identical positions as one) that do not
+    /// lie on an open boundary of the surface.
     pub cracks_by_index: usize,
     /// Boundary edges (after welding) that do not lie on an open boundary.
     pub cracks_by_position: usize,
@@ -27,14 +36,18 @@ pub struct WatertightReport {
     pub t_junctions: usize,
     /// Where those vertices are.
     pub t_junction_points: Vec<DVec3>,
-    /// Distinct vertices at one position.
+    /// Vertices at one position (within the tolerance) whose position bits differ.
     pub duplicate_vertices: usize,
+    /// Vertices whose position bits repeat another's: the copies of a point on a seam
+    /// between charts. Not a defect (see the module docs).
+    pub seam_copies: usize,
     /// Boundary edges that do lie on the surface's open boundary.
     pub boundary_edges: usize,
 }
 
 impl WatertightReport {
-    /// No degenerate triangle, non-manifold edge, crack, T-junction or duplicate vertex.
+    /// No degenerate triangle, non-manifold edge, crack, T-junction or duplicate vertex
+    /// (seam copies are allowed).
     pub fn is_watertight(&self) -> bool {
         self.degenerate_triangles == 0
             && self.non_manifold_edges == 0
@@ -56,9 +69,20 @@ pub fn check_watertight(
 ) -> WatertightReport {
     let mut report = WatertightReport::default();
     let pos: Vec<DVec3> = positions.iter().map(|p| p.as_dvec3()).collect();
+    // Vertices by their position's bits: the first of each, for every copy.
+    let mut first: HashMap<[u32; 3], u32> = HashMap::new();
+    let exact: Vec<u32> = positions
+        .iter()
+        .enumerate()
+        .map(|(i, p)| {
+            *first
+                .entry(p.to_array().map(f32::to_bits))
+                .or_insert(i as u32)
+        })
+        .collect();
     let tris: Vec<[u32; 3]> = indices
         .chunks_exact(3)
-        .map(|t| [t[0], t[1], t[2]])
+        .map(|t| [t[0], t[1], t[2]].map(|i| exact[i as usize]))
         .collect();
     for t in &tris {
         let [a, b, c] = t.map(|i| pos[i as usize]);
@@ -68,9 +92,11 @@ pub fn check_watertight(
         }
     }
     let (weld_id, _) = weld_points(positions, tol as f32);
-    let used: std::collections::HashSet<u32> = indices.iter().copied().collect();
+    let indexed: std::collections::HashSet<u32> = indices.iter().copied().collect();
+    let used: std::collections::HashSet<u32> = tris.iter().flatten().copied().collect();
     let welded_used: std::collections::HashSet<u32> =
         used.iter().map(|&i| weld_id[i as usize]).collect();
+    report.seam_copies = indexed.len() - used.len();
     report.duplicate_vertices = used.len() - welded_used.len();
 
     let on_open = |p: DVec3| -> Vec<usize> {

@@ -109,6 +109,10 @@ pub const SOURCES: &[(&str, &str)] = &[
         include_str!("../../../shaders/cc_vertex_eval.wgsl"),
     ),
     (
+        "shared/cc_face.wgsl",
+        include_str!("../../../shaders/shared/cc_face.wgsl"),
+    ),
+    (
         "shared/cc_uniform.wgsl",
         include_str!("../../../shaders/shared/cc_uniform.wgsl"),
     ),

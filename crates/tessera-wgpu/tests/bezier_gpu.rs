@@ -205,7 +205,7 @@ fn bbox_diagonal(prep: &PreparedBezier) -> f32 {
 /// rounding in S_u, which a GPU's fused multiply-add changes, turn it by
 /// ulps × |coordinates| / |S_u|.
 fn normal_tolerance(prep: &PreparedBezier, v: &OutVertex) -> f32 {
-    let cp = prep.control_points(v.patch);
+    let cp = prep.control_points(v.face);
     let f = eval_frame_f32(&cp, v.uv[0], v.uv[1]);
     let coords = cp.iter().map(|c| c.abs().max_element()).fold(0.0, f32::max);
     // The shortest derivative the normal is built from (the mixed one stands in for a
@@ -304,7 +304,7 @@ fn gpu_matches_the_cpu_reference_on_every_shipped_model() {
                     d <= tol,
                     "{what}: vertex {k} is {d} from the CPU's (tolerance {tol})"
                 );
-                assert_eq!(g.patch, c.patch, "{what}: vertex {k} patch");
+                assert_eq!(g.face, c.face, "{what}: vertex {k} patch");
                 let dn = (Vec3::from_array(g.normal) - Vec3::from_array(c.normal)).length();
                 let tol = normal_tolerance(&prep, c);
                 assert!(

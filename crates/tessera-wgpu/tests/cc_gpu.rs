@@ -4,7 +4,7 @@
 use tessera_core::catmull_clark::gpu_model::{fixed_param, vertex_eval, CcGpuModel};
 use tessera_core::catmull_clark::vertex_hash::{number_keys, split_key};
 use tessera_core::catmull_clark::{load_surface, tessellate_uniform, SurfaceModel};
-use tessera_core::gpu_types::{CcHashStatus, CcPoint, OutVertex};
+use tessera_core::gpu_types::{CcHashStatus, CcVertexPoint, OutVertex};
 use tessera_wgpu::catmull_clark::{CcHashKernels, CcModelBuffers, CcVertexEval, CcVertexHash};
 use tessera_wgpu::headless::Gpu;
 use wgpu::util::DeviceExt;
@@ -19,8 +19,9 @@ fn model(name: &str) -> SurfaceModel {
 }
 
 /// Grid points of every surface patch, plus the adaptive grid's points nearest each
-/// corner (where the pieces around extraordinary vertices are smallest).
-fn points(model: &SurfaceModel) -> Vec<CcPoint> {
+/// corner (where the pieces around extraordinary vertices are smallest), each with its
+/// face coordinates (which the kernel passes through).
+fn points(model: &SurfaceModel) -> Vec<CcVertexPoint> {
     let fine = 840.0 * 1024.0;
     let mut params: Vec<f64> = (0..=6).map(|k| k as f64 / 6.0).collect();
     params.extend([1.0 / fine, 3.0 / fine, 1.0 - 1.0 / fine, 0.5 + 1.0 / fine]);
@@ -28,10 +29,14 @@ fn points(model: &SurfaceModel) -> Vec<CcPoint> {
     for p in model.mesh.surface_patches() {
         for &v in &params {
             for &u in &params {
-                out.push(CcPoint {
+                let (face, fu, fv) = model.mesh.face_point_at(p, u, v);
+                out.push(CcVertexPoint {
                     patch_id: p as u32,
                     u: fixed_param(u),
                     v: fixed_param(v),
+                    face,
+                    face_u: fu as f32,
+                    face_v: fv as f32,
                 });
             }
         }
@@ -39,7 +44,7 @@ fn points(model: &SurfaceModel) -> Vec<CcPoint> {
     out
 }
 
-fn run_gpu(gpu: &Gpu, model: &CcGpuModel, points: &[CcPoint]) -> Vec<OutVertex> {
+fn run_gpu(gpu: &Gpu, model: &CcGpuModel, points: &[CcVertexPoint]) -> Vec<OutVertex> {
     let device = &gpu.device;
     let buffers = CcModelBuffers::new(device, &gpu.queue, model).expect("upload fits");
     let eval = CcVertexEval::new(device);
@@ -101,7 +106,7 @@ fn gpu_evaluation_matches_its_twin_and_the_exact_surface() {
                     .fold(0.0, f64::max)
             };
             worst_gpu = worst_gpu.max(d(t.position, g.position) / size);
-            assert_eq!((t.uv, t.patch), (g.uv, g.patch), "{name}");
+            assert_eq!((t.uv, t.face), (g.uv, g.face), "{name}");
             let dot: f32 = (0..3).map(|k| t.normal[k] * g.normal[k]).sum();
             assert!(dot > 0.9999, "{name} {point:?}: normals {t:?} {g:?}");
             let one = tessera_core::gpu_types::CC_PARAM_ONE as f64;
@@ -187,15 +192,15 @@ fn moved_control_points_reupload_in_place_and_a_new_shape_is_refused() {
     gpu.check().expect("no wgpu errors");
 }
 
-/// Keys of every grid point of every patch, patch after patch: each point on a patch
-/// edge or corner comes several times (once per patch around it).
+/// Keys of every grid point of every patch in its chart, patch after patch: each point
+/// on a patch edge or corner comes several times (once per patch around it).
 fn grid_keys(model: &SurfaceModel, n: u32) -> Vec<[u32; 2]> {
-    use tessera_core::catmull_clark::keys::point_key;
+    use tessera_core::catmull_clark::keys::chart_key;
     let mut keys = Vec::new();
     for p in model.mesh.surface_patches() {
         for j in 0..=n {
             for i in 0..=n {
-                keys.push(split_key(point_key(&model.mesh, p, i, j, n)));
+                keys.push(split_key(chart_key(&model.mesh, p, i, j, n)));
             }
         }
     }
@@ -244,7 +249,7 @@ fn the_vertex_hash_numbers_like_its_twin_and_the_cpu_reference() {
     ] {
         let model = model(name);
         let keys = grid_keys(&model, n);
-        // The reference: the uniform tessellation shares vertices through the same keys.
+        // The reference: the uniform tessellation numbers its vertices by the same keys.
         let vertices = tessellate_uniform(&model, n)
             .expect("uniform")
             .mesh
@@ -289,14 +294,18 @@ fn a_tiny_hash_overflows_then_grows_to_the_same_numbering() {
 #[test]
 fn the_hash_twin_catches_a_planted_collision() {
     // Test the tester: two different keys with equal high words must stay apart, and a
-    // key differing in one bit must get its own number.
-    let keys = [[7, 1], [7, 2], [7, 1], [8, 1], [7, 2], [7, 3]];
+    // key differing in one bit must get its own number. Items without a key take no
+    // slot and no number, the last one included.
+    let none = tessera_core::gpu_types::CC_NO_KEY;
+    let keys = [[7, 1], [7, 2], none, [7, 1], [8, 1], [7, 2], [7, 3], none];
     assert!(
         number_keys(&keys, 2).is_none(),
         "4 distinct keys cannot fit 2 slots"
     );
+    assert!(number_keys(&keys, 4).is_some(), "4 keys fit 4 slots");
     let (ids, unique) = number_keys(&keys, 16).expect("fits");
-    assert_eq!(ids, [0, 1, 0, 2, 1, 3]);
+    let no = tessera_core::gpu_types::CC_NO_SLOT;
+    assert_eq!(ids, [0, 1, no, 0, 2, 1, 3, no]);
     assert_eq!(unique, [[7, 1], [7, 2], [8, 1], [7, 3]]);
     let gpu = gpu();
     let (g_ids, g_unique, _) = hash_on_gpu(&gpu, &keys, 2);

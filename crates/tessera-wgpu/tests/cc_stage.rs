@@ -6,13 +6,14 @@
 
 use std::collections::HashMap;
 
-use tessera_core::catmull_clark::gpu_model::patch_topology;
-use tessera_core::catmull_clark::keys::point_key;
+use tessera_core::catmull_clark::gpu_model::{leaf_items, patch_topology, point_homes};
+use tessera_core::catmull_clark::keys::chart_key;
 use tessera_core::catmull_clark::polygon::PolygonKernel;
 use tessera_core::catmull_clark::vertex_hash::split_key;
 use tessera_core::catmull_clark::{
     load_surface, tessellate_adaptive, CcParams, FirstSplit, SurfaceModel,
 };
+use tessera_core::gpu_types::CC_NO_KEY;
 use tessera_core::{Mesh, Tolerance};
 use tessera_wgpu::catmull_clark::{CcCapacities, CcStage, UniformParams};
 use tessera_wgpu::headless::Gpu;
@@ -48,8 +49,9 @@ fn size(model: &SurfaceModel) -> f64 {
 }
 
 /// Whether two meshes are the same up to vertex numbering: equal counts, every vertex
-/// of `a` within `1e-5 · model_size` of one of `b`, and the same triangles (with
-/// orientation) through that matching.
+/// of `a` within `1e-5 · model_size` of one of `b` on the same face at the same face
+/// `(u, v)` (within 1e-6: the copies of a seam point are told apart by these), and the
+/// same triangles (with orientation) through that matching.
 fn same_mesh(a: &Mesh, b: &Mesh, model_size: f64) -> Result<(), String> {
     if a.triangle_count() != b.triangle_count() || a.vertices.len() != b.vertices.len() {
         return Err(format!(
@@ -72,10 +74,16 @@ fn same_mesh(a: &Mesh, b: &Mesh, model_size: f64) -> Result<(), String> {
     for (k, v) in a.vertices.iter().enumerate() {
         let x = v.position[0] as f64;
         let start = sorted.partition_point(|c| (c.1[0] as f64) < x - tol);
+        let on_face = |c: usize| {
+            let w = &b.vertices[c];
+            w.face == v.face && (0..2).all(|d| (w.uv[d] - v.uv[d]).abs() <= 1e-6)
+        };
         let hit = sorted[start..]
             .iter()
             .take_while(|c| (c.1[0] as f64) <= x + tol)
-            .find(|c| (0..3).all(|d| ((c.1[d] - v.position[d]) as f64).abs() <= tol));
+            .find(|c| {
+                (0..3).all(|d| ((c.1[d] - v.position[d]) as f64).abs() <= tol) && on_face(c.0)
+            });
         match hit {
             Some(h) => map[k] = h.0 as u32,
             None => return Err(format!("vertex {k} at {:?} has no twin", v.position)),
@@ -273,13 +281,16 @@ fn gpu_midpoint_splits_match_the_cpu_reference() {
 
 #[test]
 fn the_polygon_kernel_matches_its_twin() {
-    // `cc_polygon` leaf for leaf against its CPU twin, on the GPU's own leaves, first
-    // splits and vertex ids: the side counts, and every polygon vertex (id and grid point).
+    // `cc_leaf_keys` item for item and `cc_polygon` leaf for leaf against their CPU
+    // twins, on the GPU's own leaves, first splits and vertex ids: the items' keys and
+    // vertices, the side counts, and every polygon vertex (id and grid point). The
+    // pyramid has seams inside faces (triangles) as well as between them.
     let gpu = gpu();
-    let mut side_points = 0;
+    let (mut side_points, mut across) = (0, 0);
     for (name, rel) in [
         ("opensubdiv/catmark_xord_boundary.obj", 3e-3),
         ("opensubdiv/catmark_xord_interior.obj", 3e-4),
+        ("opensubdiv/catmark_pyramid.obj", 3e-4),
     ] {
         let model = model(name);
         let params = CcParams {
@@ -297,22 +308,48 @@ fn the_polygon_kernel_matches_its_twin() {
             .expect("read");
         let n = 840 << params.max_depth;
         let key =
-            |p: u32, v: &[u32; 4]| split_key(point_key(&model.mesh, p as usize, v[1], v[2], n));
-        // The hash holds the leaves' corners: their ids are in the polygons' corners.
+            |p: u32, v: &[u32; 4]| split_key(chart_key(&model.mesh, p as usize, v[1], v[2], n));
+        let topo = patch_topology(&model.mesh);
+        let homes = point_homes(&model.mesh);
+        let points = model.mesh.points.len() as u32;
+        // The hash holds the leaves' items (corners in their charts and their copies
+        // across seams): the twin's, with the GPU's ids.
         let mut id_of = HashMap::new();
         for (l, leaf) in gpu_polys.leaves.iter().enumerate() {
+            let (keys, vertices) = leaf_items(&topo, &homes, points, n, leaf);
+            let at = 8 * l..8 * l + 8;
+            assert_eq!(
+                keys,
+                gpu_polys.item_keys[at.clone()],
+                "{name}: leaf {l} keys"
+            );
+            for (k, (t, g)) in vertices.iter().zip(&gpu_polys.item_points[at]).enumerate() {
+                let uv = (t.face_u - g.face_u).abs().max((t.face_v - g.face_v).abs());
+                assert!(
+                    (t.patch_id, t.u, t.v, t.face) == (g.patch_id, g.u, g.v, g.face) && uv <= 1e-6,
+                    "{name}: leaf {l} item {k}: {t:?} against {g:?}"
+                );
+            }
+            for (k, &key) in keys.iter().enumerate() {
+                if key == CC_NO_KEY {
+                    continue;
+                }
+                across += usize::from(k >= 4);
+                let id = gpu_polys.item_ids[8 * l + k];
+                let before = id_of.insert(key, id);
+                assert!(
+                    before.is_none_or(|b| b == id),
+                    "{name}: two ids for one vertex"
+                );
+            }
+            // The corners' ids are the polygon's.
             let mut at = gpu_polys.offsets[l] as usize;
             for s in 0..4 {
                 let v = &gpu_polys.verts[at];
-                let before = id_of.insert(key(leaf.patch_id, v), v[0]);
-                assert!(
-                    before.is_none_or(|id| id == v[0]),
-                    "{name}: two ids for one point"
-                );
+                assert_eq!(id_of[&key(leaf.patch_id, v)], v[0], "{name}: leaf {l}");
                 at += 1 + gpu_polys.side_counts[l][s] as usize;
             }
         }
-        let topo = patch_topology(&model.mesh);
         let vertex_of = |k: [u32; 2]| id_of.get(&k).copied();
         let kernel = PolygonKernel {
             grid: n,
@@ -353,6 +390,7 @@ fn the_polygon_kernel_matches_its_twin() {
         side_points > 1000,
         "only {side_points} side points to compare"
     );
+    assert!(across > 100, "only {across} copies across seams");
 }
 
 #[test]
@@ -518,7 +556,11 @@ fn gpu_uniform_matches_its_twin_and_the_cpu_uniform() {
             assert_eq!(mesh.indices, twin.indices, "{name} n={n}: indices");
             assert_eq!(mesh.vertices.len(), twin.vertices.len());
             for (g, c) in mesh.vertices.iter().zip(&twin.vertices) {
-                assert_eq!((g.patch, g.uv), (c.patch, c.uv), "{name} n={n}");
+                assert_eq!(g.face, c.face, "{name} n={n}");
+                let d = (0..2)
+                    .map(|k| (g.uv[k] - c.uv[k]).abs())
+                    .fold(0f32, f32::max);
+                assert!(d <= 1e-6, "{name} n={n}: uv {:?} against {:?}", g.uv, c.uv);
                 let d = glam::Vec3::from(g.position).distance(glam::Vec3::from(c.position));
                 assert!(d as f64 <= 1e-5 * s, "{name} n={n}: off by {d}");
             }

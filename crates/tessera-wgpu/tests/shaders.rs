@@ -156,7 +156,7 @@ fn shared_structs_match_their_rust_twins() {
             ("position", offset_of!(OutVertex, position)),
             ("normal", offset_of!(OutVertex, normal)),
             ("uv", offset_of!(OutVertex, uv)),
-            ("patch", offset_of!(OutVertex, patch)),
+            ("face", offset_of!(OutVertex, face)),
         ],
     );
     check(
@@ -227,8 +227,38 @@ fn shared_structs_match_their_rust_twins() {
             ("corners", offset_of!(CcUniformPatch, corners)),
             ("edges", offset_of!(CcUniformPatch, edges)),
             ("flags", offset_of!(CcUniformPatch, flags)),
-            ("pad0", offset_of!(CcUniformPatch, pad)),
-            ("pad1", offset_of!(CcUniformPatch, pad) + 4),
+            ("face", offset_of!(CcUniformPatch, face)),
+            ("face_corner", offset_of!(CcUniformPatch, face_corner)),
+            ("corner_homes", offset_of!(CcUniformPatch, corner_homes)),
+            ("edge_homes", offset_of!(CcUniformPatch, edge_homes)),
+        ],
+    );
+    let (keys, _) = parse("cc_leaf_keys.wgsl");
+    check(
+        &keys,
+        "CcPatchTopo",
+        size_of::<CcPatchTopo>(),
+        &[
+            ("quad", offset_of!(CcPatchTopo, quad)),
+            ("edges", offset_of!(CcPatchTopo, edges)),
+            ("across", offset_of!(CcPatchTopo, across)),
+            ("face", offset_of!(CcPatchTopo, face)),
+            ("face_corner", offset_of!(CcPatchTopo, face_corner)),
+            ("pad0", offset_of!(CcPatchTopo, pad)),
+            ("pad1", offset_of!(CcPatchTopo, pad) + 4),
+        ],
+    );
+    check(
+        &keys,
+        "CcVertexPoint",
+        size_of::<CcVertexPoint>(),
+        &[
+            ("patch_id", offset_of!(CcVertexPoint, patch_id)),
+            ("u", offset_of!(CcVertexPoint, u)),
+            ("v", offset_of!(CcVertexPoint, v)),
+            ("face", offset_of!(CcVertexPoint, face)),
+            ("face_u", offset_of!(CcVertexPoint, face_u)),
+            ("face_v", offset_of!(CcVertexPoint, face_v)),
         ],
     );
     check(
@@ -320,8 +350,8 @@ fn catmull_clark_parameters_and_counters_match_their_rust_twins() {
             offset_of!(CcTessParams, search_leaf_capacity),
         ),
         ("search_rounds", offset_of!(CcTessParams, search_rounds)),
-        ("pad1", offset_of!(CcTessParams, pad)),
-        ("pad2", offset_of!(CcTessParams, pad) + 4),
+        ("points", offset_of!(CcTessParams, points)),
+        ("pad2", offset_of!(CcTessParams, pad)),
     ];
     let members: Vec<(&str, usize)> = members
         .iter()

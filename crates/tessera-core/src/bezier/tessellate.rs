@@ -394,7 +394,7 @@ pub fn vertex_eval(prep: &PreparedBezier, cps: &[[Vec3; 16]], r: &VertexRecord) 
         position: f.pos.to_array(),
         normal: n.to_array(),
         uv: [r.u, r.v],
-        patch: r.patch,
+        face: r.patch,
     }
 }
 

@@ -7,6 +7,11 @@
 //!    polyline of the marked points on it (the corners of finer neighbours).
 //! 3. Each polygon is triangulated without new vertices ([`super::triangulate`]).
 //!
+//! Output vertices are points in charts ([`super::keys`]): a point on a seam between
+//! control faces (or between the sub-faces of a face that is not a quad) is one vertex
+//! per chart, evaluated once and copied, each copy with its own face and `(u, v)`. Every
+//! triangle lies in one leaf, hence in one chart.
+//!
 //! # Splits
 //!
 //! The paper splits at midpoints only, so a patch gets `2^L` cells per side and
@@ -50,7 +55,7 @@ use glam::DVec3;
 use serde::Serialize;
 
 use super::bound::{box_bound, quadrant_offset, split_proof, WALK_ONE};
-use super::keys::{key_place, point_key, KeyPlace};
+use super::keys::{chart_key, key_place, point_key, point_of, vertex_face_uv, KeyPlace};
 use super::patch::{SurfaceModel, SurfacePoint};
 use super::topology::PatchMesh;
 use super::triangle_bound::triangles_bound;
@@ -258,7 +263,8 @@ struct Evaluator<'a> {
     proven: u64,
     /// Triangle-distance bounds computed so far.
     triangle_bounds: u64,
-    points: HashMap<u64, (SurfacePoint, usize, u32, u32)>,
+    /// Per point key: the point, evaluated from the first patch that asked.
+    points: HashMap<u64, SurfacePoint>,
     /// ε in model units.
     eps: f64,
 }
@@ -280,10 +286,10 @@ impl<'a> Evaluator<'a> {
     fn get(&mut self, p: usize, i: u32, j: u32) -> SurfacePoint {
         let key = point_key(&self.model.mesh, p, i, j, self.n);
         let (model, n) = (self.model, self.n as f64);
-        self.points
+        *self
+            .points
             .entry(key)
-            .or_insert_with(|| (model.eval(p, i as f64 / n, j as f64 / n), p, i, j))
-            .0
+            .or_insert_with(|| model.eval(p, i as f64 / n, j as f64 / n))
     }
 }
 
@@ -449,28 +455,31 @@ fn tessellate_with_splits(
     let leaves = marking.leaves;
     out.leaves = leaves.len();
 
-    // Every polygon vertex evaluated once; ids in the order of the canonical keys, so
-    // the numbering does not depend on the order of work.
-    let mut used: Vec<u64> = Vec::new();
+    // Every polygon vertex evaluated once per point; one output vertex per point and
+    // chart, its position and normal copied from the point's. Ids in the order of the
+    // chart keys, so the numbering does not depend on the order of work.
+    let mut used: HashMap<u64, (usize, u32, u32)> = HashMap::new();
     for (&(p, _), (poly, _)) in leaves.iter().zip(&polygons) {
         for &(a, b) in poly {
             eval.get(p, a, b);
-            used.push(point_key(mesh, p, a, b, n));
+            used.entry(chart_key(mesh, p, a, b, n)).or_insert((p, a, b));
         }
     }
     out.evaluations = eval.points.len() as u64;
-    used.sort_unstable();
-    used.dedup();
-    let id_of: HashMap<u64, u32> = used
+    let mut keys: Vec<u64> = used.keys().copied().collect();
+    keys.sort_unstable();
+    let id_of: HashMap<u64, u32> = keys
         .iter()
         .enumerate()
         .map(|(k, &key)| (key, k as u32))
         .collect();
-    out.mesh.vertices = used
+    out.mesh.vertices = keys
         .iter()
         .map(|key| {
-            let (sp, p, i, j) = eval.points[key];
-            out_vertex(sp, p, i as f64 / n as f64, j as f64 / n as f64)
+            // Any patch of the chart gives the same face coordinates (exact integers).
+            let (p, i, j) = used[key];
+            let (face, uv) = vertex_face_uv(mesh, p, i, j, n);
+            out_vertex(eval.points[&point_of(*key)], face, uv)
         })
         .collect();
 
@@ -484,7 +493,7 @@ fn tessellate_with_splits(
             .map(|&(a, b)| PolyVertex {
                 i: a as i64,
                 j: b as i64,
-                id: id_of[&point_key(mesh, p, a, b, n)],
+                id: id_of[&chart_key(mesh, p, a, b, n)],
             })
             .collect();
         triangulate(&poly, *corners, position, &mut indices);
@@ -786,13 +795,13 @@ impl Lines {
     }
 }
 
-/// The output vertex of a surface point.
-pub fn out_vertex(sp: SurfacePoint, patch: usize, u: f64, v: f64) -> OutVertex {
+/// The output vertex of a surface point on control face `face` at `uv` there.
+pub fn out_vertex(sp: SurfacePoint, face: u32, uv: [f32; 2]) -> OutVertex {
     OutVertex {
         position: sp.position.as_vec3().to_array(),
         normal: sp.normal.as_vec3().to_array(),
-        uv: [u as f32, v as f32],
-        patch: patch as u32,
+        uv,
+        face,
     }
 }
 
@@ -944,10 +953,10 @@ mod tests {
     fn the_polygon_kernel_twin_builds_the_reference_polygons() {
         // The GPU's walk (dyadic halving, the patch across's first split on boundaries)
         // against the reference's sorted lines, leaf for leaf, on the same leaves.
-        use crate::catmull_clark::gpu_model::patch_topology;
+        use crate::catmull_clark::gpu_model::{leaf_items, patch_topology, point_homes};
         use crate::catmull_clark::polygon::PolygonKernel;
         use crate::catmull_clark::vertex_hash::split_key;
-        use crate::gpu_types::CcCell;
+        use crate::gpu_types::{CcCell, CC_NO_KEY};
         let assets = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets");
         let splits: Vec<(u32, u32)> = first_splits().collect();
         // Side points found inside a patch and on a patch's edge.
@@ -972,12 +981,31 @@ mod tests {
             let n = eval.n;
             let marking = mark_patches(&mut eval, &params, &splits);
             let polygons = leaf_polygons(mesh, &marking.leaves, n);
-            // The hash holds the leaves' corners; any numbering will do.
-            let key = |p: usize, (a, b): (u32, u32)| split_key(point_key(mesh, p, a, b, n));
-            let mut marked: Vec<[u32; 2]> = marking
+            let topo = patch_topology(mesh);
+            let cells: Vec<CcCell> = marking
                 .leaves
                 .iter()
-                .flat_map(|&(p, cell)| cell.corners().map(|c| key(p, c)))
+                .map(|&(p, cell)| {
+                    let trial = marking.first_split[p];
+                    let (ku, _) = splits[trial as usize];
+                    let depth = (n / ku / cell.w).trailing_zeros();
+                    CcCell {
+                        patch_id: p as u32,
+                        trial_depth: trial | depth << 8,
+                        i: cell.i,
+                        j: cell.j,
+                    }
+                })
+                .collect();
+            // The hash holds the leaves' items (corners in their charts and across
+            // seams); any numbering will do.
+            let homes = point_homes(mesh);
+            let points = mesh.points.len() as u32;
+            let key = |p: usize, (a, b): (u32, u32)| split_key(chart_key(mesh, p, a, b, n));
+            let mut marked: Vec<[u32; 2]> = cells
+                .iter()
+                .flat_map(|c| leaf_items(&topo, &homes, points, n, c).0)
+                .filter(|&k| k != CC_NO_KEY)
                 .collect();
             marked.sort_unstable();
             marked.dedup();
@@ -987,27 +1015,18 @@ mod tests {
                 .map(|(k, &m)| (m, k as u32))
                 .collect();
             let vertex_of = |k: [u32; 2]| id_of.get(&k).copied();
-            let topo = patch_topology(mesh);
             let kernel = PolygonKernel {
                 grid: n,
                 topo: &topo,
                 first_trial: &marking.first_split,
                 vertex_of: &vertex_of,
             };
-            for (&(p, cell), (poly, _)) in marking.leaves.iter().zip(&polygons) {
-                let trial = marking.first_split[p];
-                let (ku, _) = splits[trial as usize];
-                let depth = (n / ku / cell.w).trailing_zeros();
-                let leaf = CcCell {
-                    patch_id: p as u32,
-                    trial_depth: trial | depth << 8,
-                    i: cell.i,
-                    j: cell.j,
-                };
-                let counts = kernel.count(&leaf);
+            for ((&(p, cell), (poly, _)), leaf) in marking.leaves.iter().zip(&polygons).zip(&cells)
+            {
+                let counts = kernel.count(leaf);
                 let mut twin = Vec::new();
                 kernel.emit(
-                    &leaf,
+                    leaf,
                     cell.corners().map(|c| id_of[&key(p, c)]),
                     counts,
                     &mut twin,

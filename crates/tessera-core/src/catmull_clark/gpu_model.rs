@@ -5,15 +5,21 @@
 //!
 //! [`vertex_eval`] is the CPU twin of the kernel `shaders/cc_vertex_eval.wgsl` (and of
 //! `cc_eval` in `shaders/shared/cc_patch.wgsl`): it reads the same arrays the same way.
+//! [`leaf_items`] is the twin of `shaders/cc_leaf_keys.wgsl`, with the homes
+//! ([`point_homes`]) that make every chart's copy of a point evaluate the same.
 
 use glam::Vec3;
 
+use super::gpu_uniform::{grid_place, GridPlace};
+use super::keys::{face_corner, seam, topo_chart_key, topo_face_uv};
 use super::patch::{Node, SurfaceModel};
+use super::polygon::cell_corner;
 use super::topology::PatchMesh;
+use super::vertex_hash::split_key;
 use crate::gpu_types::{
-    CcCorner, CcNode, CcPatchTopo, CcPoint, GpuPatch, OutVertex, CC_NODE_BALL_SHIFT,
-    CC_NODE_BEZIER, CC_NODE_CORNER, CC_NODE_KIND_MASK, CC_NODE_SPLIT, CC_NO_NEIGHBOUR, CC_NO_ROOT,
-    CC_PARAM_ONE,
+    CcCell, CcCorner, CcNode, CcPatchTopo, CcPoint, CcVertexPoint, GpuPatch, OutVertex,
+    CC_NODE_BALL_SHIFT, CC_NODE_BEZIER, CC_NODE_CORNER, CC_NODE_KIND_MASK, CC_NODE_SPLIT,
+    CC_NO_HOME, CC_NO_KEY, CC_NO_NEIGHBOUR, CC_NO_ROOT, CC_PARAM_ONE,
 };
 
 /// Flattened quadtrees of all patches.
@@ -204,21 +210,157 @@ pub fn cc_eval(model: &CcGpuModel, point: CcPoint) -> (Vec3, Vec3) {
     (Vec3::from(c.limit), Vec3::from(c.normal))
 }
 
-/// Twin of the kernel `cc_vertex_eval`: one output vertex per point.
-pub fn vertex_eval(model: &CcGpuModel, points: &[CcPoint]) -> Vec<OutVertex> {
+/// Twin of the kernel `cc_vertex_eval`: one output vertex per point, evaluated at its
+/// home, carrying its face and face `(u, v)`.
+pub fn vertex_eval(model: &CcGpuModel, points: &[CcVertexPoint]) -> Vec<OutVertex> {
     points
         .iter()
-        .map(|&point| {
-            let (p, n) = cc_eval(model, point);
-            let one = CC_PARAM_ONE as f32;
+        .map(|point| {
+            let at = CcPoint {
+                patch_id: point.patch_id,
+                u: point.u,
+                v: point.v,
+            };
+            let (p, n) = cc_eval(model, at);
             OutVertex {
                 position: p.to_array(),
                 normal: n.to_array(),
-                uv: [point.u as f32 / one, point.v as f32 / one],
-                patch: point.patch_id,
+                uv: [point.face_u, point.face_v],
+                face: point.face,
             }
         })
         .collect()
+}
+
+/// Where the points of each level-1 point and edge are evaluated, whichever chart's
+/// vertex they are: per level-1 point, then per level-1 edge, the smallest surface patch
+/// touching it, `patch << 3 | reversed << 2 | k` (`k` the point's corner or the edge's
+/// index in that patch, `reversed` whether the patch runs the edge from its larger end
+/// point); [`CC_NO_HOME`] where no surface patch touches it. One evaluation per key
+/// rather than per copy would need the copies to find each other; evaluating every copy
+/// at one home gives them the same bits.
+pub fn point_homes(mesh: &PatchMesh) -> Vec<u32> {
+    let points = mesh.points.len();
+    let mut homes = vec![CC_NO_HOME; points + mesh.edge_uses.len()];
+    for p in mesh.surface_patches() {
+        let quad = mesh.quads[p];
+        for k in 0..4 {
+            let home = &mut homes[quad[k] as usize];
+            if *home == CC_NO_HOME {
+                *home = (p as u32) << 3 | k as u32;
+            }
+            let reversed = u32::from(quad[k] > quad[(k + 1) % 4]);
+            let home = &mut homes[points + mesh.quad_edges[p][k] as usize];
+            if *home == CC_NO_HOME {
+                *home = (p as u32) << 3 | reversed << 2 | k as u32;
+            }
+        }
+    }
+    homes
+}
+
+/// Grid point `(i, j)/n` at distance `t` from corner `k` along edge `k` (the inverse of
+/// [`grid_place`] on an edge; twin of `cc_edge_point`).
+pub fn edge_point(k: usize, t: u32, n: u32) -> (u32, u32) {
+    match k {
+        0 => (t, 0),
+        1 => (n, t),
+        2 => (n - t, n),
+        _ => (0, n - t),
+    }
+}
+
+/// The grid point `(patch, i, j)` of a level-1 point's home (twin of `cc_corner_home`).
+pub fn corner_home(home: u32, n: u32) -> (u32, u32, u32) {
+    let c = home & 3;
+    let at = |on: bool| if on { n } else { 0 };
+    (home >> 3, at(c == 1 || c == 2), at(c >= 2))
+}
+
+/// The grid point `(patch, i, j)` of the point at canonical `t` (from the smaller end
+/// point) of a level-1 edge with this home (twin of `cc_edge_home`).
+pub fn edge_home(home: u32, t: u32, n: u32) -> (u32, u32, u32) {
+    let local = if home & 4 != 0 { n - t } else { t };
+    let (i, j) = edge_point((home & 3) as usize, local, n);
+    (home >> 3, i, j)
+}
+
+/// The home of grid point `(i, j)/n` of patch `p` (twin of `cc_home_point`): where every
+/// chart's vertex of that surface point is evaluated.
+pub fn home_point(
+    topo: &CcPatchTopo,
+    homes: &[u32],
+    points: u32,
+    p: u32,
+    (i, j): (u32, u32),
+    n: u32,
+) -> (u32, u32, u32) {
+    match grid_place(i, j, n) {
+        GridPlace::Corner(c) => corner_home(homes[topo.quad[c] as usize], n),
+        GridPlace::Edge(k, t) => {
+            let t = if topo.quad[k] < topo.quad[(k + 1) % 4] {
+                t
+            } else {
+                n - t
+            };
+            edge_home(homes[(points + topo.edges[k]) as usize], t, n)
+        }
+        GridPlace::Inside => (p, i, j),
+    }
+}
+
+/// `i / grid` in fixed point ([`CC_PARAM_ONE`]), rounded to nearest (twin of
+/// `cc_grid_fixed`; `grid` is `105 · 2^k`, odd times a power of two, so there are no
+/// ties).
+pub fn grid_fixed(i: u32, grid: u32) -> u32 {
+    ((((i as u64) << 32) + grid as u64) / (2 * grid as u64)) as u32
+}
+
+/// Twin of `cc_leaf_keys` for one leaf of patch `cell.patch_id`: its eight hash items,
+/// the keys and the vertices they stand for. Items `k < 4` are corner `k` in the leaf's
+/// chart; item `4 + k` is the same point in the chart across, where corner `k` lies on a
+/// seam edge of the patch (inside the edge: a level-1 point is a corner of a leaf in
+/// every chart around it), else [`CC_NO_KEY`]. The polygons of the patch across then
+/// find the point in their own chart.
+pub fn leaf_items(
+    topo: &[CcPatchTopo],
+    homes: &[u32],
+    points: u32,
+    grid: u32,
+    cell: &CcCell,
+) -> ([[u32; 2]; 8], [CcVertexPoint; 8]) {
+    let p = cell.patch_id;
+    let t = &topo[p as usize];
+    let mut keys = [CC_NO_KEY; 8];
+    let mut out = [CcVertexPoint::default(); 8];
+    for k in 0..4 {
+        let (i, j) = cell_corner(grid, cell, k as u32);
+        let (hp, hi, hj) = home_point(t, homes, points, p, (i, j), grid);
+        let vertex = |face: u32, uv: [f32; 2]| CcVertexPoint {
+            patch_id: hp,
+            u: grid_fixed(hi, grid),
+            v: grid_fixed(hj, grid),
+            face,
+            face_u: uv[0],
+            face_v: uv[1],
+        };
+        keys[k] = split_key(topo_chart_key(t, p as usize, i, j, grid));
+        let (face, uv) = topo_face_uv(t, i, j, grid);
+        out[k] = vertex(face, uv);
+        if let GridPlace::Edge(e, local) = grid_place(i, j, grid) {
+            let across = t.across[e];
+            if seam(t.face_corner, e) && across != CC_NO_NEIGHBOUR {
+                let (q, eq) = (across >> 2, (across & 3) as usize);
+                // The patch across runs the edge the other way.
+                let (qi, qj) = edge_point(eq, grid - local, grid);
+                let tq = &topo[q as usize];
+                keys[4 + k] = split_key(topo_chart_key(tq, q as usize, qi, qj, grid));
+                let (face, uv) = topo_face_uv(tq, qi, qj, grid);
+                out[4 + k] = vertex(face, uv);
+            }
+        }
+    }
+    (keys, out)
 }
 
 /// Per patch: its level-1 points and edges, and the patch (and its edge) across each
@@ -245,6 +387,9 @@ pub fn patch_topology(mesh: &PatchMesh) -> Vec<CcPatchTopo> {
                 quad: mesh.quads[p],
                 edges: mesh.quad_edges[p],
                 across,
+                face: mesh.face_of[p].0,
+                face_corner: face_corner(mesh, p),
+                pad: [0; 2],
             }
         })
         .collect()

@@ -6,83 +6,97 @@
 //!
 //! No hash is needed: with one `n` everywhere, the numbering of the shared points follows
 //! from the topology, fixed once per model by [`uniform_patches`]:
-//! `[corners (level-1 points)] [edge points: n - 1 per level-1 edge] [interior points:
-//! (n - 1)² per patch]`. A point on an edge is numbered by `t`, its distance in `1/n`
-//! from the edge's smaller end point (as in [`point_key`](super::keys::point_key)), so
-//! both patches agree; the first patch touching a corner or an edge evaluates it. The
-//! mesh is [`tessellate_uniform`](super::tessellate_uniform)'s up to vertex order.
+//! `[corners (a level-1 point in a chart)] [edge points: n - 1 per level-1 edge and side
+//! of a seam] [interior points: (n - 1)² per patch]`, one vertex per point and chart as
+//! in [`chart_key`](super::keys::chart_key). A point on an edge is numbered by `t`, its
+//! distance in `1/n` from the edge's smaller end point (as in
+//! [`point_key`](super::keys::point_key)), so both patches agree; the first patch of a
+//! chart touching a corner or an edge writes its vertex, evaluated at the point's home
+//! ([`point_homes`]) so that every chart's copy gets the same bits. The mesh is
+//! [`tessellate_uniform`](super::tessellate_uniform)'s up to vertex order.
+
+use std::collections::HashMap;
 
 use bytemuck::Zeroable;
 use glam::Vec3;
 
-use super::gpu_model::{vertex_eval, CcGpuModel};
-use super::topology::PatchMesh;
+use super::gpu_model::{corner_home, edge_home, point_homes, vertex_eval, CcGpuModel};
+use super::keys::{chart_of, face_corner, face_uv, seam};
+use super::topology::{face_coords, PatchMesh};
 use super::triangulate::DIAGONAL_MARGIN;
 use super::uniform::MAX_SEGMENTS;
 use crate::error::{Error, Result};
-use crate::gpu_types::{CcPoint, CcUniformParams, CcUniformPatch, OutVertex, CC_PARAM_ONE};
+use crate::gpu_types::{CcUniformParams, CcUniformPatch, CcVertexPoint, OutVertex, CC_PARAM_ONE};
 use crate::mesh::Mesh;
 
-/// Flag bit of [`CcUniformPatch::flags`]: this patch evaluates its corner `k`.
+/// Flag bit of [`CcUniformPatch::flags`]: this patch writes the vertex of its corner `k`.
 pub const OWNS_CORNER: u32 = 1;
-/// Flag bit: this patch evaluates the points of its edge `k`.
+/// Flag bit: this patch writes the vertices of its edge `k`.
 pub const OWNS_EDGE: u32 = 1 << 4;
 /// Flag bit: edge `k` runs from its larger end point (its `t` counts from corner `k + 1`).
 pub const EDGE_REVERSED: u32 = 1 << 8;
 
 /// The uniform kernels' view of a model: per surface patch (holes left out) where its
-/// shared points are numbered, and the counts of corners and edges.
+/// vertices are numbered, and the counts of corner and edge vertices.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct UniformLayout {
     /// The surface patches, in patch order (binding 71).
     pub patches: Vec<CcUniformPatch>,
-    /// Distinct corners the surface patches use.
+    /// Distinct corner vertices: (level-1 point, chart) pairs of the surface patches.
     pub corners: u32,
-    /// Distinct level-1 edges the surface patches use.
+    /// Distinct edge vertex rows: (level-1 edge, side of a seam) pairs.
     pub edges: u32,
 }
 
-/// Numbers the corners and edges the surface patches use, in order of first use, and
-/// gives each to the first patch that touches it.
+/// Numbers the corner and edge vertices of the surface patches (a point in a chart,
+/// [`chart_key`](super::keys::chart_key)), in order of first use, and gives each to the
+/// first patch that touches it.
 pub fn uniform_patches(mesh: &PatchMesh) -> UniformLayout {
-    let mut corner_id = vec![u32::MAX; mesh.points.len()];
-    let mut edge_id = vec![u32::MAX; mesh.edge_uses.len()];
-    let (mut corners, mut edges) = (0, 0);
+    let homes = point_homes(mesh);
+    let points = mesh.points.len();
+    let mut corner_id: HashMap<(u32, u32), u32> = HashMap::new();
+    let mut edge_id: HashMap<(u32, bool), u32> = HashMap::new();
     let patches = mesh
         .surface_patches()
         .map(|p| {
             let quad = mesh.quads[p];
+            let word = face_corner(mesh, p);
+            let chart = chart_of(word, p);
             let mut flags = 0;
+            let (mut corners, mut edges) = ([0; 4], [0; 4]);
             for k in 0..4 {
-                let c = &mut corner_id[quad[k] as usize];
-                if *c == u32::MAX {
-                    *c = corners;
-                    corners += 1;
+                let next = corner_id.len() as u32;
+                corners[k] = *corner_id.entry((quad[k], chart)).or_insert(next);
+                if corners[k] == next {
                     flags |= OWNS_CORNER << k;
                 }
-                let e = &mut edge_id[mesh.quad_edges[p][k] as usize];
-                if *e == u32::MAX {
-                    *e = edges;
-                    edges += 1;
+                let forward = quad[k] < quad[(k + 1) % 4];
+                let side = seam(word, k) && forward;
+                let next = edge_id.len() as u32;
+                edges[k] = *edge_id.entry((mesh.quad_edges[p][k], side)).or_insert(next);
+                if edges[k] == next {
                     flags |= OWNS_EDGE << k;
                 }
-                if quad[k] > quad[(k + 1) % 4] {
+                if !forward {
                     flags |= EDGE_REVERSED << k;
                 }
             }
             CcUniformPatch {
                 patch_id: p as u32,
-                corners: quad.map(|q| corner_id[q as usize]),
-                edges: mesh.quad_edges[p].map(|e| edge_id[e as usize]),
+                corners,
+                edges,
                 flags,
-                pad: [0; 2],
+                face: mesh.face_of[p].0,
+                face_corner: word,
+                corner_homes: quad.map(|q| homes[q as usize]),
+                edge_homes: mesh.quad_edges[p].map(|e| homes[points + e as usize]),
             }
         })
         .collect();
     UniformLayout {
         patches,
-        corners,
-        edges,
+        corners: corner_id.len() as u32,
+        edges: edge_id.len() as u32,
     }
 }
 
@@ -204,22 +218,42 @@ pub fn grid_vertex(
 }
 
 /// Twin of `cc_uniform_points.wgsl`, one work item per grid point `g` of
-/// `patch_count · (n + 1)²`: the point to evaluate, where it goes, if this patch owns it.
+/// `patch_count · (n + 1)²`: the vertex to write (its point's home, its face and face
+/// `(u, v)`) and where it goes, if this patch owns it.
 pub fn uniform_point(
     params: &CcUniformParams,
     patches: &[CcUniformPatch],
     g: u32,
-) -> Option<(u32, CcPoint)> {
-    let side = params.segments + 1;
+) -> Option<(u32, CcVertexPoint)> {
+    let n = params.segments;
+    let side = n + 1;
     let d = g / (side * side);
     let (i, j) = (g % side, g / side % side);
     let patch = &patches[d as usize];
     let (index, owned) = grid_vertex(params, patch, d, i, j);
     owned.then(|| {
-        let point = CcPoint {
-            patch_id: patch.patch_id,
-            u: grid_param(i, params.segments),
-            v: grid_param(j, params.segments),
+        let (home, hi, hj) = match grid_place(i, j, n) {
+            GridPlace::Corner(k) => corner_home(patch.corner_homes[k], n),
+            GridPlace::Edge(k, t) => {
+                let t = if patch.flags & (EDGE_REVERSED << k) != 0 {
+                    n - t
+                } else {
+                    t
+                };
+                edge_home(patch.edge_homes[k], t, n)
+            }
+            GridPlace::Inside => (patch.patch_id, i, j),
+        };
+        let (k, sides) = (patch.face_corner & 0xff, patch.face_corner >> 8);
+        let (s, t) = face_coords(k as u64, sides as u64, i as u64, j as u64, n as u64);
+        let [face_u, face_v] = face_uv(s, t, n as u64);
+        let point = CcVertexPoint {
+            patch_id: home,
+            u: grid_param(hi, n),
+            v: grid_param(hj, n),
+            face: patch.face,
+            face_u,
+            face_v,
         };
         (index, point)
     })
@@ -270,7 +304,7 @@ pub fn tessellate_uniform_gpu_twin(
 ) -> Result<Mesh> {
     let params = layout.params(n)?;
     let grid_points = params.patch_count * (n + 1) * (n + 1);
-    let mut points = vec![CcPoint::zeroed(); params.vertex_count() as usize];
+    let mut points = vec![CcVertexPoint::zeroed(); params.vertex_count() as usize];
     for g in 0..grid_points {
         if let Some((index, point)) = uniform_point(&params, &layout.patches, g) {
             points[index as usize] = point;

@@ -2,7 +2,8 @@
 //! `shaders/cc_polygon.wgsl`, one call per invocation, written to read like it.
 //!
 //! Each side of a leaf is replaced by the marked points on it, found by looking their
-//! keys up in the vertex hash. Inside a patch every cell lies on the grid of the patch's
+//! keys in the leaf's chart up in the vertex hash (a point marked in the chart across a
+//! seam is in the hash in both: [`super::gpu_model::leaf_items`]). Inside a patch every cell lies on the grid of the patch's
 //! first split, so the points on a side are dyadic subdivisions of it: if its midpoint is
 //! marked, look in both halves, else there is none. On the patch boundary the points
 //! come from the patch across the edge, whose first split may differ: its root cells
@@ -11,7 +12,7 @@
 //! The CPU reference ([`super::adaptive`], step 2) builds the same polygons another way,
 //! from sorted lines of marked points; a test checks that both agree.
 
-use super::keys::quad_point_key;
+use super::keys::topo_chart_key;
 use super::vertex_hash::split_key;
 use crate::gpu_types::{cc_trial_split, CcCell, CcPatchTopo, CC_NO_NEIGHBOUR};
 
@@ -24,8 +25,8 @@ pub struct PolygonKernel<'a> {
     pub topo: &'a [CcPatchTopo],
     /// Per patch, the trial ([`cc_trial_split`]) of its first split: the kernel's `best[p].y`.
     pub first_trial: &'a [u32],
-    /// The vertex of a marked point's key, `None` if the point is not marked: the kernel's
-    /// `cc_find` in the hash table, then `ids`.
+    /// The vertex of a marked point's chart key ([`super::keys::chart_key`]), `None` if
+    /// the point is not marked: the kernel's `cc_find` in the hash table, then `ids`.
     pub vertex_of: &'a dyn Fn([u32; 2]) -> Option<u32>,
 }
 
@@ -98,18 +99,12 @@ impl Walk<'_, '_> {
         }
     }
 
-    /// The vertex at position x of the line, `None` if it is not marked (`line_slot`).
+    /// The vertex at position x of the line in the leaf's chart, `None` if the point is
+    /// not marked (`line_slot`).
     fn line_vertex(&self, x: u32) -> Option<u32> {
         let (i, j) = self.line_point(x);
-        let t = &self.line_topo;
-        let key = quad_point_key(
-            t.quad,
-            t.edges,
-            self.line.patch_id as usize,
-            i,
-            j,
-            self.kernel.grid,
-        );
+        let patch = self.line.patch_id as usize;
+        let key = topo_chart_key(&self.line_topo, patch, i, j, self.kernel.grid);
         (self.kernel.vertex_of)(split_key(key))
     }
 
@@ -245,7 +240,7 @@ impl<'a> PolygonKernel<'a> {
 
     /// Entry point `emit`: the leaf's polygon, corner 0, the points of side 0 in order,
     /// corner 1, ...; `corner_ids` are the corners' vertices (the kernel reads them in
-    /// `ids`, items `4 · leaf + corner`), `counts` what [`count`](Self::count) found on
+    /// `ids`, items `8 · leaf + corner`), `counts` what [`count`](Self::count) found on
     /// each side (a side without points is not walked again).
     pub fn emit(
         &self,

@@ -195,19 +195,7 @@ impl PatchMesh {
     pub fn face_point(&self, p: usize, i: u64, j: u64, scale: u64) -> (u32, u64, u64) {
         let (face, k) = self.face_of[p];
         let sides = self.control_faces[face as usize].len();
-        let m = 2 * scale;
-        let (s, t) = if sides == 4 {
-            match k {
-                0 => (i, j),
-                1 => (m - j, i),
-                2 => (m - i, m - j),
-                _ => (j, m - i),
-            }
-        } else {
-            let d = sub_face_tiles(sides) as u64;
-            let k = k as u64;
-            ((k % d) * m + i, (k / d) * m + j)
-        };
+        let (s, t) = face_coords(k as u64, sides as u64, i, j, scale);
         (face, s, t)
     }
 
@@ -286,12 +274,36 @@ impl PatchMesh {
     }
 }
 
-/// Sub-face tiles per row of a face of `sides ≠ 4` sides in Bfr's parameterisation.
-fn sub_face_tiles(sides: usize) -> usize {
+/// [`PatchMesh::face_point`] for the patch at corner `k` of a face of `sides` sides: grid
+/// point `(i, j)/scale` of the patch in the face's coordinates, units of `1/(2·scale)`.
+/// Twin of `cc_face_coords` (`shaders/shared/cc_face.wgsl`).
+pub fn face_coords(k: u64, sides: u64, i: u64, j: u64, scale: u64) -> (u64, u64) {
+    let m = 2 * scale;
+    if sides == 4 {
+        match k {
+            0 => (i, j),
+            1 => (m - j, i),
+            2 => (m - i, m - j),
+            _ => (j, m - i),
+        }
+    } else {
+        let d = sub_face_tiles(sides as usize) as u64;
+        ((k % d) * m + i, (k / d) * m + j)
+    }
+}
+
+/// Sub-face tiles per row of a face of `sides ≠ 4` sides in Bfr's parameterisation:
+/// 2 for triangles, 3 for 5 to 9 sides, `1 + ⌊√(sides − 1)⌋` above (integer square root,
+/// as the kernels take it).
+pub fn sub_face_tiles(sides: usize) -> usize {
     if sides < 10 {
         2 + usize::from(sides > 4)
     } else {
-        1 + ((sides - 1) as f64).sqrt() as usize
+        let mut r = 1;
+        while (r + 1) * (r + 1) <= sides - 1 {
+            r += 1;
+        }
+        1 + r
     }
 }
 

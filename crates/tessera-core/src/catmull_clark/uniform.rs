@@ -1,14 +1,15 @@
 //! The peer of the adaptive method: the limit surface sampled on an `n × n` grid per
 //! patch (any `n`, not only powers of two), two triangles per cell split along the
-//! shorter diagonal, vertices shared across patch edges through the canonical keys.
+//! shorter diagonal, vertices shared across patch edges through the canonical keys
+//! inside a chart, copied (one evaluation) across chart seams ([`super::keys`]).
 
 use std::collections::HashMap;
 
 use glam::DVec3;
 
 use super::adaptive::{out_vertex, CcTessellation};
-use super::keys::point_key;
-use super::patch::SurfaceModel;
+use super::keys::{chart_key, point_of, vertex_face_uv};
+use super::patch::{SurfaceModel, SurfacePoint};
 use super::triangulate::{triangulate, PolyVertex};
 use crate::error::{Error, Result};
 
@@ -27,17 +28,23 @@ pub fn tessellate_uniform(model: &SurfaceModel, n: u32) -> Result<CcTessellation
         2 * u64::from(n).pow(2) * mesh.surface_patches().count() as u64,
         &format!("{n} segments per patch side"),
     )?;
+    // Vertex ids by chart key; surface points by point key.
     let mut keys: HashMap<u64, u32> = HashMap::new();
+    let mut points: HashMap<u64, SurfacePoint> = HashMap::new();
     let mut out = CcTessellation::default();
     let mut grid = vec![0u32; ((n + 1) * (n + 1)) as usize];
     for p in mesh.surface_patches() {
         for j in 0..=n {
             for i in 0..=n {
-                let key = point_key(mesh, p, i, j, n);
+                let key = chart_key(mesh, p, i, j, n);
                 let vertices = &mut out.mesh.vertices;
                 let id = *keys.entry(key).or_insert_with(|| {
                     let (u, v) = (i as f64 / n as f64, j as f64 / n as f64);
-                    vertices.push(out_vertex(model.eval(p, u, v), p, u, v));
+                    let sp = *points
+                        .entry(point_of(key))
+                        .or_insert_with(|| model.eval(p, u, v));
+                    let (face, uv) = vertex_face_uv(mesh, p, i, j, n);
+                    vertices.push(out_vertex(sp, face, uv));
                     vertices.len() as u32 - 1
                 });
                 grid[(j * (n + 1) + i) as usize] = id;
@@ -63,6 +70,6 @@ pub fn tessellate_uniform(model: &SurfaceModel, n: u32) -> Result<CcTessellation
         }
         out.leaves += (n * n) as usize;
     }
-    out.evaluations = out.mesh.vertices.len() as u64;
+    out.evaluations = points.len() as u64;
     Ok(out)
 }

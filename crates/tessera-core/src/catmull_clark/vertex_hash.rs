@@ -2,18 +2,20 @@
 //! `shaders/cc_hash_insert.wgsl` and `shaders/cc_hash_number.wgsl` run it; these are
 //! their CPU twins, one loop iteration per invocation.
 //!
-//! Items are canonical point keys ([`super::keys`]), many equal (a point marked by every
-//! cell around it). Insertion is lock-free with 32-bit atomics only: a slot's high word
+//! Items are canonical point keys in their charts ([`super::keys::chart_key`]), many
+//! equal (a point marked by every cell around it), some absent ([`CC_NO_KEY`]: the
+//! table passes them over). Insertion is lock-free with 32-bit atomics only: a slot's high word
 //! is claimed by compare-exchange, then its low word; whoever sets the low word owns the
 //! slot for that key, and an insertion that finds another key's word moves on. Nobody
 //! waits on anybody. Each slot keeps the smallest item that inserted its key, so the
 //! numbering (distinct keys in order of first occurrence, by a prefix sum) does not
 //! depend on which invocation ran first, though slots may.
 
-use crate::gpu_types::{CcHashSlot, CcHashStatus, CC_HASH_MAX_PROBES, CC_NO_SLOT};
+use crate::gpu_types::{CcHashSlot, CcHashStatus, CC_HASH_MAX_PROBES, CC_NO_KEY, CC_NO_SLOT};
 
 /// A key as the kernels see it: `[hi, lo]`. No canonical key has a word equal to
-/// `u32::MAX` (tag 3 is unused; `j ≤ 840 · 2^10`), so the inverted words are never 0.
+/// `u32::MAX` (tag 3 is unused; charts are below 2^22, `j` and `t` at most
+/// `840 · 2^10`), so the inverted words are never 0, and [`CC_NO_KEY`] is no key.
 pub fn split_key(key: u64) -> [u32; 2] {
     [(key >> 32) as u32, key as u32]
 }
@@ -28,7 +30,7 @@ pub fn home_slot(key: [u32; 2], capacity: u32) -> u32 {
 }
 
 /// Twin of `cc_hash_insert`: every item's slot ([`CC_NO_SLOT`] where the probes ran out,
-/// which sets `status.overflow`).
+/// which sets `status.overflow`, and for [`CC_NO_KEY`]).
 ///
 /// `table.len()` must be a power of two.
 pub fn hash_insert(
@@ -40,6 +42,10 @@ pub fn hash_insert(
     let capacity = table.len() as u32;
     for item in 0..status.items.min(keys.len() as u32) {
         let key = keys[item as usize];
+        if key == CC_NO_KEY {
+            item_slot[item as usize] = CC_NO_SLOT;
+            continue;
+        }
         let (hi, lo) = (!key[0], !key[1]);
         let mut slot = home_slot(key, capacity);
         let mut found = CC_NO_SLOT;
@@ -92,16 +98,17 @@ pub fn assign(
     let mut unique = vec![[0u32; 2]; n];
     for i in 0..n {
         let s = item_slot[i];
+        let is_first = s != CC_NO_SLOT && !table[s as usize].first == i as u32;
+        if i == n - 1 {
+            status.unique = offsets[i] + u32::from(is_first);
+        }
         if s == CC_NO_SLOT {
             continue;
         }
         let first = !table[s as usize].first;
         ids[i] = offsets[first as usize];
-        if first == i as u32 {
+        if is_first {
             unique[offsets[i] as usize] = keys[i];
-        }
-        if i == n - 1 {
-            status.unique = offsets[i] + u32::from(first == i as u32);
         }
     }
     unique.truncate(status.unique as usize);

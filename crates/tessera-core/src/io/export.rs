@@ -1,5 +1,12 @@
-//! Mesh writers: OBJ (`v`, `vn`, `vt`, `f`), ASCII PLY (`x y z nx ny nz u v patch`) and
-//! binary glTF (`.glb`: `POSITION`, `NORMAL`, `TEXCOORD_0` = patch (u, v), `_PATCH`).
+//! Mesh writers: OBJ (`v`, `vn`, `vt`, `f`), ASCII PLY (`x y z nx ny nz u v face`) and
+//! binary glTF (`.glb`: `POSITION`, `NORMAL`, `TEXCOORD_0` = the face's (u, v), `_FACE`).
+//!
+//! `face` and `(u, v)` are [`OutVertex`](crate::gpu_types::OutVertex)'s: for a
+//! Catmull-Clark surface the control face (in the input's order) and its own `(u, v)` in
+//! OpenSubdiv Bfr's parameterisation (Ptex's for quads), so per-face textures and
+//! displacement apply directly; for Bézier patches the patch and its `(u, v)`. Points on
+//! edges between faces come once per face, with the same position. OBJ has no per-vertex
+//! attribute for the face: its `vt` is the face's `(u, v)` and the face is not written.
 //!
 //! Files are written to a temporary name beside the target and renamed into place, so a
 //! failure never leaves a partial file behind.
@@ -138,8 +145,9 @@ pub fn stage(
     Ok(staged)
 }
 
-/// Writes `mesh` as OBJ: positions, normals, patch `(u, v)` as texture coordinates,
-/// faces indexing all three alike.
+/// Writes `mesh` as OBJ: positions, normals, each vertex's `(u, v)` on its face as
+/// texture coordinates (the face id itself has no place in OBJ), faces indexing all
+/// three alike.
 pub fn write_obj(w: &mut dyn Write, mesh: &Mesh) -> std::io::Result<()> {
     writeln!(
         w,
@@ -163,14 +171,15 @@ pub fn write_obj(w: &mut dyn Write, mesh: &Mesh) -> std::io::Result<()> {
     Ok(())
 }
 
-/// Writes `mesh` as ASCII PLY: per vertex position, normal, patch `(u, v)` and patch id.
+/// Writes `mesh` as ASCII PLY: per vertex position, normal, `(u, v)` on its face and the
+/// face (`property uint face`).
 pub fn write_ply(w: &mut dyn Write, mesh: &Mesh) -> std::io::Result<()> {
     writeln!(w, "ply\nformat ascii 1.0\ncomment tessera")?;
     writeln!(w, "element vertex {}", mesh.vertices.len())?;
     for p in ["x", "y", "z", "nx", "ny", "nz", "u", "v"] {
         writeln!(w, "property float {p}")?;
     }
-    writeln!(w, "property uint patch")?;
+    writeln!(w, "property uint face")?;
     writeln!(w, "element face {}", mesh.triangle_count())?;
     writeln!(w, "property list uchar uint vertex_indices\nend_header")?;
     for v in &mesh.vertices {
@@ -179,7 +188,7 @@ pub fn write_ply(w: &mut dyn Write, mesh: &Mesh) -> std::io::Result<()> {
         writeln!(
             w,
             "{x} {y} {z} {nx} {ny} {nz} {} {} {}",
-            v.uv[0], v.uv[1], v.patch
+            v.uv[0], v.uv[1], v.face
         )?;
     }
     for [a, b, c] in mesh.triangles() {
@@ -193,19 +202,20 @@ const GL_FLOAT: u32 = 5126;
 const GL_UNSIGNED_INT: u32 = 5125;
 const GL_ARRAY_BUFFER: u32 = 34962;
 const GL_ELEMENT_ARRAY_BUFFER: u32 = 34963;
-/// Patch ids are stored as floats (glTF allows unsigned ints only for indices): exact
+/// Face ids are stored as floats (glTF allows unsigned ints only for indices): exact
 /// below 2^24.
-pub const GLB_MAX_PATCH: u32 = 1 << 24;
+pub const GLB_MAX_FACE: u32 = 1 << 24;
 
 /// Binary glTF 2.0: one mesh, one triangle primitive. The vertices are interleaved as
-/// the GPU writes them (36 bytes: position, normal, patch u v, patch id), the patch id
-/// as a float in the application-specific attribute `_PATCH`; indices are `u32`.
+/// the GPU writes them (36 bytes: position, normal, the face's u v, face id),
+/// `TEXCOORD_0` the face's `(u, v)`, the face id as a float in the application-specific
+/// attribute `_FACE`; indices are `u32`.
 pub fn write_glb(w: &mut dyn Write, mesh: &Mesh) -> std::io::Result<()> {
     const STRIDE: usize = 36;
-    if let Some(v) = mesh.vertices.iter().find(|v| v.patch >= GLB_MAX_PATCH) {
+    if let Some(v) = mesh.vertices.iter().find(|v| v.face >= GLB_MAX_FACE) {
         return Err(std::io::Error::other(format!(
-            "patch id {} does not fit the glTF float attribute _PATCH (below 2^24)",
-            v.patch
+            "face id {} does not fit the glTF float attribute _FACE (below 2^24)",
+            v.face
         )));
     }
     let mut bin = Vec::with_capacity(mesh.vertices.len() * STRIDE + mesh.indices.len() * 4);
@@ -213,7 +223,7 @@ pub fn write_glb(w: &mut dyn Write, mesh: &Mesh) -> std::io::Result<()> {
         for x in v.position.iter().chain(&v.normal).chain(&v.uv) {
             bin.extend_from_slice(&x.to_le_bytes());
         }
-        bin.extend_from_slice(&(v.patch as f32).to_le_bytes());
+        bin.extend_from_slice(&(v.face as f32).to_le_bytes());
     }
     let vertex_bytes = bin.len();
     for i in &mesh.indices {
@@ -239,7 +249,7 @@ pub fn write_glb(w: &mut dyn Write, mesh: &Mesh) -> std::io::Result<()> {
             "asset": {"version": "2.0", "generator": "tessera"},
             "scene": 0, "scenes": [{"nodes": [0]}], "nodes": [{"mesh": 0}],
             "meshes": [{"primitives": [{
-                "attributes": {"POSITION": 0, "NORMAL": 1, "TEXCOORD_0": 2, "_PATCH": 3},
+                "attributes": {"POSITION": 0, "NORMAL": 1, "TEXCOORD_0": 2, "_FACE": 3},
                 "indices": 4, "mode": 4}]}],
             "buffers": [{"byteLength": bin.len()}],
             "bufferViews": [
@@ -287,11 +297,11 @@ mod tests {
     use crate::gpu_types::OutVertex;
 
     fn quad() -> Mesh {
-        let v = |x: f32, y: f32, patch| OutVertex {
+        let v = |x: f32, y: f32, face| OutVertex {
             position: [x, y, 0.5],
             normal: [0.0, 0.0, 1.0],
             uv: [x, y],
-            patch,
+            face,
         };
         Mesh {
             vertices: vec![
@@ -326,13 +336,13 @@ mod tests {
                 (v.position, v.normal, v.uv)
             );
         }
-        // `_PATCH`: the float at offset 32 of each 36-byte vertex.
-        let patch = prim
+        // `_FACE`: the float at offset 32 of each 36-byte vertex.
+        let face = prim
             .attributes()
-            .find(|(s, _)| *s == gltf::Semantic::Extras("PATCH".into()))
+            .find(|(s, _)| *s == gltf::Semantic::Extras("FACE".into()))
             .map(|(_, a)| a)
             .unwrap();
-        assert_eq!((patch.offset(), patch.count()), (32, 4));
+        assert_eq!((face.offset(), face.count()), (32, 4));
         let ids: Vec<f32> = (0..4)
             .map(|k| f32::from_le_bytes(blob[k * 36 + 32..k * 36 + 36].try_into().unwrap()))
             .collect();

@@ -156,7 +156,8 @@ impl CcModelBuffers {
     }
 }
 
-/// The kernel that evaluates points `(patch, u, v)` into output vertices.
+/// The kernel that evaluates vertices (a point `(patch, u, v)` with its face and face
+/// `(u, v)`) into output vertices.
 #[doc(hidden)]
 pub struct CcVertexEval {
     kernel: Kernel,
@@ -169,10 +170,10 @@ impl CcVertexEval {
         }
     }
 
-    /// Records the evaluation of the first `counts[0]` of `points` ([`CcPoint`]s; at
-    /// most `max_points` invocations) into `out` ([`OutVertex`]s).
+    /// Records the evaluation of the first `counts[0]` of `points` ([`CcVertexPoint`]s;
+    /// at most `max_points` invocations) into `out` ([`OutVertex`]s).
     ///
-    /// [`CcPoint`]: tessera_core::gpu_types::CcPoint
+    /// [`CcVertexPoint`]: tessera_core::gpu_types::CcVertexPoint
     /// [`OutVertex`]: tessera_core::gpu_types::OutVertex
     #[allow(clippy::too_many_arguments)]
     pub fn record(

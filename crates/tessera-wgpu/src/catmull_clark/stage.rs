@@ -12,9 +12,9 @@
 //! | 4 | `cc_choose`, `next_round` | patch | best first split so far (after the last round: the run's bound) |
 //! |   | 2–3 repeat per level (`max_depth + 1`), 1–4 per round (`CC_SEARCH_ROUNDS` = 5) | | |
 //! | 4b | `cc_collect` count, scan, emit, finish (indirect) | search leaf | leaves of each patch's best split |
-//! | 5 | `cc_leaf_keys` (indirect) | leaf | corner keys and points |
-//! | 6 | `cc_hash_*` (insert, number, gather) | corner | vertex ids, one point per vertex |
-//! | 7 | `cc_vertex_eval` | vertex | vertices (position, normal, patch u v, patch) |
+//! | 5 | `cc_leaf_keys` (indirect) | leaf | corner keys in their charts (and across seams) and vertices |
+//! | 6 | `cc_hash_*` (insert, number, gather) | item | vertex ids, one point per vertex |
+//! | 7 | `cc_vertex_eval` | vertex | vertices (position, normal at the point's home; face, face u v) |
 //! | 8 | `cc_polygon` count, scan, emit (indirect) | leaf | polygons: corners + marked points on the sides |
 //! | 9 | `cc_triangulate` (indirect), finish | leaf | indices, draw arguments |
 //!
@@ -55,12 +55,13 @@
 //! ```
 
 use std::sync::Arc;
-use tessera_core::catmull_clark::gpu_model::{patch_topology, CcGpuModel};
+use tessera_core::catmull_clark::gpu_model::{patch_topology, point_homes, CcGpuModel};
 
 use glam::Vec3;
 use tessera_core::catmull_clark::{CcParams, LeafBound, PatchMesh, SurfaceModel};
 use tessera_core::gpu_types::{
-    CcCell, CcHashStatus, CcPoint, CcState, CcTessParams, OutVertex, CC_SEARCH_ROUNDS, CC_TRIALS,
+    CcCell, CcHashStatus, CcState, CcTessParams, CcVertexPoint, OutVertex, CC_SEARCH_ROUNDS,
+    CC_TRIALS,
 };
 use tessera_core::Mesh;
 use wgpu::util::DeviceExt;
@@ -92,6 +93,7 @@ mod slot {
     pub const VERTICES: u32 = 64;
     pub const INDICES: u32 = 65;
     pub const DRAW: u32 = 66;
+    pub const HOMES: u32 = 67;
     // The vertex hash's and the vertex evaluation's (shared/cc_hash.wgsl, cc_vertex_eval).
     pub const KEYS: u32 = 40;
     pub const TABLE: u32 = 41;
@@ -106,7 +108,7 @@ mod slot {
 /// Offsets into the dispatch-arguments buffer.
 const LIST_ARGS: u64 = 0;
 const LEAF_ARGS: u64 = 12;
-/// ... and [6..9] the hash items (four corner keys per leaf).
+/// ... and [6..9] the hash items (eight per leaf).
 const ITEM_ARGS: u64 = 24;
 /// ... and [9..12] the search's leaves.
 const SEARCH_LEAF_ARGS: u64 = 36;
@@ -275,8 +277,11 @@ pub struct CcStage {
     /// Levels of the uploaded quadtrees.
     depth: u32,
     patch_count: u32,
+    /// Level-1 points: where the edges' homes start.
+    point_count: u32,
     params: CcParams,
     topo: wgpu::Buffer,
+    homes: wgpu::Buffer,
     state: wgpu::Buffer,
     best: wgpu::Buffer,
     root_offsets: wgpu::Buffer,
@@ -342,6 +347,12 @@ impl CcStage {
             contents: bytemuck::cast_slice(&patch_topology(&model.mesh)),
             usage: wgpu::BufferUsages::STORAGE,
         });
+        let point_count = model.mesh.points.len() as u32;
+        let homes = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("tessera cc homes"),
+            contents: bytemuck::cast_slice(&point_homes(&model.mesh)),
+            usage: wgpu::BufferUsages::STORAGE,
+        });
         let state = storage(device, "tessera cc state", state_bytes(patch_count));
         let best = storage(
             device,
@@ -363,12 +374,13 @@ impl CcStage {
             mapped_at_creation: false,
         });
         let eps = params.epsilon(model);
-        let buffers = Buffers::new(device, &kernels, (patch_count, &state), (params, eps), caps)?;
+        let counts = (patch_count, point_count);
+        let buffers = Buffers::new(device, &kernels, (counts, &state), (params, eps), caps)?;
         let binds = Binds::new(
             device,
             &kernels,
             &model_buffers,
-            (&topo, &state, &best, &root_offsets, &args),
+            (&topo, &homes, &state, &best, &root_offsets, &args),
             &buffers,
         );
         Ok(CcStage {
@@ -377,8 +389,10 @@ impl CcStage {
             patches: model.mesh.clone(),
             depth: model.depth,
             patch_count,
+            point_count,
             params: *params,
             topo,
+            homes,
             state,
             best,
             root_offsets,
@@ -405,7 +419,7 @@ impl CcStage {
         gpu_leaf_bound(params)?;
         self.params = *params;
         let p = tess_params(
-            self.patch_count,
+            (self.patch_count, self.point_count),
             (params, self.epsilon()),
             self.buffers.caps,
         );
@@ -688,7 +702,9 @@ impl CcStage {
             indices: grow(s.need_indices, old.indices),
             hash_slots: old.hash_slots,
         };
-        // The hash's items are the leaves' corners: keep the table at least twice that.
+        // The hash's items are eight per leaf, about half of them without a key, and
+        // the keys distinct are fewer still: a table of eight slots per leaf keeps it
+        // at most half full.
         if status.hash.overflow != 0 || caps.hash_slots < 8 * caps.leaves {
             caps.hash_slots = (2 * old.hash_slots).max(8 * caps.leaves);
         }
@@ -700,7 +716,7 @@ impl CcStage {
         let buffers = Buffers::new(
             device,
             &self.kernels,
-            (self.patch_count, &self.state),
+            ((self.patch_count, self.point_count), &self.state),
             (&self.params, self.epsilon()),
             caps,
         )?;
@@ -710,6 +726,7 @@ impl CcStage {
             &self.model,
             (
                 &self.topo,
+                &self.homes,
                 &self.state,
                 &self.best,
                 &self.root_offsets,
@@ -744,12 +761,18 @@ impl CcStage {
     }
 }
 
-/// The leaves and polygons of a run as the kernels left them, for the tests that compare
-/// `cc_polygon` with its CPU twin ([`tessera_core::catmull_clark::polygon`]).
+/// The leaves, hash items and polygons of a run as the kernels left them, for the tests
+/// that compare `cc_leaf_keys` and `cc_polygon` with their CPU twins
+/// ([`tessera_core::catmull_clark::gpu_model::leaf_items`],
+/// [`tessera_core::catmull_clark::polygon`]).
 #[doc(hidden)]
 #[derive(Clone, Debug, Default)]
 pub struct CcPolygons {
     pub leaves: Vec<CcCell>,
+    /// Eight per leaf: the hash items' keys, their vertex ids and vertices.
+    pub item_keys: Vec<[u32; 2]>,
+    pub item_ids: Vec<u32>,
+    pub item_points: Vec<CcVertexPoint>,
     /// Per patch: the trial of its first split (`best[p].y`).
     pub first_trial: Vec<u32>,
     /// Per leaf: where its polygon starts in `verts`; one more entry for the end.
@@ -783,8 +806,17 @@ impl CcStage {
         let side_counts =
             bytemuck::pod_collect_to_vec(&read(&b.poly_offsets, side_base, 16 * leaves)?);
         let total = offsets.last().copied().unwrap_or(0) as u64;
+        let items = 8 * leaves;
+        let point_bytes = std::mem::size_of::<CcVertexPoint>() as u64;
         Ok(CcPolygons {
             leaves: bytemuck::pod_collect_to_vec(&read(&b.leaves, 0, 16 * leaves)?),
+            item_keys: bytemuck::pod_collect_to_vec(&read(&b.keys, 0, 8 * items)?),
+            item_ids: bytemuck::pod_collect_to_vec(&read(&b.hash.ids, 0, 4 * items)?),
+            item_points: bytemuck::pod_collect_to_vec(&read(
+                &b.item_points,
+                0,
+                point_bytes * items,
+            )?),
             first_trial: best.iter().map(|b| b[1]).collect(),
             offsets,
             side_counts,
@@ -856,9 +888,10 @@ fn status_from_bytes(bytes: &[u8]) -> CcStatus {
     }
 }
 
-/// The kernels' parameters for `params` with ε resolved to `eps`.
+/// The kernels' parameters for `params` with ε resolved to `eps`, for a mesh of these
+/// patches and level-1 points.
 fn tess_params(
-    patch_count: u32,
+    (patch_count, points): (u32, u32),
     (params, eps): (&CcParams, f64),
     caps: CcCapacities,
 ) -> CcTessParams {
@@ -873,7 +906,8 @@ fn tess_params(
         index_capacity: caps.indices,
         search_leaf_capacity: caps.search_leaves,
         search_rounds: params.first_split.search_rounds(),
-        pad: [0; 2],
+        points,
+        pad: 0,
     }
 }
 
@@ -881,7 +915,7 @@ impl Buffers {
     fn new(
         device: &wgpu::Device,
         kernels: &CcKernels,
-        (patch_count, state): (u32, &wgpu::Buffer),
+        (counts, state): ((u32, u32), &wgpu::Buffer),
         params: (&CcParams, f64),
         caps: CcCapacities,
     ) -> Result<Self> {
@@ -893,7 +927,8 @@ impl Buffers {
             indices: caps.indices.max(3),
             hash_slots: caps.hash_slots.max(1).next_power_of_two(),
         };
-        let items = 4 * caps.leaves;
+        // Eight hash items per leaf (`cc_leaf_keys`), and at most a vertex per item.
+        let items = 8 * caps.leaves;
         for (what, bytes) in [
             ("cell list", caps.cells as u64 * 16),
             ("leaf", caps.leaves as u64 * 16),
@@ -910,7 +945,7 @@ impl Buffers {
         }
         let params = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("tessera cc params"),
-            contents: bytemuck::bytes_of(&tess_params(patch_count, params, caps)),
+            contents: bytemuck::bytes_of(&tess_params(counts, params, caps)),
             usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
         });
         let cell_bytes = std::mem::size_of::<CcCell>() as u64;
@@ -952,7 +987,7 @@ impl Buffers {
             caps.leaves + 1,
             (state, state_word(std::mem::offset_of!(CcState, leaves))),
         );
-        let point_bytes = std::mem::size_of::<CcPoint>() as u64;
+        let point_bytes = std::mem::size_of::<CcVertexPoint>() as u64;
         Ok(Buffers {
             caps,
             params,
@@ -991,7 +1026,8 @@ impl Binds {
         device: &wgpu::Device,
         k: &CcKernels,
         model: &CcModelBuffers,
-        (topo, state, best, root_offsets, args): (
+        (topo, homes, state, best, root_offsets, args): (
+            &wgpu::Buffer,
             &wgpu::Buffer,
             &wgpu::Buffer,
             &wgpu::Buffer,
@@ -1014,6 +1050,7 @@ impl Binds {
                 (slot::ROOT_OFFSETS, root_offsets),
                 (slot::ARGS, args),
                 (slot::TOPO, topo),
+                (slot::HOMES, homes),
                 (slot::ITEM_POINTS, &b.item_points),
                 (slot::POLY_OFFSETS, &b.poly_offsets),
                 (slot::POLY_VERTS, &b.poly_verts),

@@ -1,7 +1,8 @@
 //! Uniform Catmull-Clark tessellation on the GPU: every surface patch on an `n × n`
-//! grid. Three dispatches, no readback: `cc_uniform_points` (each shared point written
-//! once, by the patch that owns it), `cc_vertex_eval` (exact evaluation, the adaptive
-//! stage's kernel), `cc_uniform_cells` (two triangles per cell and the draw arguments).
+//! grid. Three dispatches, no readback: `cc_uniform_points` (each vertex, a point in a
+//! chart, written once, by the patch that owns it), `cc_vertex_eval` (exact evaluation at
+//! the point's home, the adaptive stage's kernel), `cc_uniform_cells` (two triangles per
+//! cell and the draw arguments).
 //! The output sizes follow from the topology and `n`, so the buffers are allocated
 //! exactly and never grow. CPU twin: [`tessera_core::catmull_clark::gpu_uniform`].
 //!
@@ -22,7 +23,7 @@ use glam::Vec3;
 use tessera_core::catmull_clark::gpu_model::CcGpuModel;
 use tessera_core::catmull_clark::gpu_uniform::{uniform_patches, UniformLayout};
 use tessera_core::catmull_clark::{PatchMesh, SurfaceModel};
-use tessera_core::gpu_types::{CcPoint, CcUniformParams, OutVertex};
+use tessera_core::gpu_types::{CcUniformParams, CcVertexPoint, OutVertex};
 use tessera_core::Mesh;
 use wgpu::util::DeviceExt;
 
@@ -284,7 +285,7 @@ impl Sized {
             ),
             (
                 "point",
-                vertices as u64 * std::mem::size_of::<CcPoint>() as u64,
+                vertices as u64 * std::mem::size_of::<CcVertexPoint>() as u64,
             ),
             ("index", indices as u64 * 4),
         ] {
@@ -293,7 +294,7 @@ impl Sized {
         let points = storage(
             device,
             "tessera cc uniform points",
-            vertices.max(1) as u64 * std::mem::size_of::<CcPoint>() as u64,
+            vertices.max(1) as u64 * std::mem::size_of::<CcVertexPoint>() as u64,
         );
         let counts = storage(device, "tessera cc uniform counts", 4);
         let output = MeshBuffers::with_capacity(device, vertices, indices);
