@@ -77,6 +77,8 @@ fn shipped_models_are_watertight_under_every_method() {
                 r.non_manifold_edges = 0;
             }
             assert!(r.is_watertight(), "{name} {method}: {r:?}");
+            // Every vertex shared by index: the Bézier path makes no seam copies.
+            assert_eq!(r.seam_copies, 0, "{name} {method}: {r:?}");
             assert!(t.mesh.triangle_count() > 0);
             // Normals finite and unit length, including at the collapsed lid and bottom.
             for v in &t.mesh.vertices {
@@ -211,11 +213,17 @@ fn victim() -> (BezierModel, Tessellation, u32) {
 fn checker_catches_a_duplicated_vertex_and_a_gap() {
     let (model, mut t, v) = victim();
     assert!(check(&model, &t).is_watertight());
-    // Give one triangle a private copy of the vertex: same position, other index.
+    // Give one triangle a private copy of the vertex: same position, other index. The
+    // checker counts it as a seam copy (which the Bézier path never makes).
     let copy = t.mesh.vertices.len() as u32;
     t.mesh.vertices.push(t.mesh.vertices[v as usize]);
     let k = t.mesh.indices.iter().position(|&i| i == v).unwrap();
     t.mesh.indices[k] = copy;
+    let r = check(&model, &t);
+    assert_eq!(r.seam_copies, 1, "{r:?}");
+    // One bit off: a crack by index and a duplicate vertex.
+    let x = &mut t.mesh.vertices[copy as usize].position[0];
+    *x = f32::from_bits(x.to_bits() + 1);
     let r = check(&model, &t);
     assert!(!r.is_watertight());
     assert!(r.cracks_by_index > 0 && r.duplicate_vertices > 0, "{r:?}");

@@ -343,17 +343,33 @@ fn output_is_watertight_and_the_check_catches_planted_cracks() {
             let r = check_watertight(&positions, &out.mesh.indices, &boundary, tol);
             assert!(r.is_watertight(), "{name}: {r:?}");
             assert_eq!(r.boundary_edges > 0, !boundary.is_empty(), "{name}");
+            // Every model has edges between control faces: their points are copied.
+            assert!(r.seam_copies > 0, "{name}: {r:?}");
         }
     }
-    // Test the tester: a copied vertex (a crack by index) and a removed triangle (a hole).
+    // Test the tester. A copy of a vertex with the same position bits is shared, as the
+    // seam copies are; one bit off, a crack by index (and a duplicate), though welding
+    // closes it; a removed triangle is a hole.
     let model = cc_model("opensubdiv/catmark_cube.obj");
     let out = adaptive(&model, 1e-3 * diag("opensubdiv/catmark_cube.obj"));
-    let mut positions: Vec<_> = out.mesh.positions().collect();
-    let mut indices = out.mesh.indices.clone();
-    positions.push(positions[indices[0] as usize]);
-    indices[0] = positions.len() as u32 - 1;
-    let r = check_watertight(&positions, &indices, &[], 1e-6);
+    let positions: Vec<_> = out.mesh.positions().collect();
+    let clean = check_watertight(&positions, &out.mesh.indices, &[], 1e-6);
+    assert!(clean.is_watertight(), "{clean:?}");
+    let planted = |bump: u32| {
+        let mut positions = positions.clone();
+        let mut indices = out.mesh.indices.clone();
+        let mut p = positions[indices[0] as usize];
+        p.x = f32::from_bits(p.x.to_bits() + bump);
+        positions.push(p);
+        indices[0] = positions.len() as u32 - 1;
+        check_watertight(&positions, &indices, &[], 1e-6)
+    };
+    let r = planted(0);
+    assert!(r.is_watertight(), "{r:?}");
+    assert_eq!(r.seam_copies, clean.seam_copies + 1, "{r:?}");
+    let r = planted(1);
     assert!(r.cracks_by_index > 0 && r.duplicate_vertices > 0, "{r:?}");
+    assert_eq!(r.cracks_by_position, 0, "{r:?}");
     let mut indices = out.mesh.indices.clone();
     indices.truncate(indices.len() - 3);
     let r = check_watertight(&positions, &indices, &[], 1e-6);
@@ -641,4 +657,92 @@ fn own_triangles_leaf_bound_meets_the_tolerance_with_fewer_triangles() {
         "fewer triangles on only {fewer} of {cases}"
     );
     assert!(triangle_bounds > 0, "the triangle bound was never tried");
+}
+
+/// Each vertex's `(face, u, v)`, evaluated through `SurfaceModel::eval_face` (which
+/// shares nothing with the tessellators but the patches), is where the vertex is: within
+/// 1e-5 of the model's diagonal, seams included; every triangle lies in one chart; the
+/// copies of a seam point agree bit for bit. Quads, triangles and pentagons, adaptive
+/// and uniform. Then the checker is shown to catch each planted defect.
+#[test]
+fn every_vertex_lies_at_its_face_coordinates_and_seam_copies_agree() {
+    use tessera_core::catmull_clark::faces::check_faces;
+    for (name, rel, n) in [
+        ("opensubdiv/catmark_nonquads.obj", 3e-3, 5),
+        ("opensubdiv/catmark_pyramid.obj", 1e-3, 4),
+        ("opensubdiv/catmark_cube.obj", 1e-3, 3),
+        ("catmull_clark/spot_control_mesh.obj", 3e-3, 2),
+    ] {
+        let model = cc_model(name);
+        let tol = 1e-5 * model.mesh.bbox_diag();
+        let params = CcParams {
+            tolerance: Tolerance::Absolute(rel * diag(name)),
+            max_depth: 6,
+            first_split: Default::default(),
+            leaf_bound: Default::default(),
+        };
+        let not_quads = model.mesh.control_faces.iter().any(|f| f.len() != 4);
+        let adaptive = tessellate_adaptive(&model, &params).unwrap().mesh;
+        let uniform = tessellate_uniform(&model, n).unwrap().mesh;
+        for (what, mesh, grid) in [
+            ("adaptive", &adaptive, params.grid()),
+            ("uniform", &uniform, n),
+        ] {
+            let r = check_faces(&model, mesh, grid);
+            eprintln!("{name} {what}: {r:?}");
+            assert!(r.is_consistent(tol), "{name} {what}: {r:?}");
+            assert_eq!(r.vertices, mesh.vertices.len(), "{name} {what}");
+            assert!(r.seam_points > 0, "{name} {what}");
+            assert_eq!(r.inner_seam_points > 0, not_quads, "{name} {what}");
+        }
+    }
+    // Test the tester, on the pentagons' and triangles' mesh.
+    let model = cc_model("opensubdiv/catmark_nonquads.obj");
+    let tol = 1e-5 * model.mesh.bbox_diag();
+    let grid = 6;
+    let mesh = tessellate_uniform(&model, grid).unwrap().mesh;
+    let clean = check_faces(&model, &mesh, grid);
+    assert!(clean.is_consistent(tol), "{clean:?}");
+    // A vertex with its u and v swapped is off the surface (away from the diagonal).
+    let mut swapped = mesh.clone();
+    let k = swapped
+        .vertices
+        .iter()
+        .position(|v| (v.uv[0] - v.uv[1]).abs() > 0.2 && v.uv[0] < 1.0 && v.uv[1] < 1.0)
+        .unwrap();
+    let v = &mut swapped.vertices[k];
+    v.uv = [v.uv[1], v.uv[0]];
+    assert!(check_faces(&model, &swapped, grid).max_distance > tol);
+    // Copies: one a bit off; a triangle using the copy of another chart; two vertices for
+    // one point in one chart.
+    let copies = {
+        let mut by_position: std::collections::HashMap<[u32; 3], Vec<usize>> = Default::default();
+        for (k, v) in mesh.vertices.iter().enumerate() {
+            by_position
+                .entry(v.position.map(f32::to_bits))
+                .or_default()
+                .push(k);
+        }
+        by_position
+            .into_values()
+            .find(|c| c.len() > 1 && mesh.vertices[c[0]].face != mesh.vertices[c[1]].face)
+            .unwrap()
+    };
+    let mut off = mesh.clone();
+    let x = &mut off.vertices[copies[1]].position[0];
+    *x = f32::from_bits(x.to_bits() + 1);
+    let r = check_faces(&model, &off, grid);
+    assert!(r.unequal_copies == 1 && r.max_distance <= tol, "{r:?}");
+    let mut mixed = mesh.clone();
+    let at = mixed
+        .indices
+        .iter()
+        .position(|&i| i as usize == copies[0])
+        .unwrap();
+    mixed.indices[at] = copies[1] as u32;
+    assert!(check_faces(&model, &mixed, grid).mixed_triangles > 0);
+    let mut repeated = mesh.clone();
+    repeated.vertices.push(mesh.vertices[copies[0]]);
+    repeated.indices[at] = mesh.vertices.len() as u32;
+    assert_eq!(check_faces(&model, &repeated, grid).repeated, 1);
 }

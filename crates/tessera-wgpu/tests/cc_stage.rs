@@ -738,3 +738,56 @@ fn a_loop_that_tessellates_on_change_reruns_once_per_pending_growth() {
     same_mesh(&mesh, &cpu.mesh, size(&model)).expect("the last run draws the CPU's mesh");
     gpu.check().expect("no wgpu errors");
 }
+
+#[test]
+fn gpu_vertices_lie_at_their_face_coordinates_and_seam_copies_agree() {
+    // Both stages: each vertex's (face, u, v) evaluated through `eval_face` is within
+    // 1e-5 of the diagonal of the vertex, every triangle lies in one chart, and the
+    // copies of a seam point (between faces, and between the sub-faces of triangles and
+    // pentagons) have the same position and normal bits.
+    use tessera_core::catmull_clark::faces::check_faces;
+    use tessera_wgpu::catmull_clark::CcUniformStage;
+    let gpu = gpu();
+    for (name, rel, n) in [
+        ("opensubdiv/catmark_nonquads.obj", 3e-3, 5),
+        ("opensubdiv/catmark_pyramid.obj", 1e-3, 4),
+        ("opensubdiv/catmark_cube.obj", 1e-3, 3),
+        ("catmull_clark/spot_control_mesh.obj", 3e-3, 2),
+    ] {
+        let model = model(name);
+        let tol = 1e-5 * size(&model);
+        let params = CcParams {
+            tolerance: Tolerance::Absolute(rel * size(&model)),
+            max_depth: 6,
+            first_split: Default::default(),
+            leaf_bound: Default::default(),
+        };
+        let (adaptive, _) = run(&gpu, &model, &params, None);
+        let mut stage = CcUniformStage::new(
+            &gpu.device,
+            &gpu.queue,
+            &kernels(&gpu),
+            &model,
+            &UniformParams { segments: n },
+        )
+        .expect("stage");
+        let mut encoder = gpu.device.create_command_encoder(&Default::default());
+        stage
+            .prepare(&gpu.device, &gpu.queue, &mut encoder)
+            .expect("prepare");
+        gpu.queue.submit([encoder.finish()]);
+        let uniform = stage.read_mesh(&gpu.device, &gpu.queue).expect("read");
+        gpu.check().expect("no wgpu errors");
+        let not_quads = model.mesh.control_faces.iter().any(|f| f.len() != 4);
+        for (what, mesh, grid) in [
+            ("adaptive", &adaptive, params.grid()),
+            ("uniform", &uniform, n),
+        ] {
+            let r = check_faces(&model, mesh, grid);
+            assert!(r.is_consistent(tol), "{name} {what}: {r:?}");
+            assert_eq!(r.vertices, mesh.vertices.len(), "{name} {what}");
+            assert!(r.seam_points > 0, "{name} {what}");
+            assert_eq!(r.inner_seam_points > 0, not_quads, "{name} {what}");
+        }
+    }
+}

@@ -6,8 +6,10 @@
 //! subdivision rules, one-rings), [`bicubic`] and [`patch`] (exact evaluation; "Bfr");
 //! then the tessellators [`adaptive`] and [`uniform`], with [`bound`] (the flatness bound),
 //! [`triangle_bound`] (the distance to known triangles, CPU only), [`keys`] (canonical
-//! point keys) and [`triangulate`]; [`gpu_model`], [`gpu_uniform`], [`polygon`] and
-//! [`vertex_hash`] are the CPU twins of the GPU kernels' data and of kernels.
+//! point keys, and the charts that give every vertex its control face and that face's
+//! own `(u, v)`) and [`triangulate`]; [`gpu_model`], [`gpu_uniform`], [`polygon`] and
+//! [`vertex_hash`] are the CPU twins of the GPU kernels' data and of kernels; [`faces`]
+//! checks an output's face coordinates against the surface.
 //!
 //! ```
 //! use tessera_core::{catmull_clark::{load_surface, tessellate_adaptive, CcParams}, Tolerance};
@@ -29,6 +31,7 @@ pub mod adaptive;
 pub mod bicubic;
 pub mod bound;
 pub mod control_mesh;
+pub mod faces;
 pub mod gpu_model;
 pub mod gpu_uniform;
 pub mod keys;
