@@ -27,6 +27,10 @@ pub const DEFAULT_TOLERANCE_REL: f64 = 1e-3;
 /// Default surface samples per patch side for `--measure` (the least allowed).
 pub const DEFAULT_MEASURE_SAMPLES: usize = 32;
 
+/// The stats' words for a vertex's `face` and `u v` (as in `--help` and docs/cli.md).
+const VERTEX_FACE: &str = "the control face, by its index in the input (0-based)";
+const VERTEX_UV: &str = "the point's (u, v) on that face, in OpenSubdiv Bfr's parameterisation: for a quad Ptex's, (0, 0) at its first vertex, u toward its second, v toward its last; a face of n != 4 sides is n half-unit sub-faces, one per vertex (tiles 2 per row for triangles, 3 for 5 to 9 sides, 1 + floor(sqrt(n - 1)) above)";
+
 #[derive(Serialize)]
 struct Stats {
     input: String,
@@ -41,7 +45,19 @@ struct Stats {
     leaf_bound: Option<tessera_core::catmull_clark::LeafBound>,
     segments: Option<u32>,
     triangles: usize,
+    /// Output vertices: a point on an edge between faces (or between the sub-faces of a
+    /// face that is not a quad) is one vertex per face, so that each carries its own.
     vertices: usize,
+    /// Distinct vertex positions: the surface points, seam copies counted once.
+    positions: usize,
+    /// What each vertex's `face` is.
+    vertex_face: &'static str,
+    /// What each vertex's `u v` is.
+    vertex_uv: &'static str,
+    /// Control faces tessellated (holes left out).
+    faces: usize,
+    /// Level-1 patches tessellated: one per corner of each face, after the first
+    /// subdivision step.
     patches: usize,
     /// Patches with an extraordinary corner (evaluated through their quadtree).
     irregular_patches: usize,
@@ -221,6 +237,12 @@ pub fn tessellate(args: TessellateArgs) -> Result<(), Error> {
         segments,
         triangles: out.mesh.triangle_count(),
         vertices: out.mesh.vertices.len(),
+        positions: out.mesh.distinct_positions(),
+        vertex_face: VERTEX_FACE,
+        vertex_uv: VERTEX_UV,
+        faces: (0..model.mesh.control_faces.len())
+            .filter(|&f| !model.mesh.hole[model.mesh.first_patch[f] as usize])
+            .count(),
         patches: model.mesh.surface_patches().count(),
         irregular_patches: model.patches.iter().filter(|p| !p.is_regular()).count(),
         evaluations: out.evaluations,
@@ -308,8 +330,9 @@ pub fn info(input: &Path) -> Result<(), Error> {
 }
 
 /// The adaptive stage on the GPU: a first run that grows the buffers, then the timed run
-/// and the readback. Evaluations are the output vertices (the GPU evaluates each once;
-/// the cell corners its flatness test reads are not counted).
+/// and the readback. Evaluations are the output vertices (the GPU evaluates each once,
+/// a seam copy at its point's home like the others; the cell corners its flatness test
+/// reads are not counted).
 pub fn run_gpu(
     model: &SurfaceModel,
     params: &CcParams,

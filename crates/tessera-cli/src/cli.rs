@@ -143,10 +143,18 @@ pub struct TessellateArgs {
     /// only: a mesh with creases or corners needs cpu, or --no-creases).
     #[arg(long, value_enum)]
     pub backend: Option<Backend>,
-    /// Output mesh (.obj or .ply).
+    /// Output mesh (.obj, .ply or .glb). Every vertex carries `face` and `u v`: for a
+    /// Catmull-Clark mesh the control face (its 0-based index in the input) and the
+    /// point's (u, v) on it in OpenSubdiv Bfr's parameterisation (for quads Ptex's: (0, 0)
+    /// at the face's first vertex, u toward its second, v toward its last), a point on an
+    /// edge between faces being one vertex per face; for Bézier patches the patch and its
+    /// (u, v). PLY: `u v face`; GLB: TEXCOORD_0 and `_FACE`; OBJ: `vt` only (OBJ has no
+    /// face id).
     #[arg(short = 'o', long = "output")]
     pub output: Option<PathBuf>,
-    /// Write statistics as JSON to this file.
+    /// Write statistics as JSON to this file (`vertex_face` and `vertex_uv` say what the
+    /// vertices' `face` and `u v` are; for Catmull-Clark meshes `positions` counts the
+    /// surface points, `vertices` also the copies of a point on an edge between faces).
     #[arg(long)]
     pub stats: Option<PathBuf>,
     /// Measure the error against the exact surface (max, mean, p99).
@@ -205,7 +213,8 @@ pub struct RenderArgs {
     /// Draw the triangle edges over the shading.
     #[arg(long)]
     pub wireframe: bool,
-    /// Tint each patch slightly differently.
+    /// Tint each face slightly differently: each Bézier patch, each Catmull-Clark control
+    /// face.
     #[arg(long)]
     pub patch_tint: bool,
     /// The model's up axis (the Newell teapot is z-up; the teacup and teaspoon y-up).

@@ -51,6 +51,10 @@ struct Stats {
     target_triangles: Option<usize>,
     triangles: usize,
     vertices: usize,
+    /// What each vertex's `face` is.
+    vertex_face: &'static str,
+    /// What each vertex's `u v` is.
+    vertex_uv: &'static str,
     patches: usize,
     /// Surface evaluations: the flat test's (3 per tested chord) plus one per vertex.
     evaluations: u64,
@@ -404,6 +408,8 @@ fn tessellate(args: TessellateArgs) -> Result<(), Error> {
         target_triangles: args.target_triangles,
         triangles: out.mesh.triangle_count(),
         vertices: out.mesh.vertices.len(),
+        vertex_face: "the Bézier patch, by its index in the file (0-based)",
+        vertex_uv: "the point's (u, v) on that patch",
         patches: model.patches.len(),
         evaluations: out.evaluations,
         upload_bytes: upload,

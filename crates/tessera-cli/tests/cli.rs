@@ -52,7 +52,7 @@ fn writes_obj_ply_and_stats() {
     let tris = json["triangles"].as_u64().unwrap();
     let ply_text = std::fs::read_to_string(&ply).unwrap();
     assert!(ply_text.contains(&format!("element face {tris}")));
-    assert!(ply_text.contains("property float nx") && ply_text.contains("property uint patch"));
+    assert!(ply_text.contains("property float nx") && ply_text.contains("property uint face"));
     let obj_text = std::fs::read_to_string(&obj).unwrap();
     assert_eq!(
         obj_text.lines().filter(|l| l.starts_with("f ")).count() as u64,
@@ -95,6 +95,8 @@ fn stats_with_spec_keys(stats: &Path, extra: &[&str]) -> serde_json::Value {
     let spec = [
         "triangles",
         "vertices",
+        "vertex_face",
+        "vertex_uv",
         "patches",
         "evaluations",
         "upload_bytes",
@@ -467,9 +469,9 @@ fn gpu_and_cpu_backends_write_the_same_mesh() {
     assert!(e.starts_with("vertex 0"), "{e}");
 }
 
-/// Whether two ASCII PLY files (`x y z nx ny nz u v patch` vertices) hold the same mesh,
+/// Whether two ASCII PLY files (`x y z nx ny nz u v face` vertices) hold the same mesh,
 /// as the GPU and CPU backends must write it: the same header and faces, positions within
-/// 1e-5 of the model's diagonal, normals within 1e-3, the same (patch, u, v). Not byte for
+/// 1e-5 of the model's diagonal, normals within 1e-3, the same (face, u, v). Not byte for
 /// byte: a GPU may fuse a multiply and an add where the CPU rounds twice.
 fn same_ply_mesh(actual: &str, expected: &str) -> Result<(), String> {
     /// Header lines, vertex rows, face lines.
@@ -609,8 +611,29 @@ fn catmull_clark_adaptive_and_uniform_write_ply_and_stats() {
     assert_eq!(json["unmet"], 0);
     let text = std::fs::read_to_string(&ply).unwrap();
     assert!(text.contains(&format!("element face {}", json["triangles"])));
-    assert!(text.contains("property float nx") && text.contains("property uint patch"));
+    assert!(text.contains("property float nx") && text.contains("property uint face"));
     assert_eq!(json["first_split"], "search");
+    // Each vertex names its control face; a point on an edge between faces is one
+    // vertex per face, at one position.
+    let faces = json["faces"].as_u64().unwrap();
+    let (vertices, positions) = (
+        json["vertices"].as_u64().unwrap(),
+        json["positions"].as_u64().unwrap(),
+    );
+    assert!(positions < vertices && faces > 1, "{json}");
+    assert!(json["vertex_face"]
+        .as_str()
+        .unwrap()
+        .contains("control face"));
+    assert!(json["vertex_uv"].as_str().unwrap().contains("Bfr"));
+    let end = text.lines().position(|l| l == "end_header").unwrap();
+    let face_ids: Vec<u64> = text
+        .lines()
+        .skip(end + 1)
+        .take(vertices as usize)
+        .map(|l| l.rsplit(' ').next().unwrap().parse().unwrap())
+        .collect();
+    assert!(face_ids.iter().all(|&f| f < faces));
 
     // --first-split midpoint: the paper's subdivision, one quadtree per patch (L leaves
     // over P patches test L + (L - P) / 3 cells, each with a bound or the split proof),

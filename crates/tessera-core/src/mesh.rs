@@ -45,6 +45,20 @@ impl Mesh {
         self.indices.chunks_exact(3).map(|t| [t[0], t[1], t[2]])
     }
 
+    /// Distinct vertex positions (bit for bit): the surface points, where vertices also
+    /// count the copies of a point on a seam between faces
+    /// ([`OutVertex`](crate::gpu_types::OutVertex)).
+    pub fn distinct_positions(&self) -> usize {
+        let mut bits: Vec<[u32; 3]> = self
+            .vertices
+            .iter()
+            .map(|v| v.position.map(f32::to_bits))
+            .collect();
+        bits.sort_unstable();
+        bits.dedup();
+        bits.len()
+    }
+
     /// Axis-aligned bounds of the vertices.
     pub fn bounds(&self) -> (Vec3, Vec3) {
         self.positions().fold(

@@ -4,8 +4,8 @@ use tessera_core::gpu_types::{DrawIndexedIndirectArgs, OutVertex};
 use tessera_core::Mesh;
 use wgpu::util::DeviceExt;
 
-/// Vertex buffer ([`OutVertex`]: position, normal, `u v`, face id; 36 bytes,
-/// [`VERTEX_LAYOUT`](Self::VERTEX_LAYOUT)), `u32` index buffer, and one
+/// Vertex buffer ([`OutVertex`]: position, normal, `u v` on the face, face id; 36
+/// bytes, [`VERTEX_LAYOUT`](Self::VERTEX_LAYOUT)), `u32` index buffer, and one
 /// [`DrawIndexedIndirectArgs`] written by the GPU.
 ///
 /// Draw with `draw_indexed_indirect(buffers.indirect(), 0)`; nothing needs to be read
@@ -83,10 +83,13 @@ impl MeshBuffers {
     pub const POSITION_LOCATION: u32 = 0;
     /// Shader location of the normal (`vec3<f32>`).
     pub const NORMAL_LOCATION: u32 = 1;
-    /// Shader location of `u v` on the face (`vec2<f32>`).
+    /// Shader location of `u v` on the face (`vec2<f32>`): the Bézier patch's parameter,
+    /// or the Catmull-Clark control face's own, in OpenSubdiv Bfr's parameterisation
+    /// (Ptex's for quads), so a per-face texture or displacement reads it directly.
     pub const UV_LOCATION: u32 = 2;
     /// Shader location of the face id (`u32`): the Bézier patch, or the Catmull-Clark
-    /// patch (a control face's corner after the first subdivision step).
+    /// control face, by its index in the input. Every triangle lies in one face: a point
+    /// on an edge between faces has a vertex per face, at the same position.
     pub const FACE_LOCATION: u32 = 3;
 
     /// The vertex layout of [`OutVertex`] at the locations above.

@@ -7,7 +7,8 @@
 //! Shading: two-sided Lambert from a key and a fill light fixed relative to the camera,
 //! hemispheric ambient and a Blinn-Phong highlight on a neutral material; back faces (the
 //! side the normals point away from) in a second colour, so holes and flipped patches
-//! show; optionally each patch is tinted by its id.
+//! show; optionally each face (Bézier patch, Catmull-Clark control face) is tinted by its
+//! id.
 //!
 //! Wireframe: WebGPU has no `primitive_index` or barycentrics without extra features, and
 //! the triangles share indexed vertices, so the triangle edges cannot be found in the
@@ -138,7 +139,8 @@ impl Camera {
 pub struct RenderOptions {
     /// Draw the triangle edges over the surface (when [`MeshRenderer::wireframe_available`]).
     pub wireframe: bool,
-    /// Tint each patch by a colour hashed from its id, so patches can be told apart.
+    /// Tint each face (a Bézier patch, a Catmull-Clark control face: the vertices' face
+    /// id) by a colour hashed from its id, so faces can be told apart.
     pub patch_tint: bool,
     /// Base colour of the surface, linear RGB.
     pub base_color: [f32; 3],
