@@ -74,7 +74,7 @@ fn cc_sub_face_tiles(sides: u32) -> u32 {
         return select(2u, 3u, sides > 4u);
     }
     var r = 1u;
-    while (r + 1u) * (r + 1u) <= sides - 1u {
+    while (r + 1u) * (r + 1u) < sides {
         r += 1u;
     }
     return 1u + r;

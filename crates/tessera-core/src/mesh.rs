@@ -47,7 +47,7 @@ impl Mesh {
 
     /// Distinct vertex positions (bit for bit): the surface points, where vertices also
     /// count the copies of a point on a seam between faces
-    /// ([`OutVertex`](crate::gpu_types::OutVertex)).
+    /// ([`OutVertex`]).
     pub fn distinct_positions(&self) -> usize {
         let mut bits: Vec<[u32; 3]> = self
             .vertices

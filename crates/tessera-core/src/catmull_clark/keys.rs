@@ -188,6 +188,7 @@ mod tests {
     use crate::catmull_clark::gpu_model::patch_topology;
     use crate::catmull_clark::ControlMesh;
     use glam::DVec3;
+    use std::collections::HashMap;
 
     /// A quad, two triangles and a pentagon sharing edges: quad-internal edges, seams
     /// between faces and seams inside faces that are not quads.
@@ -218,19 +219,19 @@ mod tests {
         let mesh = mixed();
         let topo = patch_topology(&mesh);
         let n = 6;
-        // Per point: the charts its vertices name, and per chart key the face
-        // coordinates every patch gives it.
-        let mut charts: std::collections::HashMap<u64, Vec<u32>> = Default::default();
-        let mut coords: std::collections::HashMap<u64, (u32, [f32; 2])> = Default::default();
-        for p in 0..mesh.patch_count() {
+        // Per point: the charts around it; per chart key: the face coordinates every
+        // patch gives it.
+        let mut charts: HashMap<u64, Vec<u32>> = HashMap::new();
+        let mut coords: HashMap<u64, (u32, [f32; 2])> = HashMap::new();
+        for (p, tp) in topo.iter().enumerate() {
             for j in 0..=n {
                 for i in 0..=n {
                     let key = chart_key(&mesh, p, i, j, n);
-                    assert_eq!(key, topo_chart_key(&topo[p], p, i, j, n));
+                    assert_eq!(key, topo_chart_key(tp, p, i, j, n));
                     assert_eq!(point_of(key), point_key(&mesh, p, i, j, n));
                     assert_eq!(key_place(key), key_place(point_of(key)));
                     let uv = vertex_face_uv(&mesh, p, i, j, n);
-                    assert_eq!(uv, topo_face_uv(&topo[p], i, j, n));
+                    assert_eq!(uv, topo_face_uv(tp, i, j, n));
                     let before = coords.insert(key, uv);
                     assert!(
                         before.is_none_or(|b| b == uv),
@@ -245,37 +246,31 @@ mod tests {
             }
         }
         // Exactly as many chart keys per point as charts around it.
-        let mut per_point: std::collections::HashMap<u64, usize> = Default::default();
+        let mut per_point: HashMap<u64, usize> = HashMap::new();
         for &key in coords.keys() {
             *per_point.entry(point_of(key)).or_default() += 1;
         }
         for (point, c) in &charts {
             assert_eq!(per_point[point], c.len(), "{:?}", key_place(*point));
         }
-        // The quad's centre is one vertex; the pentagon's centre five, the triangles'
-        // three each; a point inside the quad's internal edge one; one on the edge between
-        // the quad and a triangle two.
-        let centre = |f: usize| mesh.quads[mesh.first_patch[f] as usize][2];
-        let count = |point: u32| charts[&point_key_of_vertex(point)].len();
-        assert_eq!(
-            [0, 1, 2, 3].map(|f| count(centre(f))),
-            [1, 3, 3, 5],
-            "face centres"
-        );
-        let (quad_inner, quad_seam) = (point_key(&mesh, 0, n, 2, n), point_key(&mesh, 0, 3, 0, n));
-        assert_eq!(charts[&quad_inner].len(), 1);
-        let edge_between = point_key(&mesh, 1, n, 3, n);
-        assert_eq!(charts[&edge_between].len(), 1, "quad-internal edge");
-        assert_eq!(charts[&quad_seam].len(), 1, "open boundary");
-        let shared = point_key(&mesh, 1, 3, 0, n);
-        assert_eq!(
-            charts[&shared].len(),
-            2,
-            "edge between the quad and a triangle"
-        );
+        // Face centres: the quad's one vertex, the triangles' three, the pentagon's five.
+        let centre = |f: usize| VERTEX | mesh.quads[mesh.first_patch[f] as usize][2] as u64;
+        assert_eq!([0, 1, 2, 3].map(|f| charts[&centre(f)].len()), [1, 3, 3, 5]);
+        // Patch 0 (the quad at vertex 0): its edge 1 runs inside the quad, its edge 0
+        // along the open boundary; patch 1's edge 0 is shared with a triangle.
+        let charts_at = |p: usize, i: u32, j: u32| charts[&point_key(&mesh, p, i, j, n)].len();
+        assert_eq!(charts_at(0, n, 2), 1, "inside the quad");
+        assert_eq!(charts_at(0, 3, 0), 1, "open boundary");
+        assert_eq!(charts_at(1, 3, 0), 2, "between the quad and a triangle");
     }
 
-    fn point_key_of_vertex(point: u32) -> u64 {
-        VERTEX | point as u64
+    #[test]
+    fn sub_face_tiles_are_bfr_s() {
+        let tiles: Vec<usize> = [3, 5, 9, 10, 17, 26, 64]
+            .iter()
+            .map(|&n| crate::catmull_clark::topology::sub_face_tiles(n))
+            .collect();
+        // Above 9 sides 1 + ⌊√(n − 1)⌋, at the perfect squares too.
+        assert_eq!(tiles, [2, 3, 3, 4, 5, 6, 8]);
     }
 }

@@ -300,7 +300,7 @@ pub fn sub_face_tiles(sides: usize) -> usize {
         2 + usize::from(sides > 4)
     } else {
         let mut r = 1;
-        while (r + 1) * (r + 1) <= sides - 1 {
+        while (r + 1) * (r + 1) < sides {
             r += 1;
         }
         1 + r
