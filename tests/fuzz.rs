@@ -196,7 +196,7 @@ pub fn gltf() -> Input {
 }
 
 /// A GLB written by the project's exporter (the CLI's `-o OUT.glb`): a cube with
-/// interleaved position, normal, uv and patch id, and `u32` indices.
+/// interleaved position, normal, uv and face id, and `u32` indices.
 pub fn glb_input() -> Input {
     let (positions, normals, indices) = split_cube();
     let mesh = tessera_core::Mesh {
