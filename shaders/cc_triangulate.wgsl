@@ -2,7 +2,8 @@
 // corners (no new vertices, no zero-area triangles; proof in
 // `tessera_core::catmull_clark::triangulate`, the twin). A polygon of m vertices gives
 // m - 2 triangles, so leaf l writes from index 3 · (poly_offsets[l] - 2 l). `finish`
-// writes the draw arguments and what the run needed.
+// writes the draw arguments and what the run needed (vertices too: the vertex buffer
+// holds fewer than the hash's items).
 
 #include "shared/cc_tess.wgsl"
 #include "shared/cc_poly.wgsl"
@@ -12,6 +13,8 @@
 @group(0) @binding(64) var<storage, read> vertices: array<OutVertex>;
 @group(0) @binding(65) var<storage, read_write> indices: array<u32>;
 @group(0) @binding(66) var<storage, read_write> draw: DrawIndexedIndirectArgs;
+// [0]: the output vertices the hash counted (`gather_points`).
+@group(0) @binding(32) var<storage, read> vertex_count: array<u32>;
 
 const CC_DIAGONAL_MARGIN: f32 = 1e-4;
 
@@ -119,8 +122,10 @@ fn finish() {
     let count = 3u * (polys - 2u * n);
     cc_state.need_poly = polys;
     cc_state.need_indices = count;
+    cc_state.vertices = vertex_count[0];
     var ok = atomicLoad(&cc_state.overflow) == 0u;
-    if polys > cc_params.poly_capacity || count > cc_params.index_capacity {
+    if polys > cc_params.poly_capacity || count > cc_params.index_capacity
+        || cc_state.vertices > cc_params.vertex_capacity {
         atomicOr(&cc_state.overflow, 1u);
         ok = false;
     }

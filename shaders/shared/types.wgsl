@@ -232,7 +232,7 @@ struct CcTessParams {
     search_leaf_capacity: u32,
     search_rounds: u32,
     points: u32,
-    pad2: u32,
+    vertex_capacity: u32,
 }
 
 // Uniform Catmull-Clark tessellation (`tessera_core::gpu_types::{CcUniformPatch,

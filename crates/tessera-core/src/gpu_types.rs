@@ -906,8 +906,8 @@ pub struct CcTessParams {
     pub search_rounds: u32,
     /// Level-1 points: where the edges' homes start in the homes (binding 67).
     pub points: u32,
-    /// Padding to a multiple of 16 bytes (`pad2` in WGSL).
-    pub pad: u32,
+    /// Output vertices the vertex buffer holds (binding 64).
+    pub vertex_capacity: u32,
 }
 
 /// Counters of the adaptive Catmull-Clark kernels, read back to check capacities. In
@@ -936,7 +936,7 @@ pub struct CcState {
     pub unmet: u32,
     /// Largest bound of any leaf (f32 bits; non-negative floats order as integers).
     pub max_bound_bits: u32,
-    /// Distinct output vertices.
+    /// Output vertices needed (one per point and chart), as the vertex hash counted them.
     pub vertices: u32,
     /// Leaves of every trial of the search so far (also beyond capacity).
     pub search_leaves: u32,

@@ -30,6 +30,7 @@ fn one_of_each() -> CcCapacities {
         leaves: 1,
         search_leaves: 1,
         poly: 1,
+        vertices: 1,
         indices: 1,
         hash_slots: 1,
     }

@@ -351,7 +351,7 @@ fn catmull_clark_parameters_and_counters_match_their_rust_twins() {
         ),
         ("search_rounds", offset_of!(CcTessParams, search_rounds)),
         ("points", offset_of!(CcTessParams, points)),
-        ("pad2", offset_of!(CcTessParams, pad)),
+        ("vertex_capacity", offset_of!(CcTessParams, vertex_capacity)),
     ];
     let members: Vec<(&str, usize)> = members
         .iter()

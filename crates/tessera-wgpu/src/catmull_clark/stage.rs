@@ -23,8 +23,8 @@
 //! skips the splits that cannot beat its best so far. Every trial's leaves are kept
 //! until the search is over, so the best split is not marked a second time.
 //!
-//! Capacities: every list, the leaves, polygons, indices and the hash table. Kernels
-//! never write past them; the counters record what the run needed. Each run's status
+//! Capacities: every list, the leaves, polygons, vertices, indices and the hash table.
+//! Kernels never write past them; the counters record what the run needed. Each run's status
 //! is read back without blocking, and the next [`CcStage::prepare`] that finds an
 //! overflow reallocates, so the run after it fits ([`CcStage::run_blocking`] grows and
 //! reruns at once).
@@ -176,6 +176,8 @@ pub struct CcCapacities {
     pub search_leaves: u32,
     /// Polygon vertices (leaf corners plus the points on their sides).
     pub poly: u32,
+    /// Output vertices (one per point and chart).
+    pub vertices: u32,
     /// Indices (3 per triangle).
     pub indices: u32,
     /// Slots of the vertex hash (rounded up to a power of two).
@@ -191,6 +193,7 @@ impl CcCapacities {
             leaves: 16 * p,
             search_leaves: 48 * p,
             poly: 96 * p,
+            vertices: 48 * p,
             indices: 3 * 96 * p,
             hash_slots: 2 * 64 * p,
         }
@@ -699,6 +702,7 @@ impl CcStage {
             leaves: grow(s.leaves, old.leaves),
             search_leaves: grow(s.search_leaves, old.search_leaves),
             poly: grow(s.need_poly, old.poly),
+            vertices: grow(s.vertices, old.vertices),
             indices: grow(s.need_indices, old.indices),
             hash_slots: old.hash_slots,
         };
@@ -907,7 +911,7 @@ fn tess_params(
         search_leaf_capacity: caps.search_leaves,
         search_rounds: params.first_split.search_rounds(),
         points,
-        pad: 0,
+        vertex_capacity: caps.vertices,
     }
 }
 
@@ -924,10 +928,11 @@ impl Buffers {
             leaves: caps.leaves.max(1),
             search_leaves: caps.search_leaves.max(1),
             poly: caps.poly.max(4),
+            vertices: caps.vertices.max(1),
             indices: caps.indices.max(3),
             hash_slots: caps.hash_slots.max(1).next_power_of_two(),
         };
-        // Eight hash items per leaf (`cc_leaf_keys`), and at most a vertex per item.
+        // Eight hash items per leaf (`cc_leaf_keys`), about half of them keys.
         let items = 8 * caps.leaves;
         for (what, bytes) in [
             ("cell list", caps.cells as u64 * 16),
@@ -937,7 +942,7 @@ impl Buffers {
             ("index", caps.indices as u64 * 4),
             (
                 "vertex",
-                items as u64 * std::mem::size_of::<OutVertex>() as u64,
+                caps.vertices as u64 * std::mem::size_of::<OutVertex>() as u64,
             ),
             ("vertex hash", caps.hash_slots as u64 * 12),
         ] {
@@ -1007,13 +1012,13 @@ impl Buffers {
             vertex_points: storage(
                 device,
                 "tessera cc vertex points",
-                point_bytes * items as u64,
+                point_bytes * caps.vertices as u64,
             ),
             vertex_count: storage(device, "tessera cc vertex count", 4),
             poly_offsets,
             poly_verts: storage(device, "tessera cc polygons", 16 * caps.poly as u64),
             hash: CcVertexHash::new(device, &kernels.hash, items, caps.hash_slots),
-            output: MeshBuffers::with_capacity(device, items, caps.indices),
+            output: MeshBuffers::with_capacity(device, caps.vertices, caps.indices),
             flag_scan,
             collect_scan,
             poly_scan,
