@@ -458,6 +458,43 @@ fn tiny_capacities_grow_to_the_same_mesh_and_runs_are_byte_identical() {
     );
     let cpu = tessellate_adaptive(&model, &params).expect("cpu");
     same_mesh(&grown, &cpu.mesh, size(&model)).expect("grown run equals the CPU reference");
+    // Room for everything but the vertices: the run says so, draws nothing, and one
+    // growth makes the same mesh.
+    let caps = CcCapacities {
+        vertices: 1,
+        ..stage.capacities()
+    };
+    let mut stage = CcStage::with_capacity(
+        &gpu.device,
+        &gpu.queue,
+        &kernels(&gpu),
+        &model,
+        &params,
+        caps,
+    )
+    .expect("stage");
+    let mut encoder = gpu.device.create_command_encoder(&Default::default());
+    stage
+        .prepare(&gpu.device, &gpu.queue, &mut encoder)
+        .expect("prepare");
+    gpu.queue.submit([encoder.finish()]);
+    let first = stage.read_status(&gpu.device).expect("status");
+    assert!(first.state.overflow != 0 && first.indices == 0, "{first:?}");
+    assert_eq!(
+        (first.state.vertices, first.hash.overflow),
+        (grown.vertices.len() as u32, 0)
+    );
+    let status = stage.run_blocking(&gpu.device, &gpu.queue).expect("grows");
+    assert_eq!(stage.growths(), 1);
+    let again = stage
+        .read_mesh(&gpu.device, &gpu.queue, &status)
+        .expect("mesh");
+    assert_eq!(again.indices, roomy.indices, "indices byte for byte");
+    assert_eq!(
+        bytemuck::cast_slice::<_, u8>(&again.vertices),
+        bytemuck::cast_slice::<_, u8>(&roomy.vertices),
+        "vertices byte for byte"
+    );
     gpu.check().expect("no wgpu errors");
 }
 
