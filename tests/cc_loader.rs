@@ -254,8 +254,9 @@ fn non_manifold_edges_are_reported_as_such() {
     );
 }
 
-/// Positions of a uniform tessellation (4 segments per patch side) that appear exactly
-/// `copies` times, to 1e-9: where sheets cut apart meet again.
+/// Positions of a uniform tessellation (4 segments per patch side) that lie in exactly
+/// `copies` sheets (connected sets of faces), to 1e-9: where sheets cut apart meet again.
+/// By sheet, not by vertex: within a sheet a point between faces is a vertex per face.
 fn shared_points(control: &tessera_core::catmull_clark::ControlMesh, copies: usize) -> usize {
     use tessera_core::catmull_clark::{tessellate_uniform, SurfaceModel, TREE_DEPTH};
     let model = SurfaceModel::new(
@@ -263,14 +264,36 @@ fn shared_points(control: &tessera_core::catmull_clark::ControlMesh, copies: usi
         TREE_DEPTH,
     );
     let mesh = tessellate_uniform(&model, 4).expect("uniform").mesh;
-    let mut seen = std::collections::HashMap::new();
+    // Sheets: faces joined through shared vertices.
+    let mut parent: Vec<usize> = (0..control.positions.len()).collect();
+    fn root(parent: &mut [usize], mut v: usize) -> usize {
+        while parent[v] != v {
+            parent[v] = parent[parent[v]];
+            v = parent[v];
+        }
+        v
+    }
+    for f in &control.faces {
+        for w in f.windows(2) {
+            let (a, b) = (
+                root(&mut parent, w[0] as usize),
+                root(&mut parent, w[1] as usize),
+            );
+            parent[a] = b;
+        }
+    }
+    let mut seen: std::collections::HashMap<[i64; 3], Vec<usize>> = Default::default();
     for v in &mesh.vertices {
         let p = glam::DVec3::from_array(v.position.map(f64::from));
-        *seen
+        let sheet = root(&mut parent, control.faces[v.face as usize][0] as usize);
+        let sheets = seen
             .entry((p * 1e6).round().to_array().map(|x| x as i64))
-            .or_insert(0) += 1;
+            .or_default();
+        if !sheets.contains(&sheet) {
+            sheets.push(sheet);
+        }
     }
-    seen.values().filter(|&&n| n == copies).count()
+    seen.values().filter(|s| s.len() == copies).count()
 }
 
 #[test]
