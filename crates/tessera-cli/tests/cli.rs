@@ -273,12 +273,12 @@ fn bad_parameters_fail_cleanly() {
         (
             &teapot,
             &["--first-split", "midpoint"],
-            "--split-non-manifold are Catmull-Clark options",
+            "--split-non-manifold, --no-creases and --backend are Catmull-Clark options",
         ),
         (
             &teapot,
             &["--split-non-manifold"],
-            "--split-non-manifold are Catmull-Clark options",
+            "--split-non-manifold, --no-creases and --backend are Catmull-Clark options",
         ),
         (
             &cube,
@@ -682,11 +682,11 @@ fn catmull_clark_adaptive_and_uniform_write_ply_and_stats() {
     let st = run_ok(
         tessera()
             .args(["tessellate"])
-            .arg(asset("opensubdiv/catmark_tent_creases0.obj")),
+            .arg(asset("opensubdiv/catmark_square_hedit0.obj")),
     );
     assert!(
         String::from_utf8_lossy(&st.stderr).contains("warning:")
-            && String::from_utf8_lossy(&st.stderr).contains("crease")
+            && String::from_utf8_lossy(&st.stderr).contains("edit")
     );
 }
 
@@ -844,12 +844,12 @@ fn catmull_clark_on_the_gpu_writes_what_the_cpu_writes_and_renders() {
         (
             &["--first-split", "midpoint"],
             "teaset/teapot",
-            "--split-non-manifold are Catmull-Clark options",
+            "--split-non-manifold, --no-creases and --backend are Catmull-Clark options",
         ),
         (
             &["--split-non-manifold"],
             "teaset/teapot",
-            "--split-non-manifold are Catmull-Clark options",
+            "--split-non-manifold, --no-creases and --backend are Catmull-Clark options",
         ),
     ] {
         let out = tessera()

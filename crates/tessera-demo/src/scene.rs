@@ -186,7 +186,7 @@ impl Params {
 pub enum Surface {
     Bezier(BezierModel),
     CatmullClark {
-        model: SurfaceModel,
+        model: Box<SurfaceModel>,
         /// The control points as loaded (after any cut along non-manifold edges).
         rest: Vec<DVec3>,
     },
@@ -228,7 +228,7 @@ impl Model {
                 bounds: (lo.as_vec3(), hi.as_vec3()),
                 warnings: control.warnings.clone(),
                 surface: Surface::CatmullClark {
-                    model,
+                    model: Box::new(model),
                     rest: control.positions,
                 },
             })

@@ -3,7 +3,7 @@
 
 use tessera_core::catmull_clark::gpu_model::{fixed_param, vertex_eval, CcGpuModel};
 use tessera_core::catmull_clark::vertex_hash::{number_keys, split_key};
-use tessera_core::catmull_clark::{load_surface, tessellate_uniform, SurfaceModel};
+use tessera_core::catmull_clark::{tessellate_uniform, SurfaceModel};
 use tessera_core::gpu_types::{CcHashStatus, CcVertexPoint, OutVertex};
 use tessera_wgpu::catmull_clark::{CcHashKernels, CcModelBuffers, CcVertexEval, CcVertexHash};
 use tessera_wgpu::headless::Gpu;
@@ -13,9 +13,17 @@ fn gpu() -> Gpu {
     Gpu::new().expect("a wgpu adapter (CI installs Mesa's lavapipe; see `cargo xtask test`)")
 }
 
+/// The smooth surface of a shipped mesh (creases dropped, as `--no-creases` does: the
+/// GPU stages take smooth surfaces).
 fn model(name: &str) -> SurfaceModel {
     let path = format!("{}/../../assets/{name}", env!("CARGO_MANIFEST_DIR"));
-    load_surface(std::path::Path::new(&path)).expect("model loads")
+    let mut control =
+        tessera_core::io::load_control_mesh(std::path::Path::new(&path)).expect("model loads");
+    control.drop_creases("--no-creases");
+    SurfaceModel::new(
+        tessera_core::catmull_clark::PatchMesh::new(&control).expect("valid mesh"),
+        tessera_core::catmull_clark::TREE_DEPTH,
+    )
 }
 
 /// Grid points of every surface patch, plus the adaptive grid's points nearest each

@@ -40,9 +40,17 @@ fn kernels(gpu: &Gpu) -> Kernels {
     Kernels::new(&gpu.device)
 }
 
+/// The smooth surface of a shipped mesh (creases dropped, as `--no-creases` does: the
+/// GPU stages take smooth surfaces).
 fn model(name: &str) -> SurfaceModel {
     let path = format!("{}/../../assets/{name}", env!("CARGO_MANIFEST_DIR"));
-    load_surface(std::path::Path::new(&path)).expect("model loads")
+    let mut control =
+        tessera_core::io::load_control_mesh(std::path::Path::new(&path)).expect("model loads");
+    control.drop_creases("--no-creases");
+    SurfaceModel::new(
+        tessera_core::catmull_clark::PatchMesh::new(&control).expect("valid mesh"),
+        tessera_core::catmull_clark::TREE_DEPTH,
+    )
 }
 
 fn size(model: &SurfaceModel) -> f64 {
@@ -828,4 +836,41 @@ fn gpu_vertices_lie_at_their_face_coordinates_and_seam_copies_agree() {
             assert_eq!(r.inner_seam_points > 0, not_quads, "{name} {what}");
         }
     }
+}
+
+#[test]
+fn a_creased_surface_is_refused_by_both_stages() {
+    let gpu = gpu();
+    let kernels = kernels(&gpu);
+    let path = format!(
+        "{}/../../assets/opensubdiv/catmark_cube_creases1.obj",
+        env!("CARGO_MANIFEST_DIR")
+    );
+    let creased = load_surface(std::path::Path::new(&path)).expect("model loads");
+    assert!(creased.mesh.has_creases());
+    let params = CcParams {
+        tolerance: Tolerance::Relative(1e-2),
+        max_depth: 6,
+        first_split: Default::default(),
+        leaf_bound: Default::default(),
+    };
+    let e = CcStage::new(&gpu.device, &gpu.queue, &kernels, &creased, &params).err();
+    assert!(matches!(e, Some(tessera_wgpu::Error::Creased)), "{e:?}");
+    let line = e.unwrap().to_string();
+    assert!(
+        line.contains("--backend cpu") && line.contains("--no-creases"),
+        "{line}"
+    );
+    let e = tessera_wgpu::catmull_clark::CcUniformStage::new(
+        &gpu.device,
+        &gpu.queue,
+        &kernels,
+        &creased,
+        &UniformParams { segments: 2 },
+    )
+    .err();
+    assert!(matches!(e, Some(tessera_wgpu::Error::Creased)), "{e:?}");
+    // Its smooth surface is taken.
+    let smooth = model("opensubdiv/catmark_cube_creases1.obj");
+    assert!(CcStage::new(&gpu.device, &gpu.queue, &kernels, &smooth, &params).is_ok());
 }
