@@ -192,9 +192,10 @@ fn tessellate(args: TessellateArgs) -> Result<(), Error> {
         || args.first_split.is_some()
         || args.leaf_bound.is_some()
         || args.split_non_manifold
+        || args.no_creases
     {
         return Err(CoreError::Param(
-            "--tolerance, --tolerance-rel, --level, --first-split, --leaf-bound and --split-non-manifold are Catmull-Clark options; Bézier inputs take --threshold and --segments".into(),
+            "--tolerance, --tolerance-rel, --level, --first-split, --leaf-bound, --split-non-manifold and --no-creases are Catmull-Clark options; Bézier inputs take --threshold and --segments".into(),
         )
         .into());
     }

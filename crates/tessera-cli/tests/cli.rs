@@ -273,12 +273,17 @@ fn bad_parameters_fail_cleanly() {
         (
             &teapot,
             &["--first-split", "midpoint"],
-            "--split-non-manifold, --no-creases and --backend are Catmull-Clark options",
+            "--split-non-manifold and --no-creases are Catmull-Clark options",
         ),
         (
             &teapot,
             &["--split-non-manifold"],
-            "--split-non-manifold, --no-creases and --backend are Catmull-Clark options",
+            "--split-non-manifold and --no-creases are Catmull-Clark options",
+        ),
+        (
+            &teapot,
+            &["--no-creases"],
+            "--split-non-manifold and --no-creases are Catmull-Clark options",
         ),
         (
             &cube,
