@@ -12,7 +12,7 @@ use tessera_core::catmull_clark::{
 use tessera_core::measure::{closest_point_on_triangle, measure_error};
 use tessera_core::watertight::check_watertight;
 use tessera_core::Tolerance;
-use tessera_tests::{cc_model, control_mesh, fan};
+use tessera_tests::{cc_model, control_mesh, fan, open_boundary};
 
 fn diag(rel: &str) -> f64 {
     control_mesh(rel).bbox_diag()
@@ -294,32 +294,6 @@ fn the_split_proof_never_exceeds_the_bound() {
         4 * useful > cells,
         "the proof is within 2× of the bound on {useful} of {cells}"
     );
-}
-
-/// Boundary curves of the surface, densely sampled (for the watertightness check).
-fn open_boundary(model: &SurfaceModel) -> Vec<Vec<DVec3>> {
-    let mesh = &model.mesh;
-    let mut lines = Vec::new();
-    for p in mesh.surface_patches() {
-        for k in 0..4 {
-            let e = mesh.quad_edges[p][k] as usize;
-            let across_hole = mesh.edge_uses[e] == 2
-                && (0..mesh.patch_count())
-                    .any(|q| q != p && mesh.hole[q] && mesh.quad_edges[q].contains(&(e as u32)));
-            if mesh.edge_uses[e] == 1 || across_hole {
-                lines.push(
-                    (0..=256)
-                        .map(|i| {
-                            let t = i as f64 / 256.0;
-                            let (u, v) = [(t, 0.0), (1.0, t), (1.0 - t, 1.0), (0.0, 1.0 - t)][k];
-                            model.eval(p, u, v).position
-                        })
-                        .collect(),
-                );
-            }
-        }
-    }
-    lines
 }
 
 #[test]

@@ -9,7 +9,7 @@ use tessera_core::catmull_clark::{
 use tessera_core::measure::measure_error;
 use tessera_core::watertight::check_watertight;
 use tessera_core::Tolerance;
-use tessera_tests::{cc_model, control_mesh};
+use tessera_tests::{cc_model, control_mesh, open_boundary, surface_of};
 
 /// Quads, triangles and a pentagon; boundaries of both rules; semi-sharp, fractional
 /// and infinite creases; Chaikin's rule; corners; darts; smooth triangles.
@@ -77,10 +77,7 @@ fn the_creases_change_the_surface_and_the_measure_sees_it() {
     let creased = cc_model(&name);
     let mut control = control_mesh(&name);
     control.drop_creases("--no-creases");
-    let smooth = SurfaceModel::new(
-        tessera_core::catmull_clark::PatchMesh::new(&control).unwrap(),
-        tessera_core::catmull_clark::TREE_DEPTH,
-    );
+    let smooth = surface_of(&control);
     let tol = 1e-3 * control.bbox_diag();
     let out = tessellate_adaptive(&smooth, &params(tol)).unwrap();
     let e = measure_error(
@@ -89,28 +86,6 @@ fn the_creases_change_the_surface_and_the_measure_sees_it() {
         creased.mesh.control_diag,
     );
     assert!(e.max_error > 10.0 * tol, "{}", e.max_error);
-}
-
-/// Open boundary curves of the surface, densely sampled.
-fn open_boundary(model: &SurfaceModel) -> Vec<Vec<DVec3>> {
-    let mesh = &model.mesh;
-    let mut lines = Vec::new();
-    for p in mesh.surface_patches() {
-        for k in 0..4 {
-            if mesh.edge_uses[mesh.quad_edges[p][k] as usize] == 1 {
-                lines.push(
-                    (0..=256)
-                        .map(|i| {
-                            let t = i as f64 / 256.0;
-                            let (u, v) = [(t, 0.0), (1.0, t), (1.0 - t, 1.0), (0.0, 1.0 - t)][k];
-                            model.eval(p, u, v).position
-                        })
-                        .collect(),
-                );
-            }
-        }
-    }
-    lines
 }
 
 #[test]
@@ -150,10 +125,7 @@ fn a_regular_patch_beside_an_infinitely_sharp_crease_is_one_bspline() {
     };
     assert_eq!(edges.len(), 12);
     control.creases = edges.into_iter().map(|e| (e, 10.0)).collect();
-    let model = SurfaceModel::new(
-        tessera_core::catmull_clark::PatchMesh::new(&control).unwrap(),
-        tessera_core::catmull_clark::TREE_DEPTH,
-    );
+    let model = surface_of(&control);
     assert!(model.patches.iter().all(|p| p.is_regular()));
     for p in model.mesh.surface_patches() {
         // In the plane of its control face.
@@ -168,10 +140,7 @@ fn a_regular_patch_beside_an_infinitely_sharp_crease_is_one_bspline() {
     }
     // Semi-sharp instead: not flat, and its patches are split until the sharpness decays.
     control.creases.iter_mut().for_each(|c| c.1 = 2.5);
-    let model = SurfaceModel::new(
-        tessera_core::catmull_clark::PatchMesh::new(&control).unwrap(),
-        tessera_core::catmull_clark::TREE_DEPTH,
-    );
+    let model = surface_of(&control);
     assert!(model.patches.iter().all(|p| !p.is_regular()));
 }
 

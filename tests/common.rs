@@ -73,11 +73,50 @@ pub fn control_mesh(rel: &str) -> tessera_core::catmull_clark::ControlMesh {
 
 /// A shipped Catmull-Clark mesh with its patches built.
 pub fn cc_model(rel: &str) -> tessera_core::catmull_clark::SurfaceModel {
+    surface_of(&control_mesh(rel))
+}
+
+/// The smooth surface of a shipped Catmull-Clark mesh (creases and corners dropped, as
+/// `--no-creases` does): what the GPU stages take.
+pub fn smooth_cc_model(rel: &str) -> tessera_core::catmull_clark::SurfaceModel {
+    let mut control = control_mesh(rel);
+    control.drop_creases("--no-creases");
+    surface_of(&control)
+}
+
+/// A control mesh's patches, built.
+pub fn surface_of(
+    control: &tessera_core::catmull_clark::ControlMesh,
+) -> tessera_core::catmull_clark::SurfaceModel {
     use tessera_core::catmull_clark::{PatchMesh, SurfaceModel, TREE_DEPTH};
-    SurfaceModel::new(
-        PatchMesh::new(&control_mesh(rel)).expect("valid"),
-        TREE_DEPTH,
-    )
+    SurfaceModel::new(PatchMesh::new(control).expect("valid"), TREE_DEPTH)
+}
+
+/// The open boundary curves of a surface (patch sides no other patch shares, and sides
+/// against a hole), densely sampled: where a watertight mesh may have boundary edges.
+pub fn open_boundary(model: &tessera_core::catmull_clark::SurfaceModel) -> Vec<Vec<glam::DVec3>> {
+    let mesh = &model.mesh;
+    let mut lines = Vec::new();
+    for p in mesh.surface_patches() {
+        for k in 0..4 {
+            let e = mesh.quad_edges[p][k] as usize;
+            let across_hole = mesh.edge_uses[e] == 2
+                && (0..mesh.patch_count())
+                    .any(|q| q != p && mesh.hole[q] && mesh.quad_edges[q].contains(&(e as u32)));
+            if mesh.edge_uses[e] == 1 || across_hole {
+                lines.push(
+                    (0..=256)
+                        .map(|i| {
+                            let t = i as f64 / 256.0;
+                            let (u, v) = [(t, 0.0), (1.0, t), (1.0 - t, 1.0), (0.0, 1.0 - t)][k];
+                            model.eval(p, u, v).position
+                        })
+                        .collect(),
+                );
+            }
+        }
+    }
+    lines
 }
 
 /// A fan of `quads` quads around a centre vertex, wavy so that nothing is planar: closed

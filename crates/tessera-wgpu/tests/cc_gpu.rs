@@ -13,17 +13,9 @@ fn gpu() -> Gpu {
     Gpu::new().expect("a wgpu adapter (CI installs Mesa's lavapipe; see `cargo xtask test`)")
 }
 
-/// The smooth surface of a shipped mesh (creases dropped, as `--no-creases` does: the
-/// GPU stages take smooth surfaces).
+/// The smooth surface of a shipped mesh: the GPU stages take smooth surfaces.
 fn model(name: &str) -> SurfaceModel {
-    let path = format!("{}/../../assets/{name}", env!("CARGO_MANIFEST_DIR"));
-    let mut control =
-        tessera_core::io::load_control_mesh(std::path::Path::new(&path)).expect("model loads");
-    control.drop_creases("--no-creases");
-    SurfaceModel::new(
-        tessera_core::catmull_clark::PatchMesh::new(&control).expect("valid mesh"),
-        tessera_core::catmull_clark::TREE_DEPTH,
-    )
+    tessera_tests::smooth_cc_model(name)
 }
 
 /// Grid points of every surface patch, plus the adaptive grid's points nearest each

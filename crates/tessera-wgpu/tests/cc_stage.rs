@@ -40,17 +40,9 @@ fn kernels(gpu: &Gpu) -> Kernels {
     Kernels::new(&gpu.device)
 }
 
-/// The smooth surface of a shipped mesh (creases dropped, as `--no-creases` does: the
-/// GPU stages take smooth surfaces).
+/// The smooth surface of a shipped mesh: the GPU stages take smooth surfaces.
 fn model(name: &str) -> SurfaceModel {
-    let path = format!("{}/../../assets/{name}", env!("CARGO_MANIFEST_DIR"));
-    let mut control =
-        tessera_core::io::load_control_mesh(std::path::Path::new(&path)).expect("model loads");
-    control.drop_creases("--no-creases");
-    SurfaceModel::new(
-        tessera_core::catmull_clark::PatchMesh::new(&control).expect("valid mesh"),
-        tessera_core::catmull_clark::TREE_DEPTH,
-    )
+    tessera_tests::smooth_cc_model(name)
 }
 
 fn size(model: &SurfaceModel) -> f64 {
