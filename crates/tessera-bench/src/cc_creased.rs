@@ -54,7 +54,8 @@ const DETAILED: [&str; 3] = ["catmark_car", "catmark_bishop", "catmark_rook"];
 pub fn run(assets: &Path, out_dir: &Path, quick: bool, filter: Option<&str>) {
     let mut rows = Vec::new();
     let mut refused = Vec::new();
-    for path in creased_shapes(&assets.join("opensubdiv")) {
+    for rel in tessera_tests::osd::sharp_shapes() {
+        let path = assets.join(rel);
         let name = path.file_stem().unwrap().to_string_lossy().to_string();
         if filter.is_some_and(|f| !name.contains(f)) {
             continue;
@@ -181,23 +182,6 @@ struct Results {
     rows: Vec<Row>,
     /// Shapes the topology check refuses (with the reason).
     refused: Vec<Refused>,
-}
-
-/// The shipped OpenSubdiv shapes with crease or corner tags, by name.
-fn creased_shapes(dir: &Path) -> Vec<std::path::PathBuf> {
-    let mut out: Vec<_> = std::fs::read_dir(dir)
-        .expect("assets")
-        .filter_map(|e| e.ok().map(|e| e.path()))
-        .filter(|p| p.extension().is_some_and(|e| e == "obj"))
-        .filter(|p| {
-            std::fs::read_to_string(p).is_ok_and(|t| {
-                t.lines()
-                    .any(|l| l.starts_with("t crease") || l.starts_with("t corner"))
-            })
-        })
-        .collect();
-    out.sort();
-    out
 }
 
 /// Largest distance from OpenSubdiv's surface, relative to the bounding-box diagonal,
