@@ -49,7 +49,7 @@
 //! depend on the order of work; then every leaf is within ε of its own triangles, with
 //! fewer triangles than the flatness bound alone makes (`bench/RESULTS.md`).
 
-use std::collections::HashMap;
+use rustc_hash::FxHashMap as HashMap;
 
 use glam::DVec3;
 use serde::Serialize;
@@ -279,7 +279,7 @@ impl<'a> Evaluator<'a> {
             bounds: 0,
             proven: 0,
             triangle_bounds: 0,
-            points: HashMap::new(),
+            points: HashMap::default(),
         }
     }
 
@@ -458,7 +458,7 @@ fn tessellate_with_splits(
     // Every polygon vertex evaluated once per point; one output vertex per point and
     // chart, its position and normal copied from the point's. Ids in the order of the
     // chart keys, so the numbering does not depend on the order of work.
-    let mut used: HashMap<u64, (usize, u32, u32)> = HashMap::new();
+    let mut used: HashMap<u64, (usize, u32, u32)> = HashMap::default();
     for (&(p, _), (poly, _)) in leaves.iter().zip(&polygons) {
         for &(a, b) in poly {
             eval.get(p, a, b);

@@ -3,7 +3,7 @@
 //! shorter diagonal, vertices shared across patch edges through the canonical keys
 //! inside a chart, copied (one evaluation) across chart seams ([`super::keys`]).
 
-use std::collections::HashMap;
+use rustc_hash::FxHashMap as HashMap;
 
 use glam::DVec3;
 
@@ -29,8 +29,8 @@ pub fn tessellate_uniform(model: &SurfaceModel, n: u32) -> Result<CcTessellation
         &format!("{n} segments per patch side"),
     )?;
     // Vertex ids by chart key; surface points by point key.
-    let mut keys: HashMap<u64, u32> = HashMap::new();
-    let mut points: HashMap<u64, SurfacePoint> = HashMap::new();
+    let mut keys: HashMap<u64, u32> = HashMap::default();
+    let mut points: HashMap<u64, SurfacePoint> = HashMap::default();
     let mut out = CcTessellation::default();
     let mut grid = vec![0u32; ((n + 1) * (n + 1)) as usize];
     for p in mesh.surface_patches() {
