@@ -71,6 +71,51 @@ const MODELS: [(&str, bool); 11] = [
     ("opensubdiv/catmark_xord_interior.obj", false),
 ];
 
+/// Uniform tessellation by segment count: triangles, measured error (against `samples`)
+/// and median time of each grid `n × n` per patch, each measured once, when first asked.
+pub struct UniformLadder<'a> {
+    model: &'a SurfaceModel,
+    samples: &'a [glam::DVec3],
+    repeats: usize,
+    grids: Vec<(usize, ErrorStats, f64)>,
+}
+
+impl<'a> UniformLadder<'a> {
+    pub fn new(model: &'a SurfaceModel, samples: &'a [glam::DVec3], repeats: usize) -> Self {
+        UniformLadder {
+            model,
+            samples,
+            repeats,
+            grids: Vec::new(),
+        }
+    }
+
+    /// The grid of `n` segments per patch side.
+    pub fn at(&mut self, n: u32) -> (usize, ErrorStats, f64) {
+        while self.grids.len() < n as usize {
+            let k = self.grids.len() as u32 + 1;
+            let (ms, t) = crate::median_time(self.repeats, || {
+                tessellate_uniform(self.model, k).expect("uniform")
+            });
+            self.grids.push((
+                t.mesh.triangle_count(),
+                measure_error(self.samples, &t.mesh, self.model.mesh.control_diag),
+                ms,
+            ));
+        }
+        self.grids[n as usize - 1]
+    }
+
+    /// The fewest segments (at most 256) whose measured max error is at or under `error`.
+    pub fn segments_within(&mut self, error: f64) -> u32 {
+        let mut n = 1;
+        while self.at(n).1.max_error > error && n < 256 {
+            n += 1;
+        }
+        n
+    }
+}
+
 pub fn run(assets: &Path, out_dir: &Path, quick: bool) {
     let tolerances: &[f64] = if quick { &[3e-3] } else { &[3e-3, 1e-3, 3e-4] };
     let repeats = if quick { 1 } else { 3 };
@@ -84,21 +129,7 @@ pub fn run(assets: &Path, out_dir: &Path, quick: bool) {
         let cut = control.split_non_manifold().expect("sheets that meet");
         let model = SurfaceModel::new(PatchMesh::new(&control).expect("valid mesh"), TREE_DEPTH);
         let samples = surface_samples(&model, 32);
-        // Uniform error by segment count, measured once per n as needed.
-        let mut uniform: Vec<(usize, ErrorStats, f64)> = Vec::new();
-        let mut uniform_at = |n: u32| -> (usize, ErrorStats, f64) {
-            while uniform.len() < n as usize {
-                let k = uniform.len() as u32 + 1;
-                let (ms, t) =
-                    crate::median_time(repeats, || tessellate_uniform(&model, k).expect("uniform"));
-                uniform.push((
-                    t.mesh.triangle_count(),
-                    measure_error(&samples, &t.mesh, model.mesh.control_diag),
-                    ms,
-                ));
-            }
-            uniform[n as usize - 1]
-        };
+        let mut uniform = UniformLadder::new(&model, &samples, repeats);
         for &rel in tolerances {
             let params = CcParams {
                 tolerance: Tolerance::Relative(rel),
@@ -111,16 +142,10 @@ pub fn run(assets: &Path, out_dir: &Path, quick: bool) {
                 tessellate_adaptive(&model, &params).expect("adaptive")
             });
             let e = measure_error(&samples, &out.mesh, model.mesh.control_diag);
-            let mut n = 1;
-            while uniform_at(n).1.max_error > e.max_error && n < 256 {
-                n += 1;
-            }
-            let (ut, ue, ums) = uniform_at(n);
-            let mut m = 1;
-            while uniform_at(m).1.max_error > tolerance && m < 256 {
-                m += 1;
-            }
-            let ut_tol = uniform_at(m).0;
+            let n = uniform.segments_within(e.max_error);
+            let (ut, ue, ums) = uniform.at(n);
+            let m = uniform.segments_within(tolerance);
+            let ut_tol = uniform.at(m).0;
             let midpoint = CcParams {
                 first_split: FirstSplit::Midpoint,
                 leaf_bound: Default::default(),
@@ -131,10 +156,7 @@ pub fn run(assets: &Path, out_dir: &Path, quick: bool) {
             });
             let paper_error =
                 measure_error(&samples, &paper.mesh, model.mesh.control_diag).max_error;
-            let mut k = 1;
-            while uniform_at(k).1.max_error > paper_error && k < 256 {
-                k += 1;
-            }
+            let k = uniform.segments_within(paper_error);
             let paper_triangles = paper.mesh.triangle_count();
             let own_params = CcParams {
                 leaf_bound: LeafBound::Triangles,
@@ -144,10 +166,7 @@ pub fn run(assets: &Path, out_dir: &Path, quick: bool) {
                 tessellate_adaptive(&model, &own_params).expect("own triangles")
             });
             let own_error = measure_error(&samples, &own.mesh, model.mesh.control_diag).max_error;
-            let mut j = 1;
-            while uniform_at(j).1.max_error > own_error && j < 256 {
-                j += 1;
-            }
+            let j = uniform.segments_within(own_error);
             let row = Row {
                 model: format!(
                     "{}{}",
@@ -173,11 +192,11 @@ pub fn run(assets: &Path, out_dir: &Path, quick: bool) {
                 ratio_at_tolerance: out.mesh.triangle_count() as f64 / ut_tol as f64,
                 midpoint_triangles: paper_triangles,
                 midpoint_time_ms: midpoint_ms,
-                midpoint_ratio_to_uniform: paper_triangles as f64 / uniform_at(k).0 as f64,
+                midpoint_ratio_to_uniform: paper_triangles as f64 / uniform.at(k).0 as f64,
                 own_triangles: own.mesh.triangle_count(),
                 own_max_error: own_error,
                 own_time_ms: own_ms,
-                own_ratio_to_uniform: own.mesh.triangle_count() as f64 / uniform_at(j).0 as f64,
+                own_ratio_to_uniform: own.mesh.triangle_count() as f64 / uniform.at(j).0 as f64,
             };
             eprintln!(
                 "cc {} {rel:e}: {} tris (max {:.3e}), uniform n={n} {} tris (max {:.3e}): {:.3}×; own triangles {} ({:.3}×)",

@@ -11,11 +11,10 @@ use std::time::Instant;
 
 use serde::Serialize;
 use tessera_core::catmull_clark::{
-    patch_mesh, surface_samples, tessellate_adaptive, tessellate_uniform, CcParams, SurfaceModel,
-    MAX_DEPTH, TREE_DEPTH,
+    patch_mesh, surface_samples, tessellate_adaptive, CcParams, SurfaceModel, MAX_DEPTH, TREE_DEPTH,
 };
 use tessera_core::io::load_control_mesh;
-use tessera_core::measure::{measure_error, ErrorStats};
+use tessera_core::measure::measure_error;
 use tessera_core::Tolerance;
 
 #[derive(Serialize)]
@@ -88,7 +87,8 @@ pub fn run(assets: &Path, out_dir: &Path, quick: bool, filter: Option<&str>) {
         };
         let osd = opensubdiv_agreement(&name, &control, &model, if quick { 100 } else { 400 });
         let samples = surface_samples(&model, 32);
-        let mut uniform: Vec<(usize, ErrorStats)> = Vec::new();
+        // The grids are only counted and measured here: one run each.
+        let mut uniform = crate::cc::UniformLadder::new(&model, &samples, 1);
         for &rel in tolerances {
             let params = CcParams {
                 tolerance: Tolerance::Relative(rel),
@@ -101,22 +101,8 @@ pub fn run(assets: &Path, out_dir: &Path, quick: bool, filter: Option<&str>) {
                 tessellate_adaptive(&model, &params).expect("adaptive")
             });
             let e = measure_error(&samples, &out.mesh, model.mesh.control_diag);
-            let mut n = 1;
-            loop {
-                while uniform.len() < n as usize {
-                    let k = uniform.len() as u32 + 1;
-                    let t = tessellate_uniform(&model, k).expect("uniform");
-                    uniform.push((
-                        t.mesh.triangle_count(),
-                        measure_error(&samples, &t.mesh, model.mesh.control_diag),
-                    ));
-                }
-                if uniform[n as usize - 1].1.max_error <= e.max_error || n >= 256 {
-                    break;
-                }
-                n += 1;
-            }
-            let (ut, ue) = uniform[n as usize - 1];
+            let n = uniform.segments_within(e.max_error);
+            let (ut, ue, _) = uniform.at(n);
             let smooth_out = tessellate_adaptive(&smooth, &params).expect("smooth");
             let row = Row {
                 model: name.clone(),
