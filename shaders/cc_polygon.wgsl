@@ -174,7 +174,7 @@ fn side_walk(cell: CcCell, s: u32) {
         return;
     }
     let q = across >> 2u;
-    let split = cc_trial_split(best[q].y);
+    let split = cc_trial_split(cc_first_trial(q));
     // Edges 0 and 2 of the patch across run along its u, 1 and 3 along its v.
     let k = select(split.y, split.x, ((across & 3u) % 2u) == 0u);
     let step = n / k;

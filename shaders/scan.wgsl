@@ -1,7 +1,10 @@
-// Exclusive prefix sum of u32, in place, one level of a multi-level scan (the host
-// records the levels). `scan_blocks`: each workgroup scans its block of
-// BLOCK values and writes the block's total to `sums`; `add_offsets` adds the
-// scanned block totals back. Twin of `tessera_core::scan::{scan_blocks, add_offsets}`.
+// Exclusive prefix sum of u32, in place, in two dispatches whatever the length (a
+// fixed script: the number of dispatches never depends on the data). The values are cut
+// into GROUPS chunks of whole blocks; `reduce` sums each chunk, `scan_chunks` adds up the
+// sums of the chunks before its own and scans its chunk block by block. Two lists can be
+// scanned by the same two dispatches, each in half the chunks. No workgroup
+// waits on another: WGSL promises no forward progress between workgroups, which rules
+// out single-pass look-back scans. Twin: `tessera_core::scan::exclusive_scan`.
 
 // A workgroup scans a block of WORKGROUP × PER_LANE values, each lane PER_LANE
 // consecutive ones serially. Few lanes and few barriers: a CPU device runs a workgroup
@@ -10,6 +13,8 @@
 const WORKGROUP: u32 = 64u;
 const PER_LANE: u32 = 8u;
 const BLOCK: u32 = WORKGROUP * PER_LANE;
+// `tessera_core::scan::SCAN_GROUPS`.
+const GROUPS: u32 = 256u;
 
 struct ScanParams {
     n: u32,
@@ -17,107 +22,139 @@ struct ScanParams {
     // 0xffffffff: all n. Lists sized for their capacity are then scanned only as far as
     // they are filled; values beyond are left as they are.
     live_slot: u32,
-    // Levels of the whole scan (read by `dispatch_args` on the first level).
-    levels: u32,
+    // The second list, in `data_b` (its live count in `live_b`), when `lists` is 2.
+    n_b: u32,
+    live_slot_b: u32,
+    lists: u32,
 }
 
 @group(0) @binding(0) var<uniform> scan: ScanParams;
 @group(0) @binding(1) var<storage, read_write> data: array<u32>;
 @group(0) @binding(2) var<storage, read_write> sums: array<u32>;
 @group(0) @binding(3) var<storage, read> live: array<u32>;
-// Indirect dispatch arguments, three words per level.
-@group(0) @binding(4) var<storage, read_write> level_args: array<u32>;
+@group(0) @binding(4) var<storage, read_write> data_b: array<u32>;
+@group(0) @binding(5) var<storage, read> live_b: array<u32>;
 
-fn scan_len() -> u32 {
-    if scan.live_slot == 0xffffffffu {
-        return scan.n;
+
+// The chunks of each list, and the list of workgroup g.
+fn list_groups() -> u32 {
+    return GROUPS / scan.lists;
+}
+
+fn list_of(g: u32) -> u32 {
+    return g / list_groups();
+}
+
+fn scan_len(list: u32) -> u32 {
+    if list == 0u {
+        if scan.live_slot == 0xffffffffu {
+            return scan.n;
+        }
+        return min(scan.n, live[scan.live_slot] + 1u);
     }
-    return min(scan.n, live[scan.live_slot] + 1u);
+    if scan.live_slot_b == 0xffffffffu {
+        return scan.n_b;
+    }
+    return min(scan.n_b, live_b[scan.live_slot_b] + 1u);
+}
+
+fn load(list: u32, i: u32) -> u32 {
+    if list == 0u {
+        return data[i];
+    }
+    return data_b[i];
+}
+
+fn store(list: u32, i: u32, v: u32) {
+    if list == 0u {
+        data[i] = v;
+    } else {
+        data_b[i] = v;
+    }
+}
+
+// Blocks per chunk: the fewest that cover n in the list's chunks.
+fn chunk_blocks(n: u32) -> u32 {
+    let per_chunk = BLOCK * list_groups();
+    return max((n + per_chunk - 1u) / per_chunk, 1u);
 }
 
 var<workgroup> lane_totals: array<u32, WORKGROUP>;
-
-fn block_index(wg: vec3u, groups: vec3u) -> u32 {
-    return wg.x + wg.y * groups.x;
-}
+var<workgroup> carry: u32;
 
 @compute @workgroup_size(64)
-fn scan_blocks(
-    @builtin(workgroup_id) wg: vec3u,
-    @builtin(num_workgroups) groups: vec3u,
-    @builtin(local_invocation_index) lid: u32,
-) {
-    let block = block_index(wg, groups);
-    let n = scan_len();
-    // Uniform per workgroup: a block wholly past the live values does nothing.
-    if block * BLOCK >= n && block > 0u {
-        return;
-    }
-    let i0 = block * BLOCK + PER_LANE * lid;
-    var values: array<u32, PER_LANE>;
+fn reduce(@builtin(workgroup_id) wg: vec3u, @builtin(local_invocation_index) lid: u32) {
+    let list = list_of(wg.x);
+    let g = wg.x % list_groups();
+    let n = scan_len(list);
+    let start = g * chunk_blocks(n) * BLOCK;
+    let end = min(start + chunk_blocks(n) * BLOCK, n);
     var total = 0u;
-    for (var k = 0u; k < PER_LANE; k++) {
-        if i0 + k < n {
-            values[k] = data[i0 + k];
-        }
-        total += values[k];
+    for (var i = start + lid; i < end; i += WORKGROUP) {
+        total += load(list, i);
     }
     lane_totals[lid] = total;
     workgroupBarrier();
-    // One lane scans the lane totals (64 additions), where a tree took a barrier a round.
     if lid == 0u {
         var run = 0u;
         for (var l = 0u; l < WORKGROUP; l++) {
-            let x = lane_totals[l];
-            lane_totals[l] = run;
-            run += x;
+            run += lane_totals[l];
         }
-        // Dispatches folded into two dimensions may carry whole groups past the last block.
-        if block < arrayLength(&sums) {
-            sums[block] = run;
-        }
-    }
-    workgroupBarrier();
-    var before = lane_totals[lid];
-    for (var k = 0u; k < PER_LANE; k++) {
-        if i0 + k < n {
-            data[i0 + k] = before;
-        }
-        before += values[k];
+        sums[wg.x] = run;
     }
 }
 
 @compute @workgroup_size(64)
-fn add_offsets(
-    @builtin(workgroup_id) wg: vec3u,
-    @builtin(num_workgroups) groups: vec3u,
-    @builtin(local_invocation_index) lid: u32,
-) {
-    let block = block_index(wg, groups);
-    if block >= arrayLength(&sums) {
-        return;
+fn scan_chunks(@builtin(workgroup_id) wg: vec3u, @builtin(local_invocation_index) lid: u32) {
+    let list = list_of(wg.x);
+    let g = wg.x % list_groups();
+    let n = scan_len(list);
+    let per = chunk_blocks(n);
+    // The chunks of the same list before this one.
+    var before = 0u;
+    for (var h = wg.x - g + lid; h < wg.x; h += WORKGROUP) {
+        before += sums[h];
     }
-    let i0 = block * BLOCK + PER_LANE * lid;
-    let n = scan_len();
-    let add = sums[block];
-    for (var k = 0u; k < PER_LANE; k++) {
-        if i0 + k < n {
-            data[i0 + k] += add;
+    lane_totals[lid] = before;
+    workgroupBarrier();
+    if lid == 0u {
+        var run = 0u;
+        for (var l = 0u; l < WORKGROUP; l++) {
+            run += lane_totals[l];
         }
+        carry = run;
     }
-}
-
-// One invocation, before a scan bounded by a live count: the workgroups each level needs
-// for that count, so that a list sized for its capacity costs what it holds (as
-// `kernel::groups_2d`).
-@compute @workgroup_size(1)
-fn dispatch_args() {
-    var count = scan_len();
-    for (var l = 0u; l < scan.levels; l++) {
-        let g = max((count + BLOCK - 1u) / BLOCK, 1u);
-        level_args[3u * l] = min(g, 32768u);
-        level_args[3u * l + 1u] = (g + 32767u) / 32768u;
-        level_args[3u * l + 2u] = 1u;
-        count = g;
+    for (var b = 0u; b < per; b++) {
+        let i0 = (g * per + b) * BLOCK + PER_LANE * lid;
+        var values: array<u32, PER_LANE>;
+        var total = 0u;
+        for (var k = 0u; k < PER_LANE; k++) {
+            if i0 + k < n {
+                values[k] = load(list, i0 + k);
+            }
+            total += values[k];
+        }
+        workgroupBarrier();
+        lane_totals[lid] = total;
+        workgroupBarrier();
+        // One lane scans the lane totals (64 additions), where a tree took a barrier a
+        // round.
+        if lid == 0u {
+            var run = carry;
+            for (var l = 0u; l < WORKGROUP; l++) {
+                let x = lane_totals[l];
+                lane_totals[l] = run;
+                run += x;
+            }
+            carry = run;
+        }
+        workgroupBarrier();
+        var at = lane_totals[lid];
+        for (var k = 0u; k < PER_LANE; k++) {
+            if i0 + k < n {
+                store(list, i0 + k, at);
+            }
+            at += values[k];
+        }
     }
 }

@@ -1,39 +1,39 @@
-// What the kernels of the adaptive Catmull-Clark pipeline share (bindings 50-59): the
+// What the kernels of the adaptive Catmull-Clark pipeline share (bindings 50-58): the
 // parameters, the counters, the first-split trials, grid parameters and point keys.
-// Twins: `tessera_core::gpu_types::{cc_trial_split, cc_trial_round}`,
+// Twins: `tessera_core::gpu_types::cc_trial_split`,
 // `tessera_core::catmull_clark::keys::topo_chart_key`.
 
 #include "shared/types.wgsl"
 #include "shared/cc_patch.wgsl"
 #include "shared/cc_face.wgsl"
 
-// `tessera_core::gpu_types::CcState`, then per (patch, trial) three arrays of
-// `patch_count · CC_TRIALS` words: splits so far, the largest leaf bound (f32 bits) and
-// the leaves over the tolerance (see `cc_trial_slot`).
+// `tessera_core::gpu_types::CcState`.
 struct CcCounters {
-    round: u32,
-    count: u32,
     leaves: u32,
     overflow: atomic<u32>,
-    need_cells: atomic<u32>,
     need_poly: u32,
     need_indices: u32,
     unmet: atomic<u32>,
     max_bound_bits: atomic<u32>,
     vertices: u32,
-    search_leaves: u32,
     bounds: atomic<u32>,
     proven: atomic<u32>,
-    trials: array<atomic<u32>>,
 }
 
 @group(0) @binding(50) var<uniform> cc_params: CcTessParams;
 @group(0) @binding(51) var<storage, read_write> cc_state: CcCounters;
-// Per patch: (leaves, trial) of the best first split so far.
-@group(0) @binding(56) var<storage, read_write> best: array<vec2u>;
-// Indirect dispatch arguments: [0..3] the current cell list, [3..6] the leaves, [6..9]
-// the hash items (eight per leaf: `cc_leaf_keys`).
+// `traverse::Marks` (see cc_traverse.wgsl): per patch its leaves, then its first leaf;
+// per patch (leaves, trial) of its best first split; per patch and lane the leaves of
+// the lane's walk.
+@group(0) @binding(57) var<storage, read_write> marks: array<u32>;
+// Indirect dispatch arguments: [3..6] the leaves, [6..9] the hash items (eight per leaf:
+// `cc_leaf_keys`).
 @group(0) @binding(58) var<storage, read_write> args: array<u32>;
+
+// The trial of patch p's first split (CC_TRIALS for a hole).
+fn cc_first_trial(p: u32) -> u32 {
+    return marks[cc_params.patch_count + 2u + 2u * p];
+}
 
 fn cc_invocation(gid: vec3u, groups: vec3u) -> u32 {
     return gid.x + gid.y * groups.x * 64u;
@@ -46,18 +46,6 @@ fn cc_trial_split(t: u32) -> vec2u {
     }
     let k = (t - 4u) / 2u + 1u;
     return select(vec2u(k + 1u, k), vec2u(k, k + 1u), t % 2u == 0u);
-}
-
-// `gpu_types::cc_trial_round`: ceil(sqrt(ku·kv)) - 1, at most the last round.
-fn cc_trial_round(t: u32) -> u32 {
-    let s = cc_trial_split(t);
-    let area = s.x * s.y;
-    for (var r = 0u; r < CC_SEARCH_ROUNDS; r++) {
-        if area <= (r + 1u) * (r + 1u) || r + 1u == CC_SEARCH_ROUNDS {
-            return r;
-        }
-    }
-    return 0u;
 }
 
 // Width and height of a cell in grid units.
@@ -119,51 +107,8 @@ fn cc_edge_canonical(topo: CcPatchTopo, k: u32, t: u32) -> u32 {
     return select(cc_params.grid - t, t, topo.quad[k] < topo.quad[(k + 1u) % 4u]);
 }
 
-// Where trial t of patch p keeps its splits (`array` 0), its largest leaf bound (1) and
-// its leaves over the tolerance (2) in `cc_state.trials`.
-fn cc_trial_slot(array: u32, p: u32, t: u32) -> u32 {
-    return (array * cc_params.patch_count + p) * CC_TRIALS + t;
-}
-
-// Best (leaves, trial) before this round.
-fn best_before(p: u32) -> vec2u {
-    if cc_state.round == 0u {
-        return vec2u(0xffffffffu, CC_TRIALS);
-    }
-    return best[p];
-}
-
-// Whether trial t of a patch whose best so far is b must be tried: a split into ku·kv
-// cells has at least ku·kv leaves, and ties go to the earlier trial.
-fn needed(t: u32, b: vec2u) -> bool {
-    let s = cc_trial_split(t);
-    let area = s.x * s.y;
-    return area < b.x || (area == b.x && t < b.y);
-}
-
-// The trials of patch p in this round, as a bit tried (bit t): those of the round that
-// could still beat or tie its best so far.
-fn round_trials(p: u32) -> vec2u {
-    var tried = vec2u(0u);
-    if cc_roots[p] == CC_NO_ROOT || cc_state.round >= cc_params.search_rounds {
-        return tried;
-    }
-    let b = best_before(p);
-    for (var t = 0u; t < CC_TRIALS; t++) {
-        if cc_trial_round(t) == cc_state.round && needed(t, b) {
-            tried[t / 32u] |= 1u << (t % 32u);
-        }
-    }
-    return tried;
-}
-
-fn cc_has_trial(tried: vec2u, t: u32) -> bool {
-    return (tried[t / 32u] & (1u << (t % 32u))) != 0u;
-}
-
 // Indirect dispatch arguments for `items` invocations of 64 (as `kernel::groups_2d`), at
-// word `base`: 0 the current cell list, 3 the leaves, 6 the hash items, 9 the search's
-// leaves.
+// word `base`: 3 the leaves, 6 the hash items.
 fn cc_write_args(base: u32, items: u32) {
     let g = (items + 63u) / 64u;
     args[base] = min(g, 32768u);

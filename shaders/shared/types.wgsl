@@ -199,7 +199,6 @@ const CC_NO_KEY: vec2u = vec2u(0xffffffffu, 0xffffffffu);
 
 // Adaptive Catmull-Clark tessellation (`tessera_core::gpu_types::{CcCell, ...}`).
 const CC_TRIALS: u32 = 18u;
-const CC_SEARCH_ROUNDS: u32 = 5u;
 const CC_NO_NEIGHBOUR: u32 = 0xffffffffu;
 
 struct CcCell {
@@ -225,14 +224,14 @@ struct CcTessParams {
     max_depth: u32,
     tolerance: f32,
     patch_count: u32,
-    cell_capacity: u32,
     leaf_capacity: u32,
     poly_capacity: u32,
     index_capacity: u32,
-    search_leaf_capacity: u32,
-    search_rounds: u32,
+    trials: u32,
     points: u32,
     vertex_capacity: u32,
+    pad0: u32,
+    pad1: u32,
 }
 
 // Uniform Catmull-Clark tessellation (`tessera_core::gpu_types::{CcUniformPatch,

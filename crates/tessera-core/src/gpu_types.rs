@@ -620,16 +620,11 @@ mod tests {
         let cpu: Vec<(u32, u32)> = crate::catmull_clark::first_splits().collect();
         let gpu: Vec<(u32, u32)> = (0..CC_TRIALS).map(cc_trial_split).collect();
         assert_eq!(gpu, cpu);
-        // Rounds group trials by area: round r holds r² < ku·kv ≤ (r+1)², the last
-        // round all the larger ones.
-        let last = CC_SEARCH_ROUNDS - 1;
-        for t in 0..CC_TRIALS {
+        // Every first split fits one level of the marking's workgroups.
+        assert!((0..CC_TRIALS).all(|t| {
             let (ku, kv) = cc_trial_split(t);
-            let r = cc_trial_round(t);
-            assert!(r * r < ku * kv, "trial {t}");
-            assert!(ku * kv <= (r + 1) * (r + 1) || r == last, "trial {t}");
-        }
-        assert!((0..CC_TRIALS).any(|t| cc_trial_round(t) == last));
+            ku * kv < CC_SLOTS
+        }));
     }
 }
 
@@ -780,11 +775,10 @@ pub struct CcCell {
 
 /// First splits tried per patch: 4 odd squares, then the 14 near-square rectangles.
 pub const CC_TRIALS: u32 = 18;
-/// Rounds of the first-split search (trials grouped by `ku · kv`: 1, 2–4, 5–9, 10–16,
-/// then 20–64 together). Each round costs a pass over every level even when no patch
-/// needs it (a fixed cost in dispatches), and the large splits are rarely tried, so they
-/// share the last round.
-pub const CC_SEARCH_ROUNDS: u32 = 5;
+/// Lanes of the marking's workgroups: a patch is decided level by level until a level
+/// holds this many cells, then each lane walks its share depth first
+/// ([`crate::catmull_clark::traverse`]).
+pub const CC_SLOTS: u32 = 64;
 /// No patch across an edge (an open boundary or a hole).
 pub const CC_NO_NEIGHBOUR: u32 = u32::MAX;
 
@@ -801,15 +795,6 @@ pub fn cc_trial_split(t: u32) -> (u32, u32) {
     } else {
         (k + 1, k)
     }
-}
-
-/// The search round of trial `t`: `ceil(sqrt(ku · kv)) - 1`, at most the last round.
-pub fn cc_trial_round(t: u32) -> u32 {
-    let (ku, kv) = cc_trial_split(t);
-    let area = ku * kv;
-    (0..CC_SEARCH_ROUNDS)
-        .find(|r| area <= (r + 1) * (r + 1) || r + 1 == CC_SEARCH_ROUNDS)
-        .unwrap_or(0)
 }
 
 /// Connectivity of a patch for the GPU: its level-1 points, edge ids, per edge the
@@ -892,42 +877,33 @@ pub struct CcTessParams {
     pub tolerance: f32,
     /// Patches in the mesh, holes included.
     pub patch_count: u32,
-    /// Cells each cell list holds (bindings 52 and 53).
-    pub cell_capacity: u32,
     /// Leaves the output leaf list holds (binding 55).
     pub leaf_capacity: u32,
     /// Polygon vertices the polygon buffer holds (binding 63).
     pub poly_capacity: u32,
     /// Indices the index buffer holds (binding 65).
     pub index_capacity: u32,
-    /// Leaves of every trial of the search, kept until the best one is known.
-    pub search_leaf_capacity: u32,
-    /// Rounds of the first-split search run ([`crate::catmull_clark::FirstSplit::search_rounds`]).
-    pub search_rounds: u32,
+    /// First splits tried, in order ([`cc_trial_split`]): 1 for midpoint splits alone,
+    /// [`CC_TRIALS`] for the search.
+    pub trials: u32,
     /// Level-1 points: where the edges' homes start in the homes (binding 67).
     pub points: u32,
     /// Output vertices the vertex buffer holds (binding 64).
     pub vertex_capacity: u32,
+    /// Padding to a multiple of 16 bytes (`pad0`, `pad1` in WGSL).
+    pub pad: [u32; 2],
 }
 
-/// Counters of the adaptive Catmull-Clark kernels, read back to check capacities. In
-/// the same buffer follow, per (patch, trial): the splits so far, the largest leaf
-/// bound (f32 bits) and the leaves over the tolerance (three arrays of
-/// `patches · CC_TRIALS` words).
+/// Counters of the adaptive Catmull-Clark kernels, read back to check capacities.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable, PartialEq, Eq)]
 pub struct CcState {
-    /// Current round of the first-split search ([`CC_SEARCH_ROUNDS`] after it).
-    pub round: u32,
-    /// Cells in the current list.
-    pub count: u32,
     /// Leaves of the output: those of each patch's best trial (also beyond capacity:
     /// what is needed).
     pub leaves: u32,
-    /// Non-zero if some buffer was too small (nothing was written out of bounds).
+    /// Non-zero if some buffer was too small (nothing was written out of bounds, and
+    /// the output buffers were left as the last complete run wrote them).
     pub overflow: u32,
-    /// The largest cell list needed.
-    pub need_cells: u32,
     /// Polygon vertices needed.
     pub need_poly: u32,
     /// Indices needed.
@@ -938,9 +914,8 @@ pub struct CcState {
     pub max_bound_bits: u32,
     /// Output vertices needed (one per point and chart), as the vertex hash counted them.
     pub vertices: u32,
-    /// Leaves of every trial of the search so far (also beyond capacity).
-    pub search_leaves: u32,
-    /// Flatness bounds computed (every trial of the search included).
+    /// Flatness bounds computed by the search, every trial included (the pass that
+    /// writes the leaves decides the best trial's cells once more).
     pub bounds: u32,
     /// Cells split on the split proof alone, without a bound: with `bounds`, the cells
     /// tested.

@@ -1,45 +1,54 @@
-//! Exclusive prefix sum of `u32`, written as the GPU runs it: blocks of [`SCAN_BLOCK`]
-//! values scanned on their own, their totals scanned the same way (recursively), and
-//! added back. CPU twin of `shaders/scan.wgsl` (`scan_blocks`, `add_offsets`).
+//! Exclusive prefix sum of `u32`, written as the GPU runs it (`shaders/scan.wgsl`): the
+//! values cut into [`SCAN_GROUPS`] chunks of whole blocks of [`SCAN_BLOCK`]; each chunk
+//! summed (`reduce`), then each chunk scanned after the sum of the chunks before it
+//! (`scan_chunks`). Two dispatches whatever the length.
 
-/// Values one workgroup scans: 256 invocations, two values each.
+/// Values one workgroup scans at a time: 64 invocations, eight values each.
 pub const SCAN_BLOCK: usize = 512;
+/// Workgroups of each of the two dispatches, whatever the length.
+pub const SCAN_GROUPS: usize = 256;
 
-/// Twin of `scan_blocks`: each block of `data` becomes its own exclusive scan, and its
-/// total goes to `sums[block]`.
-pub fn scan_blocks(data: &mut [u32], sums: &mut [u32]) {
-    for (block, chunk) in data.chunks_mut(SCAN_BLOCK).enumerate() {
-        let mut running = 0u32;
-        for v in chunk {
+/// Blocks per chunk: the fewest that cover `n` values in [`SCAN_GROUPS`] chunks.
+pub fn chunk_blocks(n: usize) -> usize {
+    n.div_ceil(SCAN_BLOCK * SCAN_GROUPS).max(1)
+}
+
+/// Twin of `reduce`: the sum of each chunk.
+pub fn reduce(data: &[u32]) -> Vec<u32> {
+    let chunk = chunk_blocks(data.len()) * SCAN_BLOCK;
+    (0..SCAN_GROUPS)
+        .map(|g| {
+            let start = (g * chunk).min(data.len());
+            let end = (start + chunk).min(data.len());
+            data[start..end]
+                .iter()
+                .fold(0u32, |a, &x| a.wrapping_add(x))
+        })
+        .collect()
+}
+
+/// Twin of `scan_chunks`: each chunk scanned after the chunks before it.
+pub fn scan_chunks(data: &mut [u32], sums: &[u32]) {
+    let chunk = chunk_blocks(data.len()) * SCAN_BLOCK;
+    let mut carry = 0u32;
+    for (g, values) in data.chunks_mut(chunk).enumerate() {
+        debug_assert_eq!(
+            carry,
+            sums[..g].iter().fold(0u32, |a, &x| a.wrapping_add(x))
+        );
+        for v in values {
             let x = *v;
-            *v = running;
-            running = running.wrapping_add(x);
-        }
-        sums[block] = running;
-    }
-}
-
-/// Twin of `add_offsets`: adds each block's scanned total back to its values.
-pub fn add_offsets(data: &mut [u32], sums: &[u32]) {
-    for (block, chunk) in data.chunks_mut(SCAN_BLOCK).enumerate() {
-        for v in chunk {
-            *v = v.wrapping_add(sums[block]);
+            *v = carry;
+            carry = carry.wrapping_add(x);
         }
     }
 }
 
-/// Exclusive prefix sum in place, level by level as the GPU records it; returns the
-/// total.
+/// Exclusive prefix sum in place, as the GPU records it; returns the total.
 pub fn exclusive_scan(values: &mut [u32]) -> u32 {
-    let blocks = values.len().div_ceil(SCAN_BLOCK).max(1);
-    let mut sums = vec![0u32; blocks];
-    scan_blocks(values, &mut sums);
-    if blocks == 1 {
-        return sums[0];
-    }
-    let total = exclusive_scan(&mut sums);
-    add_offsets(values, &sums);
-    total
+    let sums = reduce(values);
+    scan_chunks(values, &sums);
+    sums.iter().fold(0u32, |a, &x| a.wrapping_add(x))
 }
 
 #[cfg(test)]
@@ -47,8 +56,9 @@ mod tests {
     use super::*;
 
     #[test]
-    fn matches_a_running_sum_across_levels() {
-        for n in [0, 1, 511, 512, 513, 4000, 262_145] {
+    fn matches_a_running_sum_across_chunk_sizes() {
+        // One block, one block per chunk, several blocks per chunk.
+        for n in [0, 1, 511, 512, 513, 4000, 131_072, 131_073, 600_000] {
             let values: Vec<u32> = (0..n as u32)
                 .map(|i| i.wrapping_mul(2_654_435_761) % 7)
                 .collect();

@@ -8,7 +8,7 @@
 //! | 0 | `bezier_map_cells` | map cell | the displacement-map atlas, built from the maps as uploaded (so that moved patches need only their maps written again) |
 //! | 1 | clear + `bezier_edge_decide` | coarse edge | edge bit sets (in the `r32uint` scratch texture, after the triangles' words), edge vertex counts |
 //! | 2 | `bezier_tri_roots` + `bezier_tri_mark` (indirect, over the triangles whose root may split) | coarse triangle | lattice points (bit sets in the scratch texture, cleared by copies of zeros before step 1), inner vertex and triangle counts, emit-order buckets |
-//! | 3 | `scan` (multi-level) | — | offsets of all three counts in one exclusive scan |
+//! | 3 | `scan` (two dispatches) | — | offsets of all three counts in one exclusive scan |
 //! | 4 | `bezier_finish` | 1 | totals, overflow flags, draw arguments, vertex dispatch, the emit order's bucket slots |
 //! | 4b | `bezier_tri_order` | coarse triangle | the emit order: those that make the most triangles first, the plain ones (no points; one triangle) last |
 //! | 5 | copy + `bezier_edge_emit` + `bezier_tri_emit` + `bezier_tri_emit_plain` (in the emit order, both indirect) | edge / triangle | vertex records, indices |
@@ -898,7 +898,7 @@ impl BezierStage {
                 }
                 Step::EdgeDecide => {
                     t.edge_decide
-                        .dispatch(&mut pass, &bg.edge_decide, l.coarse_edges, WORKGROUP)
+                        .dispatch(&mut pass, &bg.edge_decide, l.coarse_edges, WORKGROUP);
                 }
                 Step::TriMark => {
                     p.tri_roots
@@ -916,11 +916,11 @@ impl BezierStage {
                 }
                 Step::TriOrder => {
                     p.tri_order
-                        .dispatch(&mut pass, &bg.tri_order, l.coarse_triangles, WORKGROUP)
+                        .dispatch(&mut pass, &bg.tri_order, l.coarse_triangles, WORKGROUP);
                 }
                 Step::EdgeEmit => {
                     p.edge_emit
-                        .dispatch(&mut pass, &bg.edge_emit, l.coarse_edges, WORKGROUP)
+                        .dispatch(&mut pass, &bg.edge_emit, l.coarse_edges, WORKGROUP);
                 }
                 Step::TriEmit => {
                     // Sized by the finish kernel: the general triangles, then the plain.

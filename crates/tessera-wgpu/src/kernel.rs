@@ -85,37 +85,40 @@ impl Kernel {
         })
     }
 
-    /// Dispatches enough workgroups of `per_group` items for `items` items.
+    /// Dispatches enough workgroups of `per_group` items for `items` items; returns the
+    /// dispatches recorded (none for no items).
     pub fn dispatch(
         &self,
         pass: &mut wgpu::ComputePass,
         bind_group: &wgpu::BindGroup,
         items: u32,
         per_group: u32,
-    ) {
+    ) -> u32 {
         if items == 0 {
-            return;
+            return 0;
         }
         let (x, y) = groups_2d(items, per_group);
         pass.set_pipeline(&self.pipeline);
         pass.set_bind_group(0, bind_group, &[]);
         pass.dispatch_workgroups(x, y, 1);
+        1
     }
 }
 
 impl Kernel {
     /// Dispatches with workgroup counts that an earlier kernel wrote into `args` at
-    /// `offset` (three `u32`).
+    /// `offset` (three `u32`); returns the dispatches recorded (one).
     pub fn dispatch_indirect(
         &self,
         pass: &mut wgpu::ComputePass,
         bind_group: &wgpu::BindGroup,
         args: &wgpu::Buffer,
         offset: u64,
-    ) {
+    ) -> u32 {
         pass.set_pipeline(&self.pipeline);
         pass.set_bind_group(0, bind_group, &[]);
         pass.dispatch_workgroups_indirect(args, offset);
+        1
     }
 }
 

@@ -46,6 +46,20 @@ impl MeshBuffers {
         self.index_capacity
     }
 
+    /// Records copies of `old`'s vertices, indices and draw arguments into these (at
+    /// least as large) buffers: a stage that grew keeps drawing its last complete mesh
+    /// until a run fills the new ones.
+    pub(crate) fn copy_from(&self, encoder: &mut wgpu::CommandEncoder, old: &MeshBuffers) {
+        for (from, to) in [
+            (&old.vertices, &self.vertices),
+            (&old.indices, &self.indices),
+            (&old.indirect, &self.indirect),
+        ] {
+            let size = from.size().min(to.size());
+            encoder.copy_buffer_to_buffer(from, 0, to, 0, size);
+        }
+    }
+
     /// Usage of the vertex buffer: drawable, writable by compute kernels, copyable.
     pub const VERTEX_USAGE: wgpu::BufferUsages = wgpu::BufferUsages::VERTEX
         .union(wgpu::BufferUsages::STORAGE)

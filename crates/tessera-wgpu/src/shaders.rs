@@ -64,24 +64,8 @@ pub const SOURCES: &[(&str, &str)] = &[
         include_str!("../../../shaders/shared/lane_order.wgsl"),
     ),
     (
-        "cc_roots.wgsl",
-        include_str!("../../../shaders/cc_roots.wgsl"),
-    ),
-    (
-        "cc_mark.wgsl",
-        include_str!("../../../shaders/cc_mark.wgsl"),
-    ),
-    (
-        "cc_split.wgsl",
-        include_str!("../../../shaders/cc_split.wgsl"),
-    ),
-    (
-        "cc_choose.wgsl",
-        include_str!("../../../shaders/cc_choose.wgsl"),
-    ),
-    (
-        "cc_collect.wgsl",
-        include_str!("../../../shaders/cc_collect.wgsl"),
+        "cc_traverse.wgsl",
+        include_str!("../../../shaders/cc_traverse.wgsl"),
     ),
     (
         "cc_leaf_keys.wgsl",

@@ -6,6 +6,7 @@
 
 use std::collections::HashMap;
 
+use tessera_core::catmull_clark::adaptive::marking_leaves;
 use tessera_core::catmull_clark::gpu_model::{leaf_items, patch_topology, point_homes};
 use tessera_core::catmull_clark::keys::chart_key;
 use tessera_core::catmull_clark::polygon::PolygonKernel;
@@ -26,9 +27,7 @@ fn gpu() -> Gpu {
 /// Buffers of one element each: every run on them overflows.
 fn one_of_each() -> CcCapacities {
     CcCapacities {
-        cells: 1,
         leaves: 1,
-        search_leaves: 1,
         poly: 1,
         vertices: 1,
         indices: 1,
@@ -278,6 +277,60 @@ fn gpu_midpoint_splits_match_the_cpu_reference() {
         assert!((status.max_bound() as f64 - cpu.max_bound).abs() <= 1e-5 * cpu.max_bound);
         same_mesh(&switched, &cpu.mesh, size(&model)).unwrap_or_else(|e| panic!("{name}: {e}"));
     }
+}
+
+#[test]
+fn the_marking_kernel_writes_its_twins_leaves_in_order() {
+    // `cc_traverse` against `traverse` (through the CPU reference's marking): the same
+    // leaves in the same order, the same first splits and the same leaves per lane, with
+    // the search and with midpoint splits. The walks go deep enough that lanes share
+    // the work (some patch has leaves in several lanes).
+    let gpu = gpu();
+    let mut shared = 0;
+    for (name, rel, first_split) in [
+        ("opensubdiv/catmark_pyramid.obj", 1e-3, FirstSplit::Search),
+        (
+            "opensubdiv/catmark_xord_interior.obj",
+            3e-4,
+            FirstSplit::Search,
+        ),
+        (
+            "catmull_clark/spot_control_mesh.obj",
+            1e-3,
+            FirstSplit::Midpoint,
+        ),
+    ] {
+        let model = model(name);
+        let params = CcParams {
+            tolerance: Tolerance::Absolute(rel * size(&model)),
+            max_depth: 6,
+            first_split,
+            leaf_bound: Default::default(),
+        };
+        let mut stage =
+            CcStage::new(&gpu.device, &gpu.queue, &kernels(&gpu), &model, &params).expect("stage");
+        let status = stage.run_blocking(&gpu.device, &gpu.queue).expect("run");
+        gpu.check().expect("no wgpu errors");
+        let got = stage
+            .read_polygons(&gpu.device, &gpu.queue, &status)
+            .expect("read");
+        let (leaves, lanes) = marking_leaves(&model, &params).expect("twin");
+        for p in 0..lanes.len() {
+            assert_eq!(
+                got.lane_leaves[p], lanes[p],
+                "{name}: patch {p}: leaves per lane"
+            );
+        }
+        assert_eq!(got.leaves.len(), leaves.len(), "{name}: leaves");
+        for (l, (g, t)) in got.leaves.iter().zip(&leaves).enumerate() {
+            assert_eq!(g, t, "{name}: leaf {l}");
+        }
+        shared += lanes
+            .iter()
+            .filter(|l| l.iter().filter(|&&n| n > 0).count() > 1)
+            .count();
+    }
+    assert!(shared > 0, "no patch shared among lanes");
 }
 
 #[test]

@@ -1,4 +1,4 @@
-//! The GPU prefix sum against its CPU twin, across one, two and three levels of blocks,
+//! The GPU prefix sum against its CPU twin, from one block to several blocks per chunk,
 //! over a whole buffer and as far as a count written on the GPU.
 
 use tessera_core::scan::exclusive_scan;
@@ -7,10 +7,11 @@ use tessera_wgpu::scan::{PrefixSum, ScanKernels};
 use wgpu::util::DeviceExt;
 
 #[test]
-fn gpu_scan_matches_the_cpu_twin_at_every_level_count() {
+fn gpu_scan_matches_the_cpu_twin_at_every_chunk_size() {
     let gpu = Gpu::new().expect("a wgpu adapter (CI installs Mesa's lavapipe)");
     let kernels = ScanKernels::new(&gpu.device);
-    // 1 and 512: one block; 513 and 70 000: two levels; 300 000: three (> 512²).
+    // 1 and 512: one block; 513 and 70 000: one block per chunk at most; 300 000:
+    // three blocks per chunk (> 512 · 256).
     for n in [1usize, 5, 512, 513, 70_000, 300_000] {
         let values: Vec<u32> = (0..n as u32)
             .map(|i| i.wrapping_mul(2_654_435_761) >> 28)
@@ -45,9 +46,8 @@ fn gpu_scan_matches_the_cpu_twin_at_every_level_count() {
 fn a_scan_bounded_by_a_live_count_scans_that_many_and_leaves_the_rest() {
     let gpu = Gpu::new().expect("a wgpu adapter (CI installs Mesa's lavapipe)");
     let kernels = ScanKernels::new(&gpu.device);
-    // Three levels of blocks for the capacity; the live count (a word written on the
-    // GPU, here at slot 1) sets how many values are scanned and how many workgroups
-    // run (indirect dispatch).
+    // Several blocks per chunk for the capacity; the live count (a word written on the
+    // GPU, here at slot 1) sets how many values are scanned.
     let n = 300_000usize;
     let values: Vec<u32> = (0..n as u32)
         .map(|i| i.wrapping_mul(2_654_435_761) >> 28)

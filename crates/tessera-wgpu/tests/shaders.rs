@@ -333,7 +333,7 @@ fn shared_structs_match_their_rust_twins() {
 
 #[test]
 fn catmull_clark_parameters_and_counters_match_their_rust_twins() {
-    let (module, _) = parse("cc_split.wgsl");
+    let (module, _) = parse("cc_traverse.wgsl");
     let (size, members) = layout(&module, "CcTessParams");
     assert_eq!(size as usize, size_of::<CcTessParams>());
     let rust = [
@@ -341,40 +341,32 @@ fn catmull_clark_parameters_and_counters_match_their_rust_twins() {
         ("max_depth", offset_of!(CcTessParams, max_depth)),
         ("tolerance", offset_of!(CcTessParams, tolerance)),
         ("patch_count", offset_of!(CcTessParams, patch_count)),
-        ("cell_capacity", offset_of!(CcTessParams, cell_capacity)),
         ("leaf_capacity", offset_of!(CcTessParams, leaf_capacity)),
         ("poly_capacity", offset_of!(CcTessParams, poly_capacity)),
         ("index_capacity", offset_of!(CcTessParams, index_capacity)),
-        (
-            "search_leaf_capacity",
-            offset_of!(CcTessParams, search_leaf_capacity),
-        ),
-        ("search_rounds", offset_of!(CcTessParams, search_rounds)),
+        ("trials", offset_of!(CcTessParams, trials)),
         ("points", offset_of!(CcTessParams, points)),
         ("vertex_capacity", offset_of!(CcTessParams, vertex_capacity)),
+        ("pad0", offset_of!(CcTessParams, pad)),
+        ("pad1", offset_of!(CcTessParams, pad) + 4),
     ];
     let members: Vec<(&str, usize)> = members
         .iter()
         .map(|(n, o)| (n.as_str(), *o as usize))
         .collect();
     assert_eq!(members, rust, "CcTessParams");
-    // The counters are CcState followed by the per-(patch, trial) words.
-    let (_, members) = layout(&module, "CcCounters");
+    let (size, members) = layout(&module, "CcCounters");
+    assert_eq!(size as usize, size_of::<CcState>());
     let rust = [
-        ("round", offset_of!(CcState, round)),
-        ("count", offset_of!(CcState, count)),
         ("leaves", offset_of!(CcState, leaves)),
         ("overflow", offset_of!(CcState, overflow)),
-        ("need_cells", offset_of!(CcState, need_cells)),
         ("need_poly", offset_of!(CcState, need_poly)),
         ("need_indices", offset_of!(CcState, need_indices)),
         ("unmet", offset_of!(CcState, unmet)),
         ("max_bound_bits", offset_of!(CcState, max_bound_bits)),
         ("vertices", offset_of!(CcState, vertices)),
-        ("search_leaves", offset_of!(CcState, search_leaves)),
         ("bounds", offset_of!(CcState, bounds)),
         ("proven", offset_of!(CcState, proven)),
-        ("trials", size_of::<CcState>()),
     ];
     let members: Vec<(&str, usize)> = members
         .iter()

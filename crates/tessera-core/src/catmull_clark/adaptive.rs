@@ -54,14 +54,15 @@ use rustc_hash::FxHashMap as HashMap;
 use glam::DVec3;
 use serde::Serialize;
 
-use super::bound::{box_bound, quadrant_offset, split_proof, WALK_ONE};
+use super::bound::{box_bound, split_proof, WALK_ONE};
 use super::keys::{chart_key, key_place, point_key, point_of, vertex_face_uv, KeyPlace};
 use super::patch::{SurfaceModel, SurfacePoint};
 use super::topology::PatchMesh;
+use super::traverse::{self, Cell};
 use super::triangle_bound::triangles_bound;
 use super::triangulate::{triangulate, zip_start, PolyVertex};
 use crate::error::{Error, Result};
-use crate::gpu_types::OutVertex;
+use crate::gpu_types::{CcCell, OutVertex, CC_SLOTS};
 use crate::measure::closest_point_on_triangle;
 use crate::mesh::Mesh;
 use crate::tolerance::Tolerance;
@@ -122,11 +123,10 @@ impl FirstSplit {
         }
     }
 
-    /// Rounds of the GPU's search ([`crate::gpu_types::cc_trial_round`]): the 1×1 split
-    /// alone is round 0.
-    pub fn search_rounds(self) -> u32 {
+    /// First splits the GPU tries, in order ([`crate::gpu_types::CcTessParams::trials`]).
+    pub fn trials(self) -> u32 {
         match self {
-            FirstSplit::Search => crate::gpu_types::CC_SEARCH_ROUNDS,
+            FirstSplit::Search => crate::gpu_types::CC_TRIALS,
             FirstSplit::Midpoint => 1,
         }
     }
@@ -237,22 +237,6 @@ pub struct CcTessellation {
     pub triangle_bounds: u64,
 }
 
-/// A cell of a patch: `[i, i + w] × [j, j + h]` in grid units.
-#[derive(Clone, Copy, Debug)]
-struct Cell {
-    i: u32,
-    j: u32,
-    w: u32,
-    h: u32,
-}
-
-impl Cell {
-    fn corners(&self) -> [(u32, u32); 4] {
-        let Cell { i, j, w, h } = *self;
-        [(i, j), (i + w, j), (i + w, j + h), (i, j + h)]
-    }
-}
-
 /// Surface points evaluated once per canonical key.
 struct Evaluator<'a> {
     model: &'a SurfaceModel,
@@ -330,17 +314,17 @@ fn snapped_box(model: &SurfaceModel, p: usize, b: [f64; 4]) -> ([u32; 4], [DVec3
     (bx, corners)
 }
 
-/// Recursive marking of one cell; `leaf` receives each leaf, its bound and, for a leaf
-/// kept by its own triangles (`exact`), the splits it had left.
-fn mark(
+/// The decision on one cell alone (twin of `cc_decide` in `shaders/cc_traverse.wgsl`):
+/// `None` to split it, else the leaf's bound and, for a leaf kept by its own triangles
+/// (`exact`), the splits it had left.
+fn decide_cell(
     eval: &mut Evaluator,
     p: usize,
     cell: Cell,
     splits_left: u32,
     tolerance: f64,
     exact: bool,
-    leaf: &mut dyn FnMut(Cell, f64, Option<u32>),
-) {
+) -> Option<(f64, Option<u32>)> {
     // Grid units to walk units: WALK_ONE / n = 2^(18 - max_depth).
     let scale = WALK_ONE / eval.n;
     let bx = [cell.i, cell.i + cell.w, cell.j, cell.j + cell.h].map(|t| t * scale);
@@ -363,29 +347,33 @@ fn mark(
         box_bound(&eval.model.patches[p], bx, corners)
     };
     if bound <= tolerance {
-        leaf(cell, bound, None);
-        return;
+        return Some((bound, None));
     }
     if exact {
         if let Some(b) = own_triangles_bound(eval, p, cell, bx, corners, tolerance) {
-            leaf(cell, b, Some(splits_left));
-            return;
+            return Some((b, Some(splits_left)));
         }
     }
-    if splits_left == 0 {
-        leaf(cell, bound, None);
-        return;
-    }
-    let (w, h) = (cell.w / 2, cell.h / 2);
-    for c in 0..4 {
-        let (di, dj) = quadrant_offset(c);
-        let child = Cell {
-            i: cell.i + di * w,
-            j: cell.j + dj * h,
-            w,
-            h,
-        };
-        mark(eval, p, child, splits_left - 1, tolerance, exact, leaf);
+    (splits_left == 0).then_some((bound, None))
+}
+
+/// Recursive marking of one cell (a leaf kept by its own triangles that failed against
+/// its polygon is marked again this way); `leaf` receives each leaf and its bound.
+fn mark(
+    eval: &mut Evaluator,
+    p: usize,
+    cell: Cell,
+    splits_left: u32,
+    tolerance: f64,
+    leaf: &mut dyn FnMut(Cell, f64),
+) {
+    match decide_cell(eval, p, cell, splits_left, tolerance, false) {
+        Some((bound, _)) => leaf(cell, bound),
+        None => {
+            for q in 0..4 {
+                mark(eval, p, cell.child(q), splits_left - 1, tolerance, leaf);
+            }
+        }
     }
 }
 
@@ -431,6 +419,33 @@ fn own_triangles_bound(
 /// Adaptive tessellation of every (non-hole) patch to within `params.tolerance`.
 pub fn tessellate_adaptive(model: &SurfaceModel, params: &CcParams) -> Result<CcTessellation> {
     tessellate_with_splits(model, params, &params.first_split.splits())
+}
+
+/// What `cc_traverse` writes for `params` (flatness bound): every leaf in the GPU's
+/// order, and per patch the leaves of each lane's walk. The twin's output for the tests.
+#[doc(hidden)]
+pub fn marking_leaves(
+    model: &SurfaceModel,
+    params: &CcParams,
+) -> Result<(Vec<CcCell>, Vec<[u32; CC_SLOTS as usize]>)> {
+    params.validate(model)?;
+    let mut eval = Evaluator::new(model, params);
+    let flatness = CcParams {
+        leaf_bound: LeafBound::Flatness,
+        ..*params
+    };
+    let marking = mark_patches(&mut eval, &flatness, &params.first_split.splits());
+    let cells = marking
+        .leaves
+        .iter()
+        .map(|&(p, c)| CcCell {
+            patch_id: p as u32,
+            trial_depth: marking.first_split[p] | c.depth << 8,
+            i: c.i,
+            j: c.j,
+        })
+        .collect();
+    Ok((cells, marking.lanes))
 }
 
 /// [`tessellate_adaptive`] trying these first splits in this order.
@@ -502,17 +517,6 @@ fn tessellate_with_splits(
     Ok(out)
 }
 
-/// The cells of first split `ku × kv` on a grid of `n` units per patch side.
-fn base_cells(n: u32, (ku, kv): (u32, u32)) -> impl Iterator<Item = Cell> {
-    let (w, h) = (n / ku, n / kv);
-    (0..ku * kv).map(move |c| Cell {
-        i: (c % ku) * w,
-        j: (c / ku) * h,
-        w,
-        h,
-    })
-}
-
 /// What step 1 found: every leaf, and the first split each patch chose.
 struct Marking {
     leaves: Vec<(usize, Cell)>,
@@ -522,6 +526,8 @@ struct Marking {
     /// Per patch, the index in the splits tried of its first split (`u32::MAX` for a
     /// hole): with [`first_splits`] in order, the GPU's trial number.
     first_split: Vec<u32>,
+    /// Per patch, the leaves of each lane's walk ([`traverse::Walk::lane_leaves`]).
+    lanes: Vec<[u32; CC_SLOTS as usize]>,
     unmet: usize,
     max_bound: f64,
 }
@@ -537,42 +543,19 @@ fn mark_patches(eval: &mut Evaluator, params: &CcParams, splits: &[(u32, u32)]) 
         leaves: Vec::new(),
         bounds: Vec::new(),
         first_split: vec![u32::MAX; mesh.patch_count()],
+        lanes: vec![[0; CC_SLOTS as usize]; mesh.patch_count()],
         unmet: 0,
         max_bound: 0.0,
     };
     for p in mesh.surface_patches() {
-        // Square splits first, then near-square rectangles, each only if it could still
-        // beat the best so far (a split into ku·kv cells has at least that many leaves).
-        // The leaves of the best so far are kept, so it is not marked a second time.
-        let mut best = usize::MAX;
-        let mut best_leaves: Vec<(Cell, f64, Option<u32>)> = Vec::new();
-        let mut trial_leaves: Vec<(Cell, f64, Option<u32>)> = Vec::new();
-        for (t, &split) in splits.iter().enumerate() {
-            if (split.0 * split.1) as usize >= best {
-                continue;
-            }
-            trial_leaves.clear();
-            for cell in base_cells(n, split) {
-                mark(
-                    eval,
-                    p,
-                    cell,
-                    params.max_depth,
-                    eps,
-                    exact,
-                    &mut |c, bound, e| trial_leaves.push((c, bound, e)),
-                );
-                if trial_leaves.len() >= best {
-                    break;
-                }
-            }
-            if trial_leaves.len() < best {
-                best = trial_leaves.len();
-                out.first_split[p] = t as u32;
-                std::mem::swap(&mut best_leaves, &mut trial_leaves);
-            }
-        }
-        for (c, bound, e) in best_leaves {
+        // In the GPU's order (`traverse`): the same leaves as marking each cell
+        // recursively, in the order the kernel writes them.
+        let max_depth = params.max_depth;
+        let mut decide = |c: Cell| decide_cell(eval, p, c, max_depth - c.depth, eps, exact);
+        let (trial, walk) = traverse::search(n, splits, &mut decide);
+        out.first_split[p] = trial;
+        out.lanes[p] = walk.lane_leaves;
+        for (c, (bound, e)) in walk.leaves {
             if bound > eps {
                 out.unmet += 1;
             }
@@ -645,7 +628,7 @@ fn settle_exact_leaves(eval: &mut Evaluator, marking: &mut Marking) -> Vec<Polyg
                 next.next();
                 let (p, cell) = marking.leaves[k];
                 let splits_left = marking.bounds[k].1.expect("an exact leaf");
-                mark(eval, p, cell, splits_left, eps, false, &mut |c, b, _| {
+                mark(eval, p, cell, splits_left, eps, &mut |c, b| {
                     if b > eps {
                         marking.unmet += 1;
                     }
@@ -956,7 +939,7 @@ mod tests {
         use crate::catmull_clark::gpu_model::{leaf_items, patch_topology, point_homes};
         use crate::catmull_clark::polygon::PolygonKernel;
         use crate::catmull_clark::vertex_hash::split_key;
-        use crate::gpu_types::{CcCell, CC_NO_KEY};
+        use crate::gpu_types::CC_NO_KEY;
         let assets = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets");
         let splits: Vec<(u32, u32)> = first_splits().collect();
         // Side points found inside a patch and on a patch's edge.
@@ -987,11 +970,9 @@ mod tests {
                 .iter()
                 .map(|&(p, cell)| {
                     let trial = marking.first_split[p];
-                    let (ku, _) = splits[trial as usize];
-                    let depth = (n / ku / cell.w).trailing_zeros();
                     CcCell {
                         patch_id: p as u32,
-                        trial_depth: trial | depth << 8,
+                        trial_depth: trial | cell.depth << 8,
                         i: cell.i,
                         j: cell.j,
                     }

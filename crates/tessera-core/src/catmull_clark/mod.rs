@@ -40,6 +40,7 @@ pub mod patch;
 pub mod polygon;
 pub mod refine;
 pub mod topology;
+pub mod traverse;
 pub mod triangle_bound;
 pub mod triangulate;
 pub mod uniform;

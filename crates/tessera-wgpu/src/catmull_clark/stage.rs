@@ -1,32 +1,41 @@
 //! The adaptive Catmull-Clark stage: the GPU twin of
 //! [`tessera_core::catmull_clark::tessellate_adaptive`], the same mesh up to vertex order.
 //!
-//! [`CcStage::prepare`] records one straight-line script into the caller's encoder; no
-//! step reads anything back, every loop bound below is known on the host:
+//! [`CcStage::prepare`] records one straight-line script into the caller's encoder, the
+//! same [`CcStage::DISPATCHES`] dispatches for every model, tolerance, depth and first
+//! split; nothing is read back to record it:
 //!
 //! | # | kernel | per | writes |
 //! |---|---|---|---|
-//! | 1 | `cc_roots` count, scan, emit, finish | patch | root cells of the round, list size, dispatch |
-//! | 2 | `cc_mark` (indirect) | cell | flatness bound → split flag; leaves per (patch, split) |
-//! | 3 | scan, `cc_split` (indirect), finish | cell | next list (quadrants), the search's leaves |
-//! | 4 | `cc_choose`, `next_round` | patch | best first split so far (after the last round: the run's bound) |
-//! |   | 2–3 repeat per level (`max_depth + 1`), 1–4 per round (`CC_SEARCH_ROUNDS` = 5) | | |
-//! | 4b | `cc_collect` count, scan, emit, finish (indirect) | search leaf | leaves of each patch's best split |
+//! | 1 | `cc_traverse` (count) | patch (workgroup) | best first split, its leaves per lane, to full depth |
+//! | 2–3 | scan | patch | each patch's first leaf |
+//! | 4 | `cc_traverse` (emit) | patch (workgroup) | the leaves; leaf and item dispatch sizes |
 //! | 5 | `cc_leaf_keys` (indirect) | leaf | corner keys in their charts (and across seams) and vertices |
-//! | 6 | `cc_hash_*` (insert, number, gather) | item | vertex ids, one point per vertex |
-//! | 7 | `cc_vertex_eval` | vertex | vertices (position, normal at the point's home; face, face u v) |
-//! | 8 | `cc_polygon` count, scan, emit (indirect) | leaf | polygons: corners + marked points on the sides |
-//! | 9 | `cc_triangulate` (indirect), finish | leaf | indices, draw arguments |
+//! | 6 | `cc_hash_insert` (indirect) | item | the vertex hash |
+//! | 7 | `cc_hash_number` mark_first (indirect) | item | each key's first item |
+//! | 8 | `cc_polygon` count (indirect) | leaf | points on each side (found in the hash) |
+//! | 9–10 | scan of both | item, leaf | vertex numbers, polygon offsets |
+//! | 11 | `cc_hash_number` assign (indirect) | item | vertex ids |
+//! | 12 | `cc_hash_number` gather_points (indirect) | item | one point per vertex |
+//! | 13 | `cc_triangulate` finish | 1 | whether the mesh fits, draw arguments, what the run needed |
+//! | 14 | `cc_polygon` emit (indirect) | leaf | polygons: corners + marked points on the sides |
+//! | 15 | `cc_vertex_eval` (indirect) | vertex | vertices (position, normal at the point's home; face, face u v) |
+//! | 16 | `cc_triangulate` (indirect) | leaf | indices |
 //!
-//! The first split of each patch (`ku × kv` cells, up to 8 × 8) is the one with the fewest
-//! leaves, as on the CPU; the search runs in rounds of growing `ku · kv`, and a patch
-//! skips the splits that cannot beat its best so far. Every trial's leaves are kept
-//! until the search is over, so the best split is not marked a second time.
+//! Marking takes one workgroup per patch and walks each cell's subtree to full depth
+//! (level by level in workgroup memory while a level is small, then one stack per lane;
+//! twin [`tessera_core::catmull_clark::traverse`]), so the script does not grow with the
+//! depth. The first split of each patch (`ku × kv` cells, up to 8 × 8) is the one with
+//! the fewest leaves, as on the CPU: the count pass tries them in order, stopping a trial
+//! once it reaches the best so far, and the emit pass walks the best one again to write
+//! its leaves where the scan says. No workgroup waits on another.
 //!
-//! Capacities: every list, the leaves, polygons, vertices, indices and the hash table.
-//! Kernels never write past them; the counters record what the run needed. Each run's status
-//! is read back without blocking, and the next [`CcStage::prepare`] that finds an
-//! overflow reallocates, so the run after it fits ([`CcStage::run_blocking`] grows and
+//! Capacities: the leaves, polygons, vertices, indices and the hash table. Kernels never
+//! write past them, and the counters record what the run needed. The output (vertices,
+//! indices, draw arguments) is written only when the whole mesh fits: a run that
+//! overflows leaves the last complete mesh drawn. Each run's status is read back without
+//! blocking, and the next [`CcStage::prepare`] that finds an overflow reallocates (the
+//! last mesh copied over), so a later run fits ([`CcStage::run_blocking`] grows and
 //! reruns at once).
 //!
 //! ```no_run
@@ -60,8 +69,7 @@ use tessera_core::catmull_clark::gpu_model::{patch_topology, point_homes, CcGpuM
 use glam::Vec3;
 use tessera_core::catmull_clark::{CcParams, LeafBound, PatchMesh, SurfaceModel};
 use tessera_core::gpu_types::{
-    CcCell, CcHashStatus, CcState, CcTessParams, CcVertexPoint, OutVertex, CC_SEARCH_ROUNDS,
-    CC_TRIALS,
+    CcCell, CcHashStatus, CcState, CcTessParams, CcVertexPoint, OutVertex, CC_SLOTS,
 };
 use tessera_core::Mesh;
 use wgpu::util::DeviceExt;
@@ -78,13 +86,8 @@ use crate::Kernels;
 mod slot {
     pub const PARAMS: u32 = 50;
     pub const STATE: u32 = 51;
-    pub const CELLS_OUT: u32 = 52;
-    pub const CELLS_IN: u32 = 53;
-    pub const FLAGS: u32 = 54;
     pub const LEAVES: u32 = 55;
-    pub const SEARCH_LEAVES: u32 = 61;
-    pub const BEST: u32 = 56;
-    pub const ROOT_OFFSETS: u32 = 57;
+    pub const MARKS: u32 = 57;
     pub const ARGS: u32 = 58;
     pub const TOPO: u32 = 59;
     pub const ITEM_POINTS: u32 = 60;
@@ -94,6 +97,7 @@ mod slot {
     pub const INDICES: u32 = 65;
     pub const DRAW: u32 = 66;
     pub const HOMES: u32 = 67;
+    pub const PASS: u32 = 68;
     // The vertex hash's and the vertex evaluation's (shared/cc_hash.wgsl, cc_vertex_eval).
     pub const KEYS: u32 = 40;
     pub const TABLE: u32 = 41;
@@ -105,33 +109,20 @@ mod slot {
     pub const VERTEX_COUNT: u32 = 32;
 }
 
-/// Offsets into the dispatch-arguments buffer.
-const LIST_ARGS: u64 = 0;
+/// Offsets into the dispatch-arguments buffer (written by the emit pass of marking): the
+/// leaves, then the hash items (eight per leaf).
 const LEAF_ARGS: u64 = 12;
-/// ... and [6..9] the hash items (eight per leaf).
 const ITEM_ARGS: u64 = 24;
-/// ... and [9..12] the search's leaves.
-const SEARCH_LEAF_ARGS: u64 = 36;
 
 /// Every kernel of the stage, compiled once per device (part of [`Kernels`]).
 pub(crate) struct CcKernels {
-    roots_count: Kernel,
-    roots_emit: Kernel,
-    roots_finish: Kernel,
-    mark: Kernel,
-    split: Kernel,
-    split_finish: Kernel,
-    choose: Kernel,
-    next_round: Kernel,
-    collect_count: Kernel,
-    collect_emit: Kernel,
-    collect_finish: Kernel,
+    traverse: Kernel,
     leaf_keys: Kernel,
     gather_points: Kernel,
     polygon_count: Kernel,
     polygon_emit: Kernel,
+    finish: Kernel,
     triangulate: Kernel,
-    triangulate_finish: Kernel,
     hash: CcHashKernels,
     eval: CcVertexEval,
     scan: ScanKernels,
@@ -141,23 +132,13 @@ impl CcKernels {
     pub fn new(device: &wgpu::Device) -> Self {
         let k = |file, entry| Kernel::new(device, file, entry);
         CcKernels {
-            roots_count: k("cc_roots.wgsl", "count"),
-            roots_emit: k("cc_roots.wgsl", "emit"),
-            roots_finish: k("cc_roots.wgsl", "finish"),
-            mark: k("cc_mark.wgsl", "main"),
-            split: k("cc_split.wgsl", "main"),
-            split_finish: k("cc_split.wgsl", "finish"),
-            choose: k("cc_choose.wgsl", "main"),
-            next_round: k("cc_choose.wgsl", "next_round"),
-            collect_count: k("cc_collect.wgsl", "count"),
-            collect_emit: k("cc_collect.wgsl", "emit"),
-            collect_finish: k("cc_collect.wgsl", "finish"),
+            traverse: k("cc_traverse.wgsl", "main"),
             leaf_keys: k("cc_leaf_keys.wgsl", "main"),
             gather_points: k("cc_hash_number.wgsl", "gather_points"),
             polygon_count: k("cc_polygon.wgsl", "count"),
             polygon_emit: k("cc_polygon.wgsl", "emit"),
+            finish: k("cc_triangulate.wgsl", "finish"),
             triangulate: k("cc_triangulate.wgsl", "main"),
-            triangulate_finish: k("cc_triangulate.wgsl", "finish"),
             hash: CcHashKernels::new(device),
             eval: CcVertexEval::new(device),
             scan: ScanKernels::new(device),
@@ -168,12 +149,8 @@ impl CcKernels {
 /// How many of each thing the buffers hold (the tests start from tiny ones).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct CcCapacities {
-    /// Cells per list (each level's list of cells to test).
-    pub cells: u32,
     /// Leaves of the final tessellation.
     pub leaves: u32,
-    /// Leaves of every first split tried (those of the best are kept).
-    pub search_leaves: u32,
     /// Polygon vertices (leaf corners plus the points on their sides).
     pub poly: u32,
     /// Output vertices (one per point and chart).
@@ -189,9 +166,7 @@ impl CcCapacities {
     pub fn guess(patches: u32) -> Self {
         let p = patches.max(1);
         CcCapacities {
-            cells: 64 * p,
             leaves: 16 * p,
-            search_leaves: 48 * p,
             poly: 96 * p,
             vertices: 48 * p,
             indices: 3 * 96 * p,
@@ -207,12 +182,13 @@ pub struct CcStatus {
     pub state: CcState,
     /// The vertex hash's counters: distinct vertices, overflow.
     pub hash: CcHashStatus,
-    /// Indices written (0 after an overflow).
+    /// Indices of the mesh drawn after the run: its own, or after an overflow the last
+    /// complete run's.
     pub indices: u32,
 }
 
 impl CcStatus {
-    /// Whether a buffer was too small: the run wrote no triangles.
+    /// Whether a buffer was too small: the run left the last complete mesh in place.
     pub fn overflowed(&self) -> bool {
         self.state.overflow != 0 || self.hash.overflow != 0
     }
@@ -230,10 +206,7 @@ impl CcStatus {
 struct Buffers {
     caps: CcCapacities,
     params: wgpu::Buffer,
-    cells: [wgpu::Buffer; 2],
-    flags: wgpu::Buffer,
     leaves: wgpu::Buffer,
-    search_leaves: wgpu::Buffer,
     keys: wgpu::Buffer,
     item_points: wgpu::Buffer,
     vertex_points: wgpu::Buffer,
@@ -242,33 +215,32 @@ struct Buffers {
     poly_verts: wgpu::Buffer,
     hash: CcVertexHash,
     output: MeshBuffers,
-    flag_scan: PrefixSum,
-    collect_scan: PrefixSum,
-    poly_scan: PrefixSum,
+    /// The hash's first-item flags and the polygon sizes, in one scan.
+    number_scan: PrefixSum,
 }
 
 /// Bind groups of every dispatch, rebuilt when buffers are reallocated.
 struct Binds {
-    roots_count: wgpu::BindGroup,
-    roots_emit: wgpu::BindGroup,
-    roots_finish: wgpu::BindGroup,
-    /// Per list parity: the list read is `cells[parity]`.
-    mark: [wgpu::BindGroup; 2],
-    split: [wgpu::BindGroup; 2],
-    split_finish: wgpu::BindGroup,
-    choose: wgpu::BindGroup,
-    next_round: wgpu::BindGroup,
-    collect_count: wgpu::BindGroup,
-    collect_emit: wgpu::BindGroup,
-    collect_finish: wgpu::BindGroup,
+    /// The count pass, then the emit pass.
+    traverse: [wgpu::BindGroup; 2],
     leaf_keys: wgpu::BindGroup,
     gather_points: wgpu::BindGroup,
     polygon_count: wgpu::BindGroup,
     polygon_emit: wgpu::BindGroup,
+    finish: wgpu::BindGroup,
     triangulate: wgpu::BindGroup,
-    triangulate_finish: wgpu::BindGroup,
     hash: CcHashBinds,
     eval: wgpu::BindGroup,
+}
+
+/// What the stage keeps for its whole life (the model's size fixes it).
+struct Fixed<'a> {
+    topo: &'a wgpu::Buffer,
+    homes: &'a wgpu::Buffer,
+    state: &'a wgpu::Buffer,
+    marks: &'a wgpu::Buffer,
+    args: &'a wgpu::Buffer,
+    passes: &'a [wgpu::Buffer; 2],
 }
 
 /// The adaptive Catmull-Clark tessellation stage of one model.
@@ -286,29 +258,37 @@ pub struct CcStage {
     topo: wgpu::Buffer,
     homes: wgpu::Buffer,
     state: wgpu::Buffer,
-    best: wgpu::Buffer,
-    root_offsets: wgpu::Buffer,
-    root_scan: PrefixSum,
+    /// `traverse::Marks`: per patch its leaves and first leaf, best split, lanes' leaves.
+    marks: wgpu::Buffer,
+    marks_scan: PrefixSum,
     args: wgpu::Buffer,
+    /// The pass number of `cc_traverse` (0 count, 1 emit), one uniform each.
+    passes: [wgpu::Buffer; 2],
     readback: StatusReadback,
     /// The newest status read back, and whether the buffers are still to grow for it.
     latest: Option<(CcStatus, bool)>,
     growths: u32,
+    /// Dispatches the last recorded run held.
+    dispatches: u32,
     buffers: Buffers,
     binds: Binds,
 }
 
-/// The counters and, per (patch, trial), splits, largest leaf bound and leaves over the
-/// tolerance.
-fn state_bytes(patches: u32) -> u64 {
-    (std::mem::size_of::<CcState>() as u64) + 3 * 4 * (CC_TRIALS as u64) * patches.max(1) as u64
+/// Words of the marks buffer for `patches` patches: leaves per patch and the total, best
+/// `(leaves, trial)` per patch, leaves per patch and lane.
+fn marks_words(patches: u32) -> u64 {
+    let p = patches.max(1) as u64;
+    p + 1 + 2 * p + CC_SLOTS as u64 * p
 }
 
 impl CcStage {
-    /// Phases [`profile_phases`](Self::profile_phases) times: every search round, leaf
-    /// collection, leaf keys, vertex hash, vertex evaluation, polygons and triangles.
+    /// Dispatches in every run, whatever the model, tolerance, depth or first split.
+    pub const DISPATCHES: u32 = 10 + 3 * PrefixSum::DISPATCHES;
+
+    /// Phases [`profile_phases`](Self::profile_phases) times: marking, vertices (keys,
+    /// hash, numbering, evaluation), polygons and triangles.
     #[doc(hidden)]
-    pub const TIMED_PHASES: u32 = CC_SEARCH_ROUNDS + 1 + 4;
+    pub const TIMED_PHASES: u32 = 3;
 
     /// Uploads `model` through `queue`, sizes the buffers with a first guess (grown on
     /// demand), and compiles the stage's kernels into `kernels` if no stage has. A
@@ -342,9 +322,10 @@ impl CcStage {
         params.validate(model)?;
         gpu_leaf_bound(params)?;
         let kernels = kernels.cc();
+        let patch_count = model.mesh.patch_count() as u32;
         let gpu_model = CcGpuModel::new(model);
         let model_buffers = CcModelBuffers::new(device, queue, &gpu_model)?;
-        let patch_count = model.mesh.patch_count() as u32;
+        check_size(device, "patch marks", 4 * marks_words(patch_count))?;
         let topo = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("tessera cc topology"),
             contents: bytemuck::cast_slice(&patch_topology(&model.mesh)),
@@ -356,36 +337,45 @@ impl CcStage {
             contents: bytemuck::cast_slice(&point_homes(&model.mesh)),
             usage: wgpu::BufferUsages::STORAGE,
         });
-        let state = storage(device, "tessera cc state", state_bytes(patch_count));
-        let best = storage(
+        let state = storage(
             device,
-            "tessera cc best split",
-            8 * patch_count.max(1) as u64,
+            "tessera cc state",
+            std::mem::size_of::<CcState>() as u64,
         );
-        let root_offsets = storage(
+        let marks = storage(
             device,
-            "tessera cc root offsets",
-            4 * (patch_count as u64 + 1),
+            "tessera cc patch marks",
+            4 * marks_words(patch_count),
         );
-        let root_scan = PrefixSum::new(device, &kernels.scan, &root_offsets, patch_count + 1);
+        // Each patch's leaves and the total after them.
+        let marks_scan = PrefixSum::new(device, &kernels.scan, &marks, patch_count + 1);
         let args = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("tessera cc dispatch args"),
-            size: 48,
+            size: 36,
             usage: wgpu::BufferUsages::STORAGE
                 | wgpu::BufferUsages::INDIRECT
                 | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
+        let passes = [0u32, 1].map(|pass| {
+            device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("tessera cc traverse pass"),
+                contents: bytemuck::cast_slice(&[pass, 0, 0, 0]),
+                usage: wgpu::BufferUsages::UNIFORM,
+            })
+        });
         let eps = params.epsilon(model);
         let counts = (patch_count, point_count);
         let buffers = Buffers::new(device, &kernels, (counts, &state), (params, eps), caps)?;
-        let binds = Binds::new(
-            device,
-            &kernels,
-            &model_buffers,
-            (&topo, &homes, &state, &best, &root_offsets, &args),
-            &buffers,
-        );
+        let fixed = Fixed {
+            topo: &topo,
+            homes: &homes,
+            state: &state,
+            marks: &marks,
+            args: &args,
+            passes: &passes,
+        };
+        let binds = Binds::new(device, &kernels, &model_buffers, &fixed, &buffers);
         Ok(CcStage {
             kernels,
             model: model_buffers,
@@ -397,13 +387,14 @@ impl CcStage {
             topo,
             homes,
             state,
-            best,
-            root_offsets,
-            root_scan,
+            marks,
+            marks_scan,
             args,
+            passes,
             readback: StatusReadback::new("tessera cc status readback", status_size()),
             latest: None,
             growths: 0,
+            dispatches: 0,
             buffers,
             binds,
         })
@@ -469,6 +460,12 @@ impl CcStage {
         self.model.byte_size()
     }
 
+    /// Dispatches the last recorded run held ([`DISPATCHES`](Self::DISPATCHES)), counted
+    /// as they were recorded; 0 before the first.
+    pub fn dispatches(&self) -> u32 {
+        self.dispatches
+    }
+
     /// Records the whole tessellation into `encoder` (see the module docs), and a copy of
     /// its counters read back without blocking. Submits nothing. A status an earlier run
     /// left grows the buffers first if that run overflowed (an error only when the device
@@ -479,7 +476,7 @@ impl CcStage {
         _queue: &wgpu::Queue,
         encoder: &mut wgpu::CommandEncoder,
     ) -> Result<()> {
-        self.grow_from_readback(device)?;
+        self.grow_from_readback(device, encoder)?;
         self.record_run(device, encoder, None, None);
         Ok(())
     }
@@ -493,7 +490,7 @@ impl CcStage {
         encoder: &mut wgpu::CommandEncoder,
         timestamps: RunTimestamps<'_>,
     ) -> Result<()> {
-        self.grow_from_readback(device)?;
+        self.grow_from_readback(device, encoder)?;
         self.record_run(device, encoder, None, Some(timestamps));
         Ok(())
     }
@@ -515,17 +512,25 @@ impl CcStage {
         names
     }
 
-    fn grow_from_readback(&mut self, device: &wgpu::Device) -> Result<()> {
+    fn grow_from_readback(
+        &mut self,
+        device: &wgpu::Device,
+        encoder: &mut wgpu::CommandEncoder,
+    ) -> Result<()> {
         self.poll_status(device);
         if let Some((status, true)) = self.latest {
-            self.grow(device, &status)?;
+            let old = self.grow(device, &status)?;
+            // The mesh drawn until a run fits the new buffers.
+            if let Some(old) = old {
+                self.buffers.output.copy_from(encoder, &old.output);
+            }
         }
         Ok(())
     }
 
     /// The newest run's status that has arrived, without waiting (a frame or so late);
     /// `None` before the first. After an overflow the next [`prepare`](Self::prepare)
-    /// grows the buffers: record a run again to draw the mesh.
+    /// grows the buffers, and the mesh drawn until then is the last complete one.
     pub fn poll_status(&mut self, device: &wgpu::Device) -> Option<CcStatus> {
         if let Some(bytes) = self.readback.poll(device) {
             let status = status_from_bytes(&bytes);
@@ -540,10 +545,10 @@ impl CcStage {
     }
 
     /// Whether the newest status [`poll_status`](Self::poll_status) read is an overflow
-    /// that the buffers have not yet grown for: the mesh drawn now is empty, and a render
-    /// loop that tessellates only on change records one more run (its `prepare` grows
-    /// first). False again once that `prepare` has grown, so a status that arrives late
-    /// from before the growth does not ask twice.
+    /// that the buffers have not yet grown for: the mesh drawn now is the last complete
+    /// one, not this surface's, and a render loop that tessellates only on change records
+    /// one more run (its `prepare` grows first). False again once that `prepare` has
+    /// grown, so a status that arrives late from before the growth does not ask twice.
     pub fn grow_pending(&self) -> bool {
         matches!(self.latest, Some((_, true)))
     }
@@ -567,105 +572,69 @@ impl CcStage {
         let b = &self.buffers;
         let k = &self.kernels;
         let binds = &self.binds;
-        stamp(encoder, "");
+        let args = &self.args;
+        let mut dispatches = 0;
         encoder.clear_buffer(&self.state, 0, None);
         encoder.clear_buffer(&b.hash.status, 0, None);
-        let p = self.patch_count;
-        for round in 0..self.params.first_split.search_rounds() {
-            {
-                let mut pass = passes.begin(encoder, "tessera cc marking", false);
-                k.roots_count.dispatch(&mut pass, &binds.roots_count, p, 64);
-                self.root_scan.record(&mut pass, &k.scan);
-                k.roots_emit.dispatch(&mut pass, &binds.roots_emit, p, 64);
-                k.roots_finish
-                    .dispatch(&mut pass, &binds.roots_finish, 1, 1);
-                for level in 0..=self.params.max_depth as usize {
-                    let parity = level % 2;
-                    k.mark
-                        .dispatch_indirect(&mut pass, &binds.mark[parity], &self.args, LIST_ARGS);
-                    b.flag_scan.record(&mut pass, &k.scan);
-                    k.split.dispatch_indirect(
-                        &mut pass,
-                        &binds.split[parity],
-                        &self.args,
-                        LIST_ARGS,
-                    );
-                    k.split_finish
-                        .dispatch(&mut pass, &binds.split_finish, 1, 1);
-                }
-                k.choose.dispatch(&mut pass, &binds.choose, p, 64);
-                k.next_round.dispatch(&mut pass, &binds.next_round, 1, 1);
-            }
-            stamp(encoder, &format!("search round {round}"));
-        }
+        encoder.clear_buffer(&b.hash.table, 0, None);
+        stamp(encoder, "");
         {
-            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some("tessera cc leaf collection"),
-                timestamp_writes: None,
-            });
-            k.collect_count.dispatch_indirect(
-                &mut pass,
-                &binds.collect_count,
-                &self.args,
-                SEARCH_LEAF_ARGS,
-            );
-            b.collect_scan.record(&mut pass, &k.scan);
-            k.collect_emit.dispatch_indirect(
-                &mut pass,
-                &binds.collect_emit,
-                &self.args,
-                SEARCH_LEAF_ARGS,
-            );
-            k.collect_finish
-                .dispatch(&mut pass, &binds.collect_finish, 1, 1);
+            let mut pass = passes.begin(encoder, "tessera cc marking", false);
+            let patches = self.patch_count;
+            dispatches += k
+                .traverse
+                .dispatch(&mut pass, &binds.traverse[0], patches, 1);
+            dispatches += self.marks_scan.record(&mut pass, &k.scan);
+            dispatches += k
+                .traverse
+                .dispatch(&mut pass, &binds.traverse[1], patches, 1);
         }
-        stamp(encoder, "leaf collection");
+        stamp(encoder, "marking");
         {
-            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some("tessera cc leaf keys"),
-                timestamp_writes: None,
-            });
-            k.leaf_keys
-                .dispatch_indirect(&mut pass, &binds.leaf_keys, &self.args, LEAF_ARGS);
+            let mut pass = passes.begin(encoder, "tessera cc vertices", false);
+            let hash = &binds.hash;
+            dispatches +=
+                k.leaf_keys
+                    .dispatch_indirect(&mut pass, &binds.leaf_keys, args, LEAF_ARGS);
+            dispatches += k
+                .hash
+                .insert
+                .dispatch_indirect(&mut pass, &hash.insert, args, ITEM_ARGS);
+            dispatches +=
+                k.hash
+                    .mark_first
+                    .dispatch_indirect(&mut pass, &hash.mark_first, args, ITEM_ARGS);
+            dispatches +=
+                k.polygon_count
+                    .dispatch_indirect(&mut pass, &binds.polygon_count, args, LEAF_ARGS);
+            dispatches += b.number_scan.record(&mut pass, &k.scan);
+            dispatches += k
+                .hash
+                .assign
+                .dispatch_indirect(&mut pass, &hash.assign, args, ITEM_ARGS);
+            dispatches +=
+                k.gather_points
+                    .dispatch_indirect(&mut pass, &binds.gather_points, args, ITEM_ARGS);
+            // Whether everything fits: only then is the output written.
+            dispatches += k.finish.dispatch(&mut pass, &binds.finish, 1, 1);
+            dispatches +=
+                k.polygon_emit
+                    .dispatch_indirect(&mut pass, &binds.polygon_emit, args, LEAF_ARGS);
+            // At most one vertex per item.
+            dispatches += k
+                .eval
+                .kernel
+                .dispatch_indirect(&mut pass, &binds.eval, args, ITEM_ARGS);
         }
-        stamp(encoder, "leaf keys");
-        // The hash clears its table; the keys kernel has set how many items.
-        b.hash
-            .record_indirect(encoder, &k.hash, &binds.hash, &self.args, ITEM_ARGS);
-        stamp(encoder, "vertex hash");
+        stamp(encoder, "vertices");
         {
-            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some("tessera cc vertices"),
-                timestamp_writes: None,
-            });
-            k.gather_points.dispatch_indirect(
-                &mut pass,
-                &binds.gather_points,
-                &self.args,
-                ITEM_ARGS,
-            );
+            let mut pass = passes.begin(encoder, "tessera cc triangles", true);
+            dispatches +=
+                k.triangulate
+                    .dispatch_indirect(&mut pass, &binds.triangulate, args, LEAF_ARGS);
         }
-        // At most one vertex per item.
-        k.eval
-            .record_indirect(encoder, &binds.eval, &self.args, ITEM_ARGS);
-        stamp(encoder, "vertex evaluation");
-        {
-            let mut pass = passes.begin(encoder, "tessera cc polygons", true);
-            k.polygon_count.dispatch_indirect(
-                &mut pass,
-                &binds.polygon_count,
-                &self.args,
-                LEAF_ARGS,
-            );
-            b.poly_scan.record(&mut pass, &k.scan);
-            k.polygon_emit
-                .dispatch_indirect(&mut pass, &binds.polygon_emit, &self.args, LEAF_ARGS);
-            k.triangulate
-                .dispatch_indirect(&mut pass, &binds.triangulate, &self.args, LEAF_ARGS);
-            k.triangulate_finish
-                .dispatch(&mut pass, &binds.triangulate_finish, 1, 1);
-        }
-        stamp(encoder, "polygons and triangles");
+        stamp(encoder, "triangles");
+        self.dispatches = dispatches;
         let state_size = std::mem::size_of::<CcState>() as u64;
         let hash_size = std::mem::size_of::<CcHashStatus>() as u64;
         let (state, hash, indirect) = (&self.state, &b.hash.status, b.output.indirect());
@@ -683,10 +652,16 @@ impl CcStage {
     }
 
     /// After an overflow, reallocates what was too small to what the run needed (with
-    /// headroom). Returns whether anything changed; an error if the device cannot hold it.
-    fn grow(&mut self, device: &wgpu::Device, status: &CcStatus) -> Result<bool> {
+    /// headroom). Returns the buffers replaced, if any; an error if the device cannot
+    /// hold what is needed.
+    fn grow(&mut self, device: &wgpu::Device, status: &CcStatus) -> Result<Option<Buffers>> {
         if !status.overflowed() {
-            return Ok(false);
+            return Ok(None);
+        }
+        if status.state.overflow & 2 != 0 {
+            return Err(Error::Wgpu(
+                "the marking's two passes disagreed on a patch's leaves".into(),
+            ));
         }
         let s = &status.state;
         let old = self.buffers.caps;
@@ -697,13 +672,18 @@ impl CcStage {
                 have
             }
         };
+        // With the leaves cut at their capacity, the rest counted only what was kept:
+        // scale it to all the leaves.
+        let kept = s.leaves.min(old.leaves).max(1) as u64;
+        let scaled = |need: u32| {
+            let all = need as u64 * s.leaves.max(1) as u64 / kept;
+            all.min(u32::MAX as u64) as u32
+        };
         let mut caps = CcCapacities {
-            cells: grow(s.need_cells, old.cells),
             leaves: grow(s.leaves, old.leaves),
-            search_leaves: grow(s.search_leaves, old.search_leaves),
-            poly: grow(s.need_poly, old.poly),
-            vertices: grow(s.vertices, old.vertices),
-            indices: grow(s.need_indices, old.indices),
+            poly: grow(scaled(s.need_poly), old.poly),
+            vertices: grow(scaled(s.vertices), old.vertices),
+            indices: grow(scaled(s.need_indices), old.indices),
             hash_slots: old.hash_slots,
         };
         // The hash's items are eight per leaf, about half of them without a key, and
@@ -724,25 +704,20 @@ impl CcStage {
             (&self.params, self.epsilon()),
             caps,
         )?;
-        self.binds = Binds::new(
-            device,
-            &self.kernels,
-            &self.model,
-            (
-                &self.topo,
-                &self.homes,
-                &self.state,
-                &self.best,
-                &self.root_offsets,
-                &self.args,
-            ),
-            &buffers,
-        );
-        self.buffers = buffers;
+        let fixed = Fixed {
+            topo: &self.topo,
+            homes: &self.homes,
+            state: &self.state,
+            marks: &self.marks,
+            args: &self.args,
+            passes: &self.passes,
+        };
+        self.binds = Binds::new(device, &self.kernels, &self.model, &fixed, &buffers);
+        let old = std::mem::replace(&mut self.buffers, buffers);
         self.readback.new_generation();
         self.latest = self.latest.map(|(s, _)| (s, false));
         self.growths += 1;
-        Ok(true)
+        Ok(Some(old))
     }
 
     /// Runs to completion on its own submission, growing and rerunning until everything
@@ -766,8 +741,9 @@ impl CcStage {
 }
 
 /// The leaves, hash items and polygons of a run as the kernels left them, for the tests
-/// that compare `cc_leaf_keys` and `cc_polygon` with their CPU twins
-/// ([`tessera_core::catmull_clark::gpu_model::leaf_items`],
+/// that compare `cc_traverse`, `cc_leaf_keys` and `cc_polygon` with their CPU twins
+/// ([`tessera_core::catmull_clark::traverse`],
+/// [`tessera_core::catmull_clark::gpu_model::leaf_items`],
 /// [`tessera_core::catmull_clark::polygon`]).
 #[doc(hidden)]
 #[derive(Clone, Debug, Default)]
@@ -777,8 +753,12 @@ pub struct CcPolygons {
     pub item_keys: Vec<[u32; 2]>,
     pub item_ids: Vec<u32>,
     pub item_points: Vec<CcVertexPoint>,
-    /// Per patch: the trial of its first split (`best[p].y`).
+    /// Per patch: its first leaf; one more entry for the end.
+    pub first_leaf: Vec<u32>,
+    /// Per patch: the trial of its first split.
     pub first_trial: Vec<u32>,
+    /// Per patch and lane: the leaves of the lane's walk.
+    pub lane_leaves: Vec<[u32; CC_SLOTS as usize]>,
     /// Per leaf: where its polygon starts in `verts`; one more entry for the end.
     pub offsets: Vec<u32>,
     /// Per leaf: the points found on each side.
@@ -802,8 +782,11 @@ impl CcStage {
             crate::readback::read_buffer(device, queue, buffer, offset, size)
         };
         let leaves = status.state.leaves as u64;
-        let best: Vec<[u32; 2]> =
-            bytemuck::pod_collect_to_vec(&read(&self.best, 0, 8 * self.patch_count as u64)?);
+        let p = self.patch_count as u64;
+        let marks: Vec<u32> =
+            bytemuck::pod_collect_to_vec(&read(&self.marks, 0, 4 * marks_words(self.patch_count))?);
+        let best = &marks[(p + 1) as usize..(3 * p + 1) as usize];
+        let lanes = &marks[(3 * p + 1) as usize..];
         let offsets: Vec<u32> =
             bytemuck::pod_collect_to_vec(&read(&b.poly_offsets, 0, 4 * (leaves + 1))?);
         let side_base = 4 * (b.caps.leaves as u64 + 1);
@@ -821,7 +804,13 @@ impl CcStage {
                 0,
                 point_bytes * items,
             )?),
-            first_trial: best.iter().map(|b| b[1]).collect(),
+            first_leaf: marks[..=p as usize].to_vec(),
+            first_trial: best.chunks(2).map(|b| b[1]).collect(),
+            lane_leaves: lanes
+                .chunks(CC_SLOTS as usize)
+                .take(p as usize)
+                .map(|c| c.try_into().expect("a lane count per lane"))
+                .collect(),
             offsets,
             side_counts,
             verts: bytemuck::pod_collect_to_vec(&read(&b.poly_verts, 0, 16 * total)?),
@@ -844,11 +833,11 @@ impl GrowingStage for CcStage {
         self.read_status(device)
     }
     fn grow_to(&mut self, device: &wgpu::Device, status: &CcStatus) -> Result<bool> {
-        self.grow(device, status)
+        Ok(self.grow(device, status)?.is_some())
     }
 }
 
-/// An error if the run overflowed: its buffers hold nothing whole.
+/// An error if the run overflowed: its buffers hold nothing whole of this run.
 fn completed(status: &CcStatus) -> Result<()> {
     if status.overflowed() {
         return Err(Error::Wgpu(
@@ -904,14 +893,13 @@ fn tess_params(
         max_depth: params.max_depth,
         tolerance: eps as f32,
         patch_count,
-        cell_capacity: caps.cells,
         leaf_capacity: caps.leaves,
         poly_capacity: caps.poly,
         index_capacity: caps.indices,
-        search_leaf_capacity: caps.search_leaves,
-        search_rounds: params.first_split.search_rounds(),
+        trials: params.first_split.trials(),
         points,
         vertex_capacity: caps.vertices,
+        pad: [0; 2],
     }
 }
 
@@ -924,9 +912,7 @@ impl Buffers {
         caps: CcCapacities,
     ) -> Result<Self> {
         let caps = CcCapacities {
-            cells: caps.cells.max(1),
             leaves: caps.leaves.max(1),
-            search_leaves: caps.search_leaves.max(1),
             poly: caps.poly.max(4),
             vertices: caps.vertices.max(1),
             indices: caps.indices.max(3),
@@ -934,10 +920,10 @@ impl Buffers {
         };
         // Eight hash items per leaf (`cc_leaf_keys`), about half of them keys.
         let items = 8 * caps.leaves;
+        let point_bytes = std::mem::size_of::<CcVertexPoint>() as u64;
         for (what, bytes) in [
-            ("cell list", caps.cells as u64 * 16),
             ("leaf", caps.leaves as u64 * 16),
-            ("search leaf", caps.search_leaves as u64 * 16),
+            ("hash item", items as u64 * point_bytes),
             ("polygon", caps.poly as u64 * 16),
             ("index", caps.indices as u64 * 4),
             (
@@ -954,59 +940,28 @@ impl Buffers {
             usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
         });
         let cell_bytes = std::mem::size_of::<CcCell>() as u64;
-        // Split flags of a cell list, then keep flags of the search's leaves.
-        let flags = storage(
-            device,
-            "tessera cc flags",
-            4 * (caps.cells.max(caps.search_leaves) as u64 + 1),
-        );
-        // Scanned as far as the list is filled (CcState::count), and as far as the search
-        // found leaves (CcState::search_leaves).
-        let flag_scan = PrefixSum::with_live_count(
-            device,
-            &kernels.scan,
-            &flags,
-            caps.cells + 1,
-            (state, state_word(std::mem::offset_of!(CcState, count))),
-        );
-        let collect_scan = PrefixSum::with_live_count(
-            device,
-            &kernels.scan,
-            &flags,
-            caps.search_leaves + 1,
-            (
-                state,
-                state_word(std::mem::offset_of!(CcState, search_leaves)),
-            ),
-        );
         let poly_offsets = storage(
             device,
             "tessera cc polygon offsets",
             4 * (caps.leaves as u64 + 1 + 4 * caps.leaves as u64),
         );
-        // As far as there are leaves (CcState::leaves).
-        let poly_scan = PrefixSum::with_live_count(
+        let hash = CcVertexHash::new(device, &kernels.hash, items, caps.hash_slots);
+        // The hash's flags as far as there are items (CcHashStatus::items, word 0), the
+        // polygon sizes as far as there are leaves (CcState::leaves).
+        let number_scan = PrefixSum::pair(
             device,
             &kernels.scan,
-            &poly_offsets,
-            caps.leaves + 1,
-            (state, state_word(std::mem::offset_of!(CcState, leaves))),
+            (&hash.offsets, hash.item_capacity, (&hash.status, 0)),
+            (
+                &poly_offsets,
+                caps.leaves + 1,
+                (state, state_word(std::mem::offset_of!(CcState, leaves))),
+            ),
         );
-        let point_bytes = std::mem::size_of::<CcVertexPoint>() as u64;
         Ok(Buffers {
             caps,
             params,
-            cells: [
-                storage(device, "tessera cc cells 0", cell_bytes * caps.cells as u64),
-                storage(device, "tessera cc cells 1", cell_bytes * caps.cells as u64),
-            ],
-            flags,
             leaves: storage(device, "tessera cc leaves", cell_bytes * caps.leaves as u64),
-            search_leaves: storage(
-                device,
-                "tessera cc search leaves",
-                cell_bytes * caps.search_leaves as u64,
-            ),
             keys: storage(device, "tessera cc keys", 8 * items as u64),
             item_points: storage(device, "tessera cc item points", point_bytes * items as u64),
             vertex_points: storage(
@@ -1017,45 +972,32 @@ impl Buffers {
             vertex_count: storage(device, "tessera cc vertex count", 4),
             poly_offsets,
             poly_verts: storage(device, "tessera cc polygons", 16 * caps.poly as u64),
-            hash: CcVertexHash::new(device, &kernels.hash, items, caps.hash_slots),
+            hash,
             output: MeshBuffers::with_capacity(device, caps.vertices, caps.indices),
-            flag_scan,
-            collect_scan,
-            poly_scan,
+            number_scan,
         })
     }
 }
 
 impl Binds {
-    fn new(
+    fn new<'a>(
         device: &wgpu::Device,
         k: &CcKernels,
-        model: &CcModelBuffers,
-        (topo, homes, state, best, root_offsets, args): (
-            &wgpu::Buffer,
-            &wgpu::Buffer,
-            &wgpu::Buffer,
-            &wgpu::Buffer,
-            &wgpu::Buffer,
-            &wgpu::Buffer,
-        ),
-        b: &Buffers,
+        model: &'a CcModelBuffers,
+        f: &Fixed<'a>,
+        b: &'a Buffers,
     ) -> Self {
-        let common = |parity: usize| {
+        let common = |pass: &'a wgpu::Buffer| -> Vec<(u32, &'a wgpu::Buffer)> {
             let mut e: Vec<(u32, &wgpu::Buffer)> = model.entries().to_vec();
             e.extend([
                 (slot::PARAMS, &b.params),
-                (slot::STATE, state),
-                (slot::CELLS_IN, &b.cells[parity]),
-                (slot::CELLS_OUT, &b.cells[1 - parity]),
-                (slot::FLAGS, &b.flags),
+                (slot::STATE, f.state),
                 (slot::LEAVES, &b.leaves),
-                (slot::SEARCH_LEAVES, &b.search_leaves),
-                (slot::BEST, best),
-                (slot::ROOT_OFFSETS, root_offsets),
-                (slot::ARGS, args),
-                (slot::TOPO, topo),
-                (slot::HOMES, homes),
+                (slot::MARKS, f.marks),
+                (slot::ARGS, f.args),
+                (slot::TOPO, f.topo),
+                (slot::HOMES, f.homes),
+                (slot::PASS, pass),
                 (slot::ITEM_POINTS, &b.item_points),
                 (slot::POLY_OFFSETS, &b.poly_offsets),
                 (slot::POLY_VERTS, &b.poly_verts),
@@ -1073,32 +1015,20 @@ impl Binds {
             ]);
             e
         };
-        // Roots are written to cells[0], read by level 0 as parity 0: CELLS_OUT of
-        // parity 1 is cells[0].
-        let even = common(0);
-        let odd = common(1);
+        let count = common(&f.passes[0]);
+        let emit = common(&f.passes[1]);
         // The nets are a texture (see `CcModelBuffers::nets`).
         let bind = |kernel: &Kernel, entries: &[(u32, &wgpu::Buffer)]| {
             kernel.bind_with_textures(device, entries, &model.textures())
         };
         Binds {
-            roots_count: bind(&k.roots_count, &odd),
-            roots_emit: bind(&k.roots_emit, &odd),
-            roots_finish: bind(&k.roots_finish, &odd),
-            mark: [bind(&k.mark, &even), bind(&k.mark, &odd)],
-            split: [bind(&k.split, &even), bind(&k.split, &odd)],
-            split_finish: bind(&k.split_finish, &even),
-            choose: bind(&k.choose, &even),
-            next_round: bind(&k.next_round, &even),
-            collect_count: bind(&k.collect_count, &even),
-            collect_emit: bind(&k.collect_emit, &even),
-            collect_finish: bind(&k.collect_finish, &even),
-            leaf_keys: bind(&k.leaf_keys, &even),
-            gather_points: bind(&k.gather_points, &even),
-            polygon_count: bind(&k.polygon_count, &even),
-            polygon_emit: bind(&k.polygon_emit, &even),
-            triangulate: bind(&k.triangulate, &even),
-            triangulate_finish: bind(&k.triangulate_finish, &even),
+            traverse: [bind(&k.traverse, &count), bind(&k.traverse, &emit)],
+            leaf_keys: bind(&k.leaf_keys, &count),
+            gather_points: bind(&k.gather_points, &count),
+            polygon_count: bind(&k.polygon_count, &count),
+            polygon_emit: bind(&k.polygon_emit, &count),
+            finish: bind(&k.finish, &count),
+            triangulate: bind(&k.triangulate, &count),
             hash: b.hash.bind(device, &k.hash, &b.keys),
             eval: k.eval.bind(
                 device,

@@ -1,0 +1,204 @@
+//! Adaptive marking as the GPU runs it, one patch at a time: twin of
+//! `shaders/cc_traverse.wgsl`, which marks every patch to full depth in one dispatch (a
+//! workgroup per patch) rather than one dispatch per level.
+//!
+//! A trial (a first split `ku × kv`) is decided level by level while a level holds fewer
+//! than [`CC_SLOTS`] cells; the cells of the first level that holds more are then shared
+//! among the lanes, lane `l` taking cells `l, l + 64, …`, each walked depth first with a
+//! stack, quadrant 0 first. The leaves come out in that order: those decided level by
+//! level, level after level, then lane after lane. Each cell is decided alone, so the
+//! leaves are the recursion's ([`super::adaptive`]) in another order.
+//!
+//! The first-split search tries the trials in order, skips one that cannot beat the best
+//! so far (a split into `ku · kv` cells has at least that many leaves) and stops a trial
+//! once its leaves reach the best: ties go to the earlier trial.
+
+use crate::gpu_types::CC_SLOTS;
+
+/// A cell of a patch: `[i, i + w] × [j, j + h]` in grid units, `depth` midpoint splits
+/// below its first split.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Cell {
+    /// Lower-left corner along u.
+    pub i: u32,
+    /// Lower-left corner along v.
+    pub j: u32,
+    /// Width along u.
+    pub w: u32,
+    /// Height along v.
+    pub h: u32,
+    /// Midpoint splits below the first split.
+    pub depth: u32,
+}
+
+impl Cell {
+    /// Corners counter-clockwise from the lower left.
+    pub fn corners(&self) -> [(u32, u32); 4] {
+        let Cell { i, j, w, h, .. } = *self;
+        [(i, j), (i + w, j), (i + w, j + h), (i, j + h)]
+    }
+
+    /// Quadrant `q` (`[0,½]², [½,1]×[0,½], [½,1]², [0,½]×[½,1]`).
+    pub fn child(&self, q: u32) -> Cell {
+        let (w, h) = (self.w / 2, self.h / 2);
+        Cell {
+            i: self.i + u32::from(q == 1 || q == 2) * w,
+            j: self.j + u32::from(q >= 2) * h,
+            w,
+            h,
+            depth: self.depth + 1,
+        }
+    }
+}
+
+/// The cells of first split `ku × kv` on a grid of `n` units per patch side, in the
+/// kernel's order (row by row).
+pub fn first_cells(n: u32, (ku, kv): (u32, u32)) -> impl Iterator<Item = Cell> {
+    let (w, h) = (n / ku, n / kv);
+    (0..ku * kv).map(move |c| Cell {
+        i: (c % ku) * w,
+        j: (c / ku) * h,
+        w,
+        h,
+        depth: 0,
+    })
+}
+
+/// One trial's leaves in the kernel's order, each with what the decision gave it.
+#[derive(Clone, Debug)]
+pub struct Walk<L> {
+    /// Every leaf with its payload.
+    pub leaves: Vec<(Cell, L)>,
+    /// Leaves decided level by level (the first ones of `leaves`).
+    pub level_leaves: u32,
+    /// Then each lane's walk's leaves (`marks` of the kernel).
+    pub lane_leaves: [u32; CC_SLOTS as usize],
+}
+
+/// Trial `split` of a patch, stopped (`None`) once its leaves reach `stop`. `decide`
+/// gives `None` for a cell to split, the leaf's payload for a leaf.
+pub fn walk_trial<L>(
+    n: u32,
+    split: (u32, u32),
+    stop: usize,
+    decide: &mut dyn FnMut(Cell) -> Option<L>,
+) -> Option<Walk<L>> {
+    let lanes = CC_SLOTS as usize;
+    let mut leaves = Vec::new();
+    let mut level: Vec<Cell> = first_cells(n, split).collect();
+    // Level by level while a level has fewer cells than lanes (at most max_depth + 1).
+    while !level.is_empty() && level.len() < lanes {
+        if leaves.len() >= stop {
+            return None;
+        }
+        let mut next = Vec::with_capacity(4 * level.len());
+        for cell in level {
+            match decide(cell) {
+                None => next.extend((0..4).map(|q| cell.child(q))),
+                Some(leaf) => leaves.push((cell, leaf)),
+            }
+        }
+        level = next;
+    }
+    if leaves.len() >= stop {
+        return None;
+    }
+    let level_leaves = leaves.len() as u32;
+    let mut lane_leaves = [0; CC_SLOTS as usize];
+    for (lane, count) in lane_leaves.iter_mut().enumerate() {
+        let before = leaves.len();
+        for &start in level.iter().skip(lane).step_by(lanes) {
+            let mut stack = vec![start];
+            while let Some(cell) = stack.pop() {
+                if leaves.len() >= stop {
+                    return None;
+                }
+                match decide(cell) {
+                    // Pushed last to first: quadrant 0 is walked first.
+                    None => stack.extend((0..4).rev().map(|q| cell.child(q))),
+                    Some(leaf) => leaves.push((cell, leaf)),
+                }
+            }
+        }
+        *count = (leaves.len() - before) as u32;
+    }
+    Some(Walk {
+        leaves,
+        level_leaves,
+        lane_leaves,
+    })
+}
+
+/// The first-split search of one patch over `splits` in order: the index of the split
+/// with the fewest leaves (ties to the earlier) and its walk.
+pub fn search<L>(
+    n: u32,
+    splits: &[(u32, u32)],
+    decide: &mut dyn FnMut(Cell) -> Option<L>,
+) -> (u32, Walk<L>) {
+    let mut best: Option<(u32, Walk<L>)> = None;
+    for (t, &split) in splits.iter().enumerate() {
+        let stop = best.as_ref().map_or(usize::MAX, |(_, w)| w.leaves.len());
+        if (split.0 * split.1) as usize >= stop {
+            continue;
+        }
+        // A walk can end on its `stop`-th leaf: a tie, which goes to the earlier trial.
+        if let Some(walk) = walk_trial(n, split, stop, decide).filter(|w| w.leaves.len() < stop) {
+            best = Some((t as u32, walk));
+        }
+    }
+    best.expect("the first trial is never skipped or stopped")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_walk_finds_the_recursions_leaves_in_the_kernels_order() {
+        // Split where a cell overlaps a disc near one corner, down to depth 5.
+        let n = 840 << 5;
+        let mut decide = |c: Cell| {
+            let near = c.i < n / 3 && c.j < n / 5;
+            (c.depth == 5 || !near).then_some(())
+        };
+        let walk = walk_trial(n, (3, 3), usize::MAX, &mut decide).expect("not stopped");
+        fn recurse(c: Cell, d: &mut dyn FnMut(Cell) -> Option<()>, out: &mut Vec<Cell>) {
+            match d(c) {
+                None => (0..4).for_each(|q| recurse(c.child(q), d, out)),
+                Some(()) => out.push(c),
+            }
+        }
+        let mut reference = Vec::new();
+        for c in first_cells(n, (3, 3)) {
+            recurse(c, &mut decide, &mut reference);
+        }
+        let key = |c: &Cell| (c.i, c.j, c.w);
+        let mut got: Vec<_> = walk.leaves.iter().map(|(c, _)| key(c)).collect();
+        let mut want: Vec<_> = reference.iter().map(key).collect();
+        assert_ne!(got, want, "level leaves come first: another order");
+        got.sort_unstable();
+        want.sort_unstable();
+        assert_eq!(got, want);
+        let lanes: u32 = walk.lane_leaves.iter().sum();
+        assert_eq!((walk.level_leaves + lanes) as usize, walk.leaves.len());
+        assert!(walk.level_leaves > 0 && lanes > 0);
+    }
+
+    #[test]
+    fn the_search_keeps_the_fewest_leaves_with_ties_to_the_earlier_trial() {
+        let n = 840 << 3;
+        // Every cell is a leaf: a split of ku·kv cells has ku·kv leaves; 1×1 wins.
+        let (t, walk) = search(n, &[(1, 1), (3, 3)], &mut |_| Some(()));
+        assert_eq!((t, walk.leaves.len()), (0, 1));
+        // Split cells wider than a third of the patch: 1×1 gives 16 leaves, 3×3 gives 9.
+        let mut decide = |c: Cell| (c.w <= n / 3).then_some(());
+        let (t, walk) = search(n, &[(1, 1), (3, 3), (2, 3)], &mut decide);
+        assert_eq!((t, walk.leaves.len()), (1, 9));
+        // A trial stopped at the best is not the best.
+        assert!(walk_trial(n, (1, 1), 9, &mut decide).is_none());
+        // A tie goes to the earlier trial, also when the later one ends on its last leaf.
+        let (t, walk) = search(n, &[(3, 3), (1, 1), (3, 3)], &mut decide);
+        assert_eq!((t, walk.leaves.len()), (0, 9));
+    }
+}
