@@ -285,18 +285,17 @@ fn main(@builtin(workgroup_id) wg: vec3u, @builtin(num_workgroups) groups: vec3u
             for (var t = 0u; t < cc_params.trials; t++) {
                 let s = cc_trial_split(t);
                 // A split into ku·kv cells has at least ku·kv leaves.
-                if s.x * s.y >= best.x {
-                    continue;
-                }
-                let mine = run_trial(p, t, lid, false, best.x, 0u);
-                workgroupBarrier();
-                if lid == 0u {
-                    found_now = atomicLoad(&found);
-                }
-                let total = workgroupUniformLoad(&found_now);
-                if total < best.x {
-                    best = vec2u(total, t);
-                    best_mine = mine;
+                if s.x * s.y < best.x {
+                    let mine = run_trial(p, t, lid, false, best.x, 0u);
+                    workgroupBarrier();
+                    if lid == 0u {
+                        found_now = atomicLoad(&found);
+                    }
+                    let total = workgroupUniformLoad(&found_now);
+                    if total < best.x {
+                        best = vec2u(total, t);
+                        best_mine = mine;
+                    }
                 }
             }
         }
