@@ -63,22 +63,19 @@ fn cc_cell_corner(cell: CcCell, k: u32) -> vec2u {
 }
 
 // A grid coordinate as a fixed-point parameter: round(i · 2^31 / grid), grid =
-// 105 · 2^(max_depth + 3), by long division (no 64-bit integers in WGSL).
+// 105 · 2^(max_depth + 3), without 64-bit integers (none in WGSL): the remainder of
+// i / 105 shifted by s = 28 - max_depth in two steps that stay below 2^32. No loop: a
+// CPU device stops every loop of an invocation after 65 535 iterations in all, and this
+// runs for every surface point.
 fn cc_grid_fixed(i: u32) -> u32 {
     let s = 28u - cc_params.max_depth;
+    let a = min(s, 16u);
+    let b = s - a;
     let q = i / 105u;
-    var rem = i % 105u;
-    var frac = 0u;
-    for (var b = 0u; b < s; b++) {
-        rem = rem << 1u;
-        frac = frac << 1u;
-        if rem >= 105u {
-            rem -= 105u;
-            frac |= 1u;
-        }
-    }
-    var r = (q << s) + frac;
-    if 2u * rem >= 105u {
+    let x1 = (i % 105u) << a;
+    let x2 = (x1 % 105u) << b;
+    var r = (q << s) + ((x1 / 105u) << b) + x2 / 105u;
+    if 2u * (x2 % 105u) >= 105u {
         r += 1u;
     }
     return r;

@@ -4,10 +4,11 @@
 //!
 //! A trial (a first split `ku × kv`) is decided level by level while a level holds fewer
 //! than [`CC_SLOTS`] cells; the cells of the first level that holds more are then shared
-//! among the lanes, lane `l` taking cells `l, l + 64, …`, each walked depth first with a
-//! stack, quadrant 0 first. The leaves come out in that order: those decided level by
-//! level, level after level, then lane after lane. Each cell is decided alone, so the
-//! leaves are the recursion's ([`super::adaptive`]) in another order.
+//! out by slot, slot `k` holding cells `k, k + 64, …`, each walked depth first, quadrant
+//! 0 first (the kernel turns its lanes between slots from trial to trial, which changes
+//! nothing here). The leaves come out in that order: those decided level by level, level
+//! after level, then slot after slot. Each cell is decided alone, so the leaves are the
+//! recursion's ([`super::adaptive`]) in another order.
 //!
 //! The first-split search tries the trials in order, skips one that cannot beat the best
 //! so far (a split into `ku · kv` cells has at least that many leaves) and stops a trial
@@ -64,6 +65,32 @@ pub fn first_cells(n: u32, (ku, kv): (u32, u32)) -> impl Iterator<Item = Cell> {
     })
 }
 
+/// Twin of `cc_next_cell`: the cell after `c` in a depth-first walk from a cell at depth
+/// `top`, once `c` and everything below it is done: its next sibling, else its parent's,
+/// and so on; `None` when the walk is over. A cell's quadrant is the parity of its
+/// position in cells of its size, so the walk needs no stack.
+pub fn next_cell(c: Cell, top: u32) -> Option<Cell> {
+    let mut c = c;
+    while c.depth > top {
+        match ((c.i / c.w) & 1, (c.j / c.h) & 1) {
+            (0, 0) => return Some(Cell { i: c.i + c.w, ..c }),
+            (1, 0) => return Some(Cell { j: c.j + c.h, ..c }),
+            (1, 1) => return Some(Cell { i: c.i - c.w, ..c }),
+            // Quadrant 3, the last: on to the parent's next.
+            _ => {
+                c = Cell {
+                    j: c.j - c.h,
+                    w: 2 * c.w,
+                    h: 2 * c.h,
+                    depth: c.depth - 1,
+                    ..c
+                }
+            }
+        }
+    }
+    None
+}
+
 /// One trial's leaves in the kernel's order, each with what the decision gave it.
 #[derive(Clone, Debug)]
 pub struct Walk<L> {
@@ -71,7 +98,7 @@ pub struct Walk<L> {
     pub leaves: Vec<(Cell, L)>,
     /// Leaves decided level by level (the first ones of `leaves`).
     pub level_leaves: u32,
-    /// Then each lane's walk's leaves (`marks` of the kernel).
+    /// Then each slot's walks' leaves (`marks` of the kernel).
     pub lane_leaves: [u32; CC_SLOTS as usize],
 }
 
@@ -108,16 +135,18 @@ pub fn walk_trial<L>(
     for (lane, count) in lane_leaves.iter_mut().enumerate() {
         let before = leaves.len();
         for &start in level.iter().skip(lane).step_by(lanes) {
-            let mut stack = vec![start];
-            while let Some(cell) = stack.pop() {
+            let mut at = Some(start);
+            while let Some(cell) = at {
                 if leaves.len() >= stop {
                     return None;
                 }
-                match decide(cell) {
-                    // Pushed last to first: quadrant 0 is walked first.
-                    None => stack.extend((0..4).rev().map(|q| cell.child(q))),
-                    Some(leaf) => leaves.push((cell, leaf)),
-                }
+                at = match decide(cell) {
+                    None => Some(cell.child(0)),
+                    Some(leaf) => {
+                        leaves.push((cell, leaf));
+                        next_cell(cell, start.depth)
+                    }
+                };
             }
         }
         *count = (leaves.len() - before) as u32;

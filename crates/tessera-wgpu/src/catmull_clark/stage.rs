@@ -658,6 +658,11 @@ impl CcStage {
         if !status.overflowed() {
             return Ok(None);
         }
+        if status.state.overflow & 4 != 0 {
+            return Err(Error::Wgpu(
+                "the device cut the marking's walk short (a loop-iteration limit per invocation, as lavapipe's 65535)".into(),
+            ));
+        }
         if status.state.overflow & 2 != 0 {
             return Err(Error::Wgpu(
                 "the marking's two passes disagreed on a patch's leaves".into(),
