@@ -76,6 +76,9 @@ struct Stats {
     /// Adaptive with `--leaf-bound triangles`: distance bounds to a cell's own
     /// triangles computed.
     triangle_bounds: Option<u64>,
+    /// Adaptive on the GPU: dispatches recorded per run, the same for every model and
+    /// tolerance.
+    dispatches: Option<u32>,
     warnings: Vec<String>,
     timings_ms: Timings,
     #[serde(flatten)]
@@ -155,6 +158,7 @@ pub fn tessellate(args: TessellateArgs) -> Result<(), Error> {
     check_measure_args(&args, measure_samples, model.mesh.surface_patches().count())?;
 
     let t = Instant::now();
+    let mut dispatches = None;
     let (out, tolerance, segments) = match method {
         Method::Uniform => {
             let n = match args.level {
@@ -188,8 +192,9 @@ pub fn tessellate(args: TessellateArgs) -> Result<(), Error> {
             let tolerance = params.epsilon(&model);
             if on_gpu {
                 let mut gpu_timings = GpuTimings::default();
-                let out = run_gpu(&model, &params, &mut gpu_timings)?;
+                let (out, recorded) = run_gpu(&model, &params, &mut gpu_timings)?;
                 timings.gpu = Some(gpu_timings);
+                dispatches = Some(recorded);
                 (out, Some(tolerance), None)
             } else {
                 (tessellate_adaptive(&model, &params)?, Some(tolerance), None)
@@ -253,6 +258,7 @@ pub fn tessellate(args: TessellateArgs) -> Result<(), Error> {
         flatness_bounds: tolerance.map(|_| out.bounds),
         split_proofs: tolerance.map(|_| out.proven),
         triangle_bounds: tolerance.map(|_| out.triangle_bounds),
+        dispatches,
         warnings,
         timings_ms: timings,
         error,
@@ -330,14 +336,14 @@ pub fn info(input: &Path) -> Result<(), Error> {
 }
 
 /// The adaptive stage on the GPU: a first run that grows the buffers, then the timed run
-/// and the readback. Evaluations are the output vertices (the GPU evaluates each once,
-/// a seam copy at its point's home like the others; the cell corners its flatness test
-/// reads are not counted).
+/// and the readback; with the dispatches the run recorded. Evaluations are the output
+/// vertices (the GPU evaluates each once, a seam copy at its point's home like the
+/// others; the cell corners its flatness test reads are not counted).
 pub fn run_gpu(
     model: &SurfaceModel,
     params: &CcParams,
     timings: &mut GpuTimings,
-) -> Result<CcTessellation, Error> {
+) -> Result<(CcTessellation, u32), Error> {
     let gpu = crate::gpu::open(timings)?;
     let kernels = Kernels::new(&gpu.device);
     let (stage, status) = crate::gpu::run(&gpu, timings, || {
@@ -346,7 +352,7 @@ pub fn run_gpu(
     let t = Instant::now();
     let mesh = stage.read_mesh(&gpu.device, &gpu.queue, &status)?;
     timings.readback = ms(t);
-    Ok(CcTessellation {
+    let tessellation = CcTessellation {
         evaluations: mesh.vertices.len() as u64,
         mesh,
         leaves: status.state.leaves as usize,
@@ -355,7 +361,8 @@ pub fn run_gpu(
         bounds: status.state.bounds as u64,
         proven: status.state.proven as u64,
         triangle_bounds: 0,
-    })
+    };
+    Ok((tessellation, stage.dispatches()))
 }
 
 /// The uniform stage on the GPU: a first run, the timed run and the readback.

@@ -315,10 +315,10 @@ fn the_marking_kernel_writes_its_twins_leaves_in_order() {
             .read_polygons(&gpu.device, &gpu.queue, &status)
             .expect("read");
         let (leaves, lanes) = marking_leaves(&model, &params).expect("twin");
-        for p in 0..lanes.len() {
+        for (p, lanes) in lanes.iter().enumerate() {
             assert_eq!(
-                got.lane_leaves[p], lanes[p],
-                "{name}: patch {p}: leaves per lane"
+                &got.lane_leaves[p], lanes,
+                "{name}: patch {p}: leaves per slot"
             );
         }
         assert_eq!(got.leaves.len(), leaves.len(), "{name}: leaves");
@@ -330,7 +330,7 @@ fn the_marking_kernel_writes_its_twins_leaves_in_order() {
             .filter(|l| l.iter().filter(|&&n| n > 0).count() > 1)
             .count();
     }
-    assert!(shared > 0, "no patch shared among lanes");
+    assert!(shared > 0, "no patch walked in several slots");
 }
 
 #[test]
@@ -668,6 +668,126 @@ fn gpu_uniform_matches_its_twin_and_the_cpu_uniform() {
             );
         }
     }
+}
+
+#[test]
+fn every_run_records_the_same_dispatches() {
+    // The script is a constant of the stage: the same on a cube, the car and Spot, at
+    // three tolerances, with both first splits, and at most 16 dispatches, as recorded.
+    let gpu = gpu();
+    for name in [
+        "opensubdiv/catmark_cube.obj",
+        "opensubdiv/catmark_car.obj",
+        "catmull_clark/spot_control_mesh.obj",
+    ] {
+        let model = model(name);
+        for rel in [1e-2, 3e-3, 1e-3] {
+            // The car (6 300 patches) with the default split only: this is the slow one.
+            let splits: &[FirstSplit] = if name.contains("car") {
+                &[FirstSplit::Search]
+            } else {
+                &[FirstSplit::Search, FirstSplit::Midpoint]
+            };
+            for &first_split in splits {
+                let params = CcParams {
+                    tolerance: Tolerance::Relative(rel),
+                    max_depth: 5,
+                    first_split,
+                    leaf_bound: Default::default(),
+                };
+                let mut stage =
+                    CcStage::new(&gpu.device, &gpu.queue, &kernels(&gpu), &model, &params)
+                        .expect("stage");
+                assert_eq!(stage.dispatches(), 0, "nothing recorded yet");
+                let status = stage.run_blocking(&gpu.device, &gpu.queue).expect("run");
+                assert!(status.indices > 0, "{name} at {rel}: a mesh");
+                assert_eq!(
+                    stage.dispatches(),
+                    CcStage::DISPATCHES,
+                    "{name} at {rel}, {first_split:?}"
+                );
+                assert!(
+                    stage.dispatches() <= 16,
+                    "{} dispatches",
+                    stage.dispatches()
+                );
+            }
+        }
+    }
+    gpu.check().expect("no wgpu errors");
+}
+
+#[test]
+fn an_overflowing_run_leaves_the_last_mesh_drawn() {
+    // A run that needs more room than the buffers have writes nothing of the output: the
+    // vertices, indices and draw arguments of the last complete run stay, and what it
+    // needed is reported. The next run grows and draws the new surface.
+    let gpu = gpu();
+    let model = model("opensubdiv/catmark_torus.obj");
+    let coarse = CcParams {
+        tolerance: Tolerance::Relative(1e-2),
+        max_depth: 5,
+        first_split: Default::default(),
+        leaf_bound: Default::default(),
+    };
+    let mut stage = CcStage::with_capacity(
+        &gpu.device,
+        &gpu.queue,
+        &kernels(&gpu),
+        &model,
+        &coarse,
+        one_of_each(),
+    )
+    .expect("stage");
+    let fitted = stage.run_blocking(&gpu.device, &gpu.queue).expect("run");
+    let before = stage
+        .read_mesh(&gpu.device, &gpu.queue, &fitted)
+        .expect("mesh");
+    let caps = stage.capacities();
+    let fine = CcParams {
+        tolerance: Tolerance::Relative(1e-3),
+        ..coarse
+    };
+    stage
+        .set_params(&gpu.device, &gpu.queue, &fine)
+        .expect("params");
+    let mut encoder = gpu.device.create_command_encoder(&Default::default());
+    stage
+        .prepare(&gpu.device, &gpu.queue, &mut encoder)
+        .expect("prepare");
+    gpu.queue.submit([encoder.finish()]);
+    let over = stage.read_status(&gpu.device).expect("status");
+    assert!(over.overflowed(), "1e-3 needs more than 1e-2's buffers");
+    assert!(
+        over.state.leaves > caps.leaves,
+        "what it needed is reported"
+    );
+    assert_eq!(stage.capacities(), caps, "not grown yet");
+    assert_eq!(
+        over.indices, fitted.indices,
+        "the draw arguments are the last run's"
+    );
+    let drawn = stage
+        .output()
+        .read_mesh(&gpu.device, &gpu.queue, fitted.vertices(), fitted.indices)
+        .expect("drawn");
+    assert_eq!(
+        drawn.indices, before.indices,
+        "the indices are the last run's"
+    );
+    assert!(
+        drawn.vertices == before.vertices,
+        "the vertices are the last run's"
+    );
+    let status = stage.run_blocking(&gpu.device, &gpu.queue).expect("run");
+    assert!(stage.growths() >= 1);
+    let mesh = stage
+        .read_mesh(&gpu.device, &gpu.queue, &status)
+        .expect("mesh");
+    let cpu = tessellate_adaptive(&model, &fine).expect("cpu");
+    same_mesh(&mesh, &cpu.mesh, size(&model)).expect("the grown run draws 1e-3");
+    assert!(same_mesh(&before, &cpu.mesh, size(&model)).is_err());
+    gpu.check().expect("no wgpu errors");
 }
 
 #[test]
