@@ -9,15 +9,8 @@
 
 #include "shared/cc_tess.wgsl"
 
-struct CcHashStatusOut {
-    items: u32,
-    overflow: u32,
-    unique: u32,
-    pad: u32,
-}
-
 @group(0) @binding(40) var<storage, read_write> keys_out: array<vec2u>;
-@group(0) @binding(43) var<storage, read_write> hash_status: CcHashStatusOut;
+@group(0) @binding(43) var<storage, read_write> hash_status: CcHashStatusView;
 @group(0) @binding(55) var<storage, read> leaves: array<CcCell>;
 @group(0) @binding(59) var<storage, read> topo: array<CcPatchTopo>;
 @group(0) @binding(60) var<storage, read_write> item_points: array<CcVertexPoint>;

@@ -20,13 +20,6 @@
 // fit, so that `cc_vertex_eval` writes none.
 @group(0) @binding(32) var<storage, read_write> vertex_count: array<u32>;
 
-struct CcHashStatusView {
-    items: u32,
-    overflow: u32,
-    unique: u32,
-    pad: u32,
-}
-
 @group(0) @binding(43) var<storage, read> hash_status: CcHashStatusView;
 
 const CC_DIAGONAL_MARGIN: f32 = 1e-4;

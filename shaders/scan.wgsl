@@ -87,8 +87,9 @@ fn reduce(@builtin(workgroup_id) wg: vec3u, @builtin(local_invocation_index) lid
     let list = list_of(wg.x);
     let g = wg.x % list_groups();
     let n = scan_len(list);
-    let start = g * chunk_blocks(n) * BLOCK;
-    let end = min(start + chunk_blocks(n) * BLOCK, n);
+    let chunk = chunk_blocks(n) * BLOCK;
+    let start = g * chunk;
+    let end = min(start + chunk, n);
     var total = 0u;
     for (var i = start + lid; i < end; i += WORKGROUP) {
         total += load(list, i);

@@ -20,6 +20,15 @@ struct CcCounters {
     proven: atomic<u32>,
 }
 
+// `tessera_core::gpu_types::CcHashStatus` as the kernels around the hash read and set it
+// (the hash's own kernels use the atomic `CcHashStatus` of `shared/cc_hash.wgsl`).
+struct CcHashStatusView {
+    items: u32,
+    overflow: u32,
+    unique: u32,
+    pad: u32,
+}
+
 @group(0) @binding(50) var<uniform> cc_params: CcTessParams;
 @group(0) @binding(51) var<storage, read_write> cc_state: CcCounters;
 // `traverse::Marks` (see cc_traverse.wgsl): per patch its leaves, then its first leaf;

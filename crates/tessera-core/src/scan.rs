@@ -30,12 +30,9 @@ pub fn reduce(data: &[u32]) -> Vec<u32> {
 /// Twin of `scan_chunks`: each chunk scanned after the chunks before it.
 pub fn scan_chunks(data: &mut [u32], sums: &[u32]) {
     let chunk = chunk_blocks(data.len()) * SCAN_BLOCK;
-    let mut carry = 0u32;
     for (g, values) in data.chunks_mut(chunk).enumerate() {
-        debug_assert_eq!(
-            carry,
-            sums[..g].iter().fold(0u32, |a, &x| a.wrapping_add(x))
-        );
+        // The sums of the chunks before this one, as each workgroup adds them up.
+        let mut carry = sums[..g].iter().fold(0u32, |a, &x| a.wrapping_add(x));
         for v in values {
             let x = *v;
             *v = carry;
