@@ -1,58 +1,29 @@
-// Adaptive marking, one workgroup per patch, to full depth in one dispatch: the cells of
-// a first split are decided level by level in workgroup memory until a level holds at
-// least CC_SLOTS cells; then the cells of that level are shared out by slot (slot k:
-// cells k, k + 64, ...) and each slot's cells are walked depth first, without a stack
-// (`cc_next_cell`). A cell is decided alone (`cc_decide`), so the leaves do not depend
-// on the order of work; the order of the walk only fixes where each leaf is written.
+// Adaptive marking to full depth in one dispatch per pass, one invocation per patch.
+// The count pass runs the CPU's first-split search: trials in order, each walking the
+// cells of its split row by row and each cell's subtree depth first, without a stack
+// (`cc_next_cell`); a trial that cannot beat the best so far is skipped, one that
+// reaches it is stopped (ties go to the earlier trial). A cell is decided alone
+// (`cc_decide`), so the leaves do not depend on the order of work. Every decision is
+// kept as a bit, in a chain of blocks of 32, so the emit pass replays the best trial's
+// walk without deciding anything again, writing its leaves from the patch's first
+// leaf (scanned in between).
 //
-// The same entry runs twice, told apart by `cc_pass` (one pipeline, so the two passes
-// compile to the same decisions):
-// - pass 0, count: tries the first splits of the search in order, skipping those that
-//   cannot beat the best so far and stopping a trial as soon as its leaves reach the
-//   best (ties go to the earlier trial, as the CPU reference). Writes per patch the
-//   best trial, its leaves (scanned next), and the leaves of each slot's walk.
-// - pass 1, emit: walks the best trial again and writes its leaves at the patch's
-//   offset: first those decided level by level, in order, then slot after slot.
-//   Workgroup 0 sets the run's leaf count and the next dispatches' sizes.
+// No workgroup memory, no barriers and no waiting on other invocations. A CPU device
+// (lavapipe) runs eight lanes at a time through every instruction of a loop until the
+// last lane is done, and stops every loop of those eight lanes after 65 535 iterations
+// in all: the emit pass has no decision code, and a walk cut short is reported
+// (overflow bit 4), never taken for a mesh.
 //
-// No workgroup waits on another, and every loop is bounded by the tree's depth. A CPU
-// device (lavapipe) also stops every loop of a group of 8 lanes once they have run
-// 65 535 iterations in all: the lanes turn between slots from trial to trial
-// (`cc_slot`), surface points are found without loops (`cc_grid_fixed`), and a walk the
-// device cut short is reported (overflow bit 4), never taken for a mesh.
+// The same entry runs for both passes, told apart by `cc_pass` (one pipeline).
 // Twin: `tessera_core::catmull_clark::traverse`.
 
 #include "shared/cc_tess.wgsl"
 #include "shared/cc_bound.wgsl"
+#include "shared/lane_order.wgsl"
 
 @group(0) @binding(55) var<storage, read_write> leaves: array<CcCell>;
 @group(0) @binding(68) var<uniform> cc_pass: vec4u;
 
-const CC_SLOTS: u32 = 64u;
-// Cells of one level held in workgroup memory: a level of fewer than CC_SLOTS cells
-// splits into at most 4 · (CC_SLOTS - 1).
-const CC_LEVEL_CELLS: u32 = 256u;
-
-var<workgroup> level_cells: array<array<vec2u, CC_LEVEL_CELLS>, 2>;
-var<workgroup> level_len: u32;
-var<workgroup> found: atomic<u32>;
-var<workgroup> found_now: u32;
-var<workgroup> lane_split: array<u32, CC_SLOTS>;
-var<workgroup> lane_leaf: array<u32, CC_SLOTS>;
-
-fn best_at(p: u32) -> u32 {
-    return cc_params.patch_count + 1u + 2u * p;
-}
-
-fn slot_at(p: u32, lane: u32) -> u32 {
-    return 3u * cc_params.patch_count + 1u + CC_SLOTS * p + lane;
-}
-
-// A cell as held in workgroup memory and by a walk: `i | depth << 20`, `j`
-// (i < 840 · 2^MAX_DEPTH < 2^20).
-fn cc_cell_of(p: u32, t: u32, c: vec2u) -> CcCell {
-    return CcCell(p, t | ((c.x >> 20u) << 8u), c.x & 0xfffffu, c.y);
-}
 
 fn cc_corner(p: u32, i: u32, j: u32) -> vec3f {
     return cc_eval(CcPoint(p, cc_grid_fixed(i), cc_grid_fixed(j))).position;
@@ -95,13 +66,11 @@ fn cc_decide(cell: CcCell) -> CcDecision {
     return CcDecision(!leaf, bound, false);
 }
 
-// Per lane: what its decisions cost, and (emit) what its leaves guarantee.
+// Per invocation: what its decisions cost, and (emit) what its leaves guarantee.
 var<private> lane_bounds: u32;
 var<private> lane_proven: u32;
 var<private> lane_unmet: u32;
 var<private> lane_max_bound: f32;
-// Whether the lane's walk stopped at the best so far.
-var<private> lane_stopped: bool;
 
 fn decide_counted(cell: CcCell) -> bool {
     let d = cc_decide(cell);
@@ -119,27 +88,22 @@ fn decide_counted(cell: CcCell) -> bool {
     return d.split;
 }
 
-// The quadrant q of a cell held as `i | depth << 20`, `j`, whose size is `size`.
-fn cc_child(c: vec2u, size: vec2u, q: u32) -> vec2u {
-    let half = size / 2u;
-    let o = vec2u(select(0u, 1u, q == 1u || q == 2u), select(0u, 1u, q >= 2u));
-    return vec2u(c.x + o.x * half.x + (1u << 20u), c.y + o.y * half.y);
+// A cell during a walk: `i | depth << 20`, `j` (i < 840 · 2^MAX_DEPTH < 2^20).
+fn cc_cell_of(p: u32, t: u32, c: vec2u) -> CcCell {
+    return CcCell(p, t | ((c.x >> 20u) << 8u), c.x & 0xfffffu, c.y);
 }
 
-// The slot lane `lid` works in trial t: the cells `slot, slot + 64, ...` of a level, the
-// slot's leaves in the output. The lanes turn by a group of 8 per trial, so that the
-// cells at a patch corner with an extraordinary vertex, slot 0 in every trial and the
-// longest walks, do not all fall to the same group of lanes (see the top).
-fn cc_slot(lid: u32, t: u32) -> u32 {
-    return (lid + CC_SLOTS - (8u * t) % CC_SLOTS) % CC_SLOTS;
+// Quadrant 0 of a cell held as `i | depth << 20`, `j`: the same corner, one level down.
+fn cc_first_child(c: vec2u) -> vec2u {
+    return vec2u(c.x + (1u << 20u), c.y);
 }
 
 // The cell after `c` (held as `i | depth << 20`, `j`) in a depth-first walk of trial t
-// from a cell at depth `top`, once c and everything below it is done: its next sibling,
+// from a cell at depth 0, once c and everything below it is done: its next sibling,
 // else its parent's, and so on; `j` = 0xffffffff when the walk is over. A cell's
 // quadrant is the parity of its position in cells of its size, so the walk needs no
 // stack.
-fn cc_next_cell(t: u32, c: vec2u, top: u32) -> vec2u {
+fn cc_next_cell(t: u32, c: vec2u) -> vec2u {
     let s = cc_trial_split(t);
     var i = c.x & 0xfffffu;
     var j = c.y;
@@ -147,7 +111,7 @@ fn cc_next_cell(t: u32, c: vec2u, top: u32) -> vec2u {
     var done = false;
     var next = vec2u(0u, 0xffffffffu);
     for (var guard = 0u; guard <= 10u && !done; guard++) {
-        if depth <= top {
+        if depth == 0u {
             done = true;
         } else {
             let w = (cc_params.grid / s.x) >> depth;
@@ -173,217 +137,262 @@ fn cc_next_cell(t: u32, c: vec2u, top: u32) -> vec2u {
     return next;
 }
 
-// Trial t of patch p: level by level while a level holds fewer than CC_SLOTS cells, then
-// each lane's walk. Counting, stops once the leaves reach `stop`; emitting, writes the
-// leaves from `first`. Returns the lane's walk's leaves; `found` holds the trial's.
-fn run_trial(p: u32, t: u32, lid: u32, emitting: bool, stop: u32, first: u32) -> u32 {
-    let slot = cc_slot(lid, t);
+// Cell r of trial t (row by row), as held during a walk.
+fn cc_root_cell(t: u32, r: u32) -> vec2u {
     let s = cc_trial_split(t);
-    let w = cc_params.grid / s.x;
-    let h = cc_params.grid / s.y;
-    // Every lane has read what the last trial (or the caller) left in workgroup memory.
-    workgroupBarrier();
-    if lid < s.x * s.y {
-        level_cells[0][lid] = vec2u((lid % s.x) * w, (lid / s.x) * h);
+    return vec2u((r % s.x) * (cc_params.grid / s.x), (r / s.x) * (cc_params.grid / s.y));
+}
+
+// The decision blocks of one walk: where the next bit goes (or comes from).
+struct CcChain {
+    block: u32,
+    bit: u32,
+    bits: u32,
+}
+
+// The walks' decisions, 32 to a block `[bits, next block]` in the marks after the
+// patches' words: blocks 2p and 2p + 1 are patch p's own, further blocks are taken in
+// turn (`cc_state.decision_blocks`).
+fn cc_bits_at(b: u32) -> u32 {
+    return 3u * cc_params.patch_count + 1u + 2u * b;
+}
+
+fn cc_blocks() -> u32 {
+    return (arrayLength(&marks) - cc_bits_at(0u)) / 2u;
+}
+
+// A free block for a chain that needs more than its patch's own; CC_NO_BLOCK once there
+// are no more (overflow bit 8: the run needs more).
+const CC_NO_BLOCK: u32 = 0xffffffffu;
+
+fn cc_take_block() -> u32 {
+    let own = 2u * cc_params.patch_count;
+    let b = own + atomicAdd(&cc_state.decision_blocks, 1u);
+    if b >= cc_blocks() {
+        atomicOr(&cc_state.overflow, 8u);
+        return CC_NO_BLOCK;
     }
-    if lid == 0u {
-        level_len = s.x * s.y;
-        atomicStore(&found, 0u);
-        found_now = 0u;
+    marks[cc_bits_at(b) + 1u] = CC_NO_BLOCK;
+    return b;
+}
+
+// Records one decision; a full block is written out and the chain moves on to its next
+// block, taking one if it has none.
+fn cc_record(c: ptr<function, CcChain>, split: bool) {
+    if split {
+        (*c).bits |= 1u << (*c).bit;
     }
-    var cur = 0u;
-    // At most max_depth + 1 levels.
-    for (var level = 0u; level <= 10u; level++) {
-        let n = workgroupUniformLoad(&level_len);
-        let so_far = workgroupUniformLoad(&found_now);
-        if n == 0u || n >= CC_SLOTS || (!emitting && so_far >= stop) {
-            break;
+    (*c).bit += 1u;
+    if (*c).bit == 32u && (*c).block != CC_NO_BLOCK {
+        marks[cc_bits_at((*c).block)] = (*c).bits;
+        var next = marks[cc_bits_at((*c).block) + 1u];
+        if next == CC_NO_BLOCK {
+            next = cc_take_block();
+            marks[cc_bits_at((*c).block) + 1u] = next;
         }
-        var split = false;
-        var cell: CcCell;
-        if slot < n {
-            cell = cc_cell_of(p, t, level_cells[cur][slot]);
-            split = decide_counted(cell);
-        }
-        lane_split[slot] = select(0u, 1u, split);
-        lane_leaf[slot] = select(0u, 1u, slot < n && !split);
-        workgroupBarrier();
-        if lid == 0u {
-            var splits = 0u;
-            var leaves_before = found_now;
-            for (var l = 0u; l < CC_SLOTS; l++) {
-                let a = lane_split[l];
-                lane_split[l] = splits;
-                splits += a;
-                let b = lane_leaf[l];
-                lane_leaf[l] = leaves_before;
-                leaves_before += b;
-            }
-            level_len = 4u * splits;
-            found_now = leaves_before;
-            atomicStore(&found, leaves_before);
-        }
-        workgroupBarrier();
-        if slot < n {
-            let c = level_cells[cur][slot];
-            if split {
-                let size = cc_cell_size(cell);
-                for (var q = 0u; q < 4u; q++) {
-                    level_cells[1u - cur][4u * lane_split[slot] + q] = cc_child(c, size, q);
-                }
-            } else if emitting {
-                let at = first + lane_leaf[slot];
-                if at < cc_params.leaf_capacity && at < arrayLength(&leaves) {
-                    leaves[at] = cell;
-                }
-            }
-        }
-        cur = 1u - cur;
+        (*c).block = next;
+        (*c).bit = 0u;
+        (*c).bits = 0u;
     }
-    // A trial stopped here walks nothing more.
-    var n = workgroupUniformLoad(&level_len);
-    let so_far = workgroupUniformLoad(&found_now);
-    if !emitting && so_far >= stop {
-        n = 0u;
+}
+
+// Writes out the last, partly filled block.
+fn cc_flush(c: CcChain) {
+    if c.block != CC_NO_BLOCK && c.bit > 0u {
+        marks[cc_bits_at(c.block)] = c.bits;
     }
-    // Emitting: this lane's leaves go after those of the levels and of the lanes before.
-    var at = 0u;
-    if emitting {
-        if lid == 0u {
-            var run = first + so_far;
-            for (var l = 0u; l < CC_SLOTS; l++) {
-                let x = marks[slot_at(p, l)];
-                lane_leaf[l] = run;
-                run += x;
-            }
+}
+
+// The next decision of a chain being replayed.
+fn cc_replay(c: ptr<function, CcChain>) -> bool {
+    if (*c).bit == 32u {
+        if (*c).block != CC_NO_BLOCK {
+            (*c).block = marks[cc_bits_at((*c).block) + 1u];
         }
-        workgroupBarrier();
-        at = lane_leaf[slot];
+        (*c).bit = 0u;
+        (*c).bits = 0u;
+        if (*c).block != CC_NO_BLOCK {
+            (*c).bits = marks[cc_bits_at((*c).block)];
+        }
     }
-    // Emitting: at most what the count pass found for this lane, so that a walk that
-    // found more cannot write over the next lane's leaves.
-    var limit = 0xffffffffu;
-    if emitting {
-        limit = marks[slot_at(p, slot)];
-    }
+    let split = ((*c).bits >> (*c).bit & 1u) != 0u;
+    (*c).bit += 1u;
+    return split;
+}
+
+fn cc_chain_at(block: u32) -> CcChain {
+    return CcChain(block, 0u, 0u);
+}
+
+// Counting: patch p's search, as `traverse::search`. One loop over every decision of
+// every trial, so that lanes of different patches keep deciding side by side.
+fn count_patch(p: u32) {
+    // Chain 0 holds the best trial's decisions, chain 1 the current one's (swapped when
+    // the current trial becomes the best). Blocks of a losing trial are reused.
+    var heads = vec2u(2u * p, 2u * p + 1u);
+    marks[cc_bits_at(heads.x) + 1u] = CC_NO_BLOCK;
+    marks[cc_bits_at(heads.y) + 1u] = CC_NO_BLOCK;
+    var chain = cc_chain_at(heads.y);
+    var best = 0xffffffffu;
+    var best_trial = CC_TRIALS;
+    var best_max = 0.0;
+    var best_unmet = 0u;
+    var t = 0u;
+    var r = 0u;
     var mine = 0u;
-    var stopped = false;
-    lane_stopped = false;
-    for (var c = slot; c < n && !stopped; c += CC_SLOTS) {
-        let start = level_cells[cur][c];
-        let start_depth = start.x >> 20u;
-        var at_cell = start;
-        var walking = true;
-        while walking && !stopped {
-            if !emitting && atomicLoad(&found) >= stop {
-                stopped = true;
+    var at_cell = cc_root_cell(0u, 0u);
+    var searching = true;
+    while searching {
+        let cell = cc_cell_of(p, t, at_cell);
+        let split = decide_counted(cell);
+        cc_record(&chain, split);
+        var trial_over = false;
+        if split {
+            at_cell = cc_first_child(at_cell);
+        } else {
+            mine += 1u;
+            let next = cc_next_cell(t, at_cell);
+            if next.y != 0xffffffffu {
+                at_cell = next;
             } else {
-                let cell = cc_cell_of(p, t, at_cell);
-                let dsplit = decide_counted(cell);
-                if dsplit {
-                    at_cell = cc_child(at_cell, cc_cell_size(cell), 0u);
-                } else {
-                    if emitting {
-                        let k = at + mine;
-                        if mine < limit && k < cc_params.leaf_capacity && k < arrayLength(&leaves) {
-                            leaves[k] = cell;
-                        }
-                    } else {
-                        atomicAdd(&found, 1u);
-                    }
-                    mine += 1u;
-                    let next = cc_next_cell(t, at_cell, start_depth);
-                    walking = next.y != 0xffffffffu;
-                    at_cell = next;
+                r += 1u;
+                let s = cc_trial_split(t);
+                if r < s.x * s.y {
+                    at_cell = cc_root_cell(t, r);
+                } else if mine < best {
+                    // Finished with fewer leaves than the best so far: the new best.
+                    cc_flush(chain);
+                    best = mine;
+                    best_trial = t;
+                    best_max = lane_max_bound;
+                    best_unmet = lane_unmet;
+                    heads = heads.yx;
+                    trial_over = true;
                 }
             }
+            // Reaching the best (a tie goes to the earlier trial): stopped.
+            trial_over = trial_over || mine >= best;
         }
-        // The loop ends only when the walk is over or stopped: otherwise the device cut
-        // it short (see the top), and this run's leaves are not the surface's.
-        if walking && !stopped {
-            atomicOr(&cc_state.overflow, 4u);
+        if trial_over {
+            // On to the next trial that could beat the best: ku·kv cells give at least
+            // ku·kv leaves.
+            t += 1u;
+            for (; t < cc_params.trials; t++) {
+                let s = cc_trial_split(t);
+                if s.x * s.y < best {
+                    break;
+                }
+            }
+            searching = t < cc_params.trials;
+            r = 0u;
+            mine = 0u;
+            lane_max_bound = 0.0;
+            lane_unmet = 0u;
+            at_cell = cc_root_cell(min(t, CC_TRIALS - 1u), 0u);
+            chain = cc_chain_at(heads.y);
         }
     }
-    lane_stopped = stopped;
-    return mine;
+    // The loop ends only when the search is over: otherwise the device cut it short.
+    if searching {
+        atomicOr(&cc_state.overflow, 4u);
+    }
+    marks[p] = best;
+    marks[cc_chosen_at(p)] = best_trial;
+    marks[cc_head_at(p)] = heads.x;
+    atomicMax(&cc_state.max_bound_bits, bitcast<u32>(best_max));
+    atomicAdd(&cc_state.unmet, best_unmet);
+}
+
+// Emitting: the best trial's walk replayed, its leaves written from the patch's first.
+fn emit_patch(p: u32) {
+    let t = marks[cc_chosen_at(p)];
+    let first = marks[p];
+    // The count pass's leaves: at most that many are written here.
+    let count = marks[p + 1u] - first;
+    let head = marks[cc_head_at(p)];
+    var chain = CcChain(head, 0u, marks[cc_bits_at(head)]);
+    var r = 0u;
+    var mine = 0u;
+    var at_cell = cc_root_cell(t, 0u);
+    var walking = true;
+    let area = cc_trial_split(t).x * cc_trial_split(t).y;
+    while walking {
+        let cell = cc_cell_of(p, t, at_cell);
+        if cc_replay(&chain) {
+            at_cell = cc_first_child(at_cell);
+        } else {
+            let k = first + mine;
+            if mine < count && k < cc_params.leaf_capacity && k < arrayLength(&leaves) {
+                leaves[k] = cell;
+            }
+            mine += 1u;
+            let next = cc_next_cell(t, at_cell);
+            if next.y != 0xffffffffu {
+                at_cell = next;
+            } else {
+                r += 1u;
+                walking = r < area;
+                at_cell = cc_root_cell(t, r);
+            }
+        }
+    }
+    if walking {
+        atomicOr(&cc_state.overflow, 4u);
+    }
+    // The replay must find what the search counted.
+    if mine != count {
+        atomicOr(&cc_state.overflow, 2u);
+    }
+}
+
+// Whether patch p has an extraordinary vertex (its tree splits at the root): its bounds
+// walk chains of pieces and its walks go deeper.
+fn cc_irregular(p: u32) -> bool {
+    return cc_roots[p] != CC_NO_ROOT && (cc_nodes[cc_roots[p]].kind & CC_NODE_KIND_MASK) != CC_NODE_BEZIER;
 }
 
 @compute @workgroup_size(64)
-fn main(@builtin(workgroup_id) wg: vec3u, @builtin(num_workgroups) groups: vec3u,
+fn main(@builtin(global_invocation_id) gid: vec3u, @builtin(num_workgroups) groups: vec3u,
     @builtin(local_invocation_index) lid: u32) {
-    let p = wg.x + wg.y * groups.x;
+    let x = cc_invocation(gid, groups);
     let emitting = cc_pass.x == 1u;
-    if emitting && p == 0u && lid == 0u {
-        // The scan left the total after the patches' offsets.
-        let total = marks[cc_params.patch_count];
-        cc_state.leaves = total;
-        if total > cc_params.leaf_capacity {
-            atomicOr(&cc_state.overflow, 1u);
+    let patches = cc_params.patch_count;
+    // Counting, the patches at a vertex of each workgroup search side by side, after the
+    // others (`shared/lane_order.wgsl`).
+    let valid = x < patches;
+    let ordered = lane_order(lid, valid, x, valid && cc_irregular(x));
+    if x == 0u {
+        if emitting {
+            // The scan left the total after the patches' offsets.
+            let total = marks[patches];
+            cc_state.leaves = total;
+            if total > cc_params.leaf_capacity {
+                atomicOr(&cc_state.overflow, 1u);
+            }
+            let n = min(total, cc_params.leaf_capacity);
+            cc_write_args(3u, n);
+            cc_write_args(6u, 8u * n);
+        } else {
+            // Scanned as no leaves: the total lands here.
+            marks[patches] = 0u;
         }
-        let n = min(total, cc_params.leaf_capacity);
-        cc_write_args(3u, n);
-        cc_write_args(6u, 8u * n);
     }
-    if p >= cc_params.patch_count {
+    let p = select(x, ordered, !emitting);
+    if p >= patches {
         return;
     }
-    // A hole has no surface (and no tree).
-    let hole = cc_roots[p] == CC_NO_ROOT;
-    if !emitting {
-        var best = vec2u(0xffffffffu, CC_TRIALS);
-        var best_mine = 0u;
-        if hole {
-            best = vec2u(0u, CC_TRIALS);
-        } else {
-            for (var t = 0u; t < cc_params.trials; t++) {
-                let s = cc_trial_split(t);
-                // A split into ku·kv cells has at least ku·kv leaves.
-                if s.x * s.y < best.x {
-                    let mine = run_trial(p, t, lid, false, best.x, 0u);
-                    // The trial's leaves: the levels' and every lane's own count (the
-                    // shared counter only tells the lanes when to stop), or none if a
-                    // lane stopped.
-                    lane_leaf[cc_slot(lid, t)] = select(mine, 0xffffffffu, lane_stopped);
-                    workgroupBarrier();
-                    if lid == 0u {
-                        var total = found_now;
-                        for (var l = 0u; l < CC_SLOTS; l++) {
-                            total = select(total + lane_leaf[l], 0xffffffffu, lane_leaf[l] == 0xffffffffu || total == 0xffffffffu);
-                        }
-                        found_now = total;
-                    }
-                    let total = workgroupUniformLoad(&found_now);
-                    if total < best.x {
-                        best = vec2u(total, t);
-                        best_mine = mine;
-                    }
-                }
-            }
+    // A hole has no surface (and no tree): no leaves, no trial.
+    if cc_roots[p] == CC_NO_ROOT {
+        if !emitting {
+            marks[p] = 0u;
+            marks[cc_chosen_at(p)] = CC_TRIALS;
         }
-        marks[slot_at(p, cc_slot(lid, best.y))] = best_mine;
-        if lid == 0u {
-            marks[p] = best.x;
-            marks[best_at(p)] = best.x;
-            marks[best_at(p) + 1u] = best.y;
-        }
-    } else if !hole {
-        if lid == 0u {
-            found_now = marks[best_at(p) + 1u];
-        }
-        let t = workgroupUniformLoad(&found_now);
-        if t < CC_TRIALS {
-            let mine = run_trial(p, t, lid, true, 0xffffffffu, marks[p]);
-            // Both passes run the same code on the same data; a walk that found another
-            // count would write over its neighbours' leaves.
-            if mine != marks[slot_at(p, cc_slot(lid, t))] {
-                atomicOr(&cc_state.overflow, 2u);
-            }
-            atomicMax(&cc_state.max_bound_bits, bitcast<u32>(lane_max_bound));
-            atomicAdd(&cc_state.unmet, lane_unmet);
-        }
+        return;
     }
-    // The search's cost (the emit pass decides the best trial's cells once more).
-    if !emitting {
+    if emitting {
+        emit_patch(p);
+    } else {
+        count_patch(p);
         atomicAdd(&cc_state.bounds, lane_bounds);
         atomicAdd(&cc_state.proven, lane_proven);
     }

@@ -18,6 +18,7 @@ struct CcCounters {
     vertices: u32,
     bounds: atomic<u32>,
     proven: atomic<u32>,
+    decision_blocks: atomic<u32>,
 }
 
 // `tessera_core::gpu_types::CcHashStatus` as the kernels around the hash read and set it
@@ -31,17 +32,25 @@ struct CcHashStatusView {
 
 @group(0) @binding(50) var<uniform> cc_params: CcTessParams;
 @group(0) @binding(51) var<storage, read_write> cc_state: CcCounters;
-// `traverse::Marks` (see cc_traverse.wgsl): per patch its leaves, then its first leaf;
-// per patch (leaves, trial) of its best first split; per patch and lane the leaves of
-// the lane's walk.
+// Marking's words (`stage::marks_words`, see cc_traverse.wgsl), P patches: per patch
+// its leaves, then its first leaf (scanned in place, the total at P); per patch the
+// trial chosen; per patch the first block of its best trial's decisions.
 @group(0) @binding(57) var<storage, read_write> marks: array<u32>;
 // Indirect dispatch arguments: [3..6] the leaves, [6..9] the hash items (eight per leaf:
 // `cc_leaf_keys`).
 @group(0) @binding(58) var<storage, read_write> args: array<u32>;
 
+fn cc_chosen_at(p: u32) -> u32 {
+    return cc_params.patch_count + 1u + p;
+}
+
+fn cc_head_at(p: u32) -> u32 {
+    return 2u * cc_params.patch_count + 1u + p;
+}
+
 // The trial of patch p's first split (CC_TRIALS for a hole).
 fn cc_first_trial(p: u32) -> u32 {
-    return marks[cc_params.patch_count + 2u + 2u * p];
+    return marks[cc_chosen_at(p)];
 }
 
 fn cc_invocation(gid: vec3u, groups: vec3u) -> u32 {

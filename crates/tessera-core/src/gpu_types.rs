@@ -620,11 +620,8 @@ mod tests {
         let cpu: Vec<(u32, u32)> = crate::catmull_clark::first_splits().collect();
         let gpu: Vec<(u32, u32)> = (0..CC_TRIALS).map(cc_trial_split).collect();
         assert_eq!(gpu, cpu);
-        // Every first split fits one level of the marking's workgroups.
-        assert!((0..CC_TRIALS).all(|t| {
-            let (ku, kv) = cc_trial_split(t);
-            ku * kv < CC_SLOTS
-        }));
+        // The kernel keys a trial as leaves << 5 | trial.
+        assert!(CC_TRIALS <= 32);
     }
 }
 
@@ -775,10 +772,6 @@ pub struct CcCell {
 
 /// First splits tried per patch: 4 odd squares, then the 14 near-square rectangles.
 pub const CC_TRIALS: u32 = 18;
-/// Lanes of the marking's workgroups: a patch is decided level by level until a level
-/// holds this many cells, then each lane walks its share depth first
-/// ([`crate::catmull_clark::traverse`]).
-pub const CC_SLOTS: u32 = 64;
 /// No patch across an edge (an open boundary or a hole).
 pub const CC_NO_NEIGHBOUR: u32 = u32::MAX;
 
@@ -914,10 +907,12 @@ pub struct CcState {
     pub max_bound_bits: u32,
     /// Output vertices needed (one per point and chart), as the vertex hash counted them.
     pub vertices: u32,
-    /// Flatness bounds computed by the search, every trial included (the pass that
-    /// writes the leaves decides the best trial's cells once more).
+    /// Flatness bounds computed by the search, every trial included.
     pub bounds: u32,
     /// Cells split on the split proof alone, without a bound: with `bounds`, the cells
     /// tested.
     pub proven: u32,
+    /// Blocks of 32 decisions the walks took beyond the two of each patch's own (also
+    /// beyond capacity: what is needed).
+    pub decision_blocks: u32,
 }

@@ -62,7 +62,7 @@ use super::traverse::{self, Cell};
 use super::triangle_bound::triangles_bound;
 use super::triangulate::{triangulate, zip_start, PolyVertex};
 use crate::error::{Error, Result};
-use crate::gpu_types::{CcCell, OutVertex, CC_SLOTS};
+use crate::gpu_types::{CcCell, OutVertex};
 use crate::measure::closest_point_on_triangle;
 use crate::mesh::Mesh;
 use crate::tolerance::Tolerance;
@@ -422,12 +422,12 @@ pub fn tessellate_adaptive(model: &SurfaceModel, params: &CcParams) -> Result<Cc
 }
 
 /// What `cc_traverse` writes for `params` (flatness bound): every leaf in the GPU's
-/// order, and per patch the leaves of each lane's walk. The twin's output for the tests.
+/// order. The twin's output for the tests.
 #[doc(hidden)]
 pub fn marking_leaves(
     model: &SurfaceModel,
     params: &CcParams,
-) -> Result<(Vec<CcCell>, Vec<[u32; CC_SLOTS as usize]>)> {
+) -> Result<Vec<CcCell>> {
     params.validate(model)?;
     let mut eval = Evaluator::new(model, params);
     let flatness = CcParams {
@@ -445,7 +445,7 @@ pub fn marking_leaves(
             j: c.j,
         })
         .collect();
-    Ok((cells, marking.lanes))
+    Ok(cells)
 }
 
 /// [`tessellate_adaptive`] trying these first splits in this order.
@@ -526,8 +526,6 @@ struct Marking {
     /// Per patch, the index in the splits tried of its first split (`u32::MAX` for a
     /// hole): with [`first_splits`] in order, the GPU's trial number.
     first_split: Vec<u32>,
-    /// Per patch, the leaves of each lane's walk ([`traverse::Walk::lane_leaves`]).
-    lanes: Vec<[u32; CC_SLOTS as usize]>,
     unmet: usize,
     max_bound: f64,
 }
@@ -543,7 +541,6 @@ fn mark_patches(eval: &mut Evaluator, params: &CcParams, splits: &[(u32, u32)]) 
         leaves: Vec::new(),
         bounds: Vec::new(),
         first_split: vec![u32::MAX; mesh.patch_count()],
-        lanes: vec![[0; CC_SLOTS as usize]; mesh.patch_count()],
         unmet: 0,
         max_bound: 0.0,
     };
@@ -554,7 +551,6 @@ fn mark_patches(eval: &mut Evaluator, params: &CcParams, splits: &[(u32, u32)]) 
         let mut decide = |c: Cell| decide_cell(eval, p, c, max_depth - c.depth, eps, exact);
         let (trial, walk) = traverse::search(n, splits, &mut decide);
         out.first_split[p] = trial;
-        out.lanes[p] = walk.lane_leaves;
         for (c, (bound, e)) in walk.leaves {
             if bound > eps {
                 out.unmet += 1;

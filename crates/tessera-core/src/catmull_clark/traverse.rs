@@ -1,20 +1,16 @@
 //! Adaptive marking as the GPU runs it, one patch at a time: twin of
-//! `shaders/cc_traverse.wgsl`, which marks every patch to full depth in one dispatch (a
-//! workgroup per patch) rather than one dispatch per level.
+//! `shaders/cc_traverse.wgsl`, which marks every patch to full depth in one dispatch (an
+//! invocation per cell of every first split) rather than one dispatch per level.
 //!
-//! A trial (a first split `ku × kv`) is decided level by level while a level holds fewer
-//! than [`CC_SLOTS`] cells; the cells of the first level that holds more are then shared
-//! out by slot, slot `k` holding cells `k, k + 64, …`, each walked depth first, quadrant
-//! 0 first (the kernel turns its lanes between slots from trial to trial, which changes
-//! nothing here). The leaves come out in that order: those decided level by level, level
-//! after level, then slot after slot. Each cell is decided alone, so the leaves are the
-//! recursion's ([`super::adaptive`]) in another order.
+//! A trial (a first split `ku × kv`) is walked cell by cell of the split, row by row,
+//! each cell's subtree depth first, quadrant 0 first. The leaves come out in that order.
+//! Each cell is decided alone, so the leaves are the recursion's ([`super::adaptive`]).
 //!
-//! The first-split search tries the trials in order, skips one that cannot beat the best
-//! so far (a split into `ku · kv` cells has at least that many leaves) and stops a trial
-//! once its leaves reach the best: ties go to the earlier trial.
-
-use crate::gpu_types::CC_SLOTS;
+//! The first-split search keeps the trial with the fewest leaves, ties to the earlier:
+//! here the trials run in order, one that cannot beat the best so far (a split into
+//! `ku · kv` cells has at least that many leaves) is skipped, and one is stopped once
+//! its leaves reach the best. The kernel runs them side by side and stops a trial once
+//! its leaves exceed a finished one's; both keep the same trial.
 
 /// A cell of a patch: `[i, i + w] × [j, j + h]` in grid units, `depth` midpoint splits
 /// below its first split.
@@ -96,10 +92,6 @@ pub fn next_cell(c: Cell, top: u32) -> Option<Cell> {
 pub struct Walk<L> {
     /// Every leaf with its payload.
     pub leaves: Vec<(Cell, L)>,
-    /// Leaves decided level by level (the first ones of `leaves`).
-    pub level_leaves: u32,
-    /// Then each slot's walks' leaves (`marks` of the kernel).
-    pub lane_leaves: [u32; CC_SLOTS as usize],
 }
 
 /// Trial `split` of a patch, stopped (`None`) once its leaves reach `stop`. `decide`
@@ -110,52 +102,23 @@ pub fn walk_trial<L>(
     stop: usize,
     decide: &mut dyn FnMut(Cell) -> Option<L>,
 ) -> Option<Walk<L>> {
-    let lanes = CC_SLOTS as usize;
     let mut leaves = Vec::new();
-    let mut level: Vec<Cell> = first_cells(n, split).collect();
-    // Level by level while a level has fewer cells than lanes (at most max_depth + 1).
-    while !level.is_empty() && level.len() < lanes {
-        if leaves.len() >= stop {
-            return None;
-        }
-        let mut next = Vec::with_capacity(4 * level.len());
-        for cell in level {
-            match decide(cell) {
-                None => next.extend((0..4).map(|q| cell.child(q))),
-                Some(leaf) => leaves.push((cell, leaf)),
+    for start in first_cells(n, split) {
+        let mut at = Some(start);
+        while let Some(cell) = at {
+            if leaves.len() >= stop {
+                return None;
             }
-        }
-        level = next;
-    }
-    if leaves.len() >= stop {
-        return None;
-    }
-    let level_leaves = leaves.len() as u32;
-    let mut lane_leaves = [0; CC_SLOTS as usize];
-    for (lane, count) in lane_leaves.iter_mut().enumerate() {
-        let before = leaves.len();
-        for &start in level.iter().skip(lane).step_by(lanes) {
-            let mut at = Some(start);
-            while let Some(cell) = at {
-                if leaves.len() >= stop {
-                    return None;
+            at = match decide(cell) {
+                None => Some(cell.child(0)),
+                Some(leaf) => {
+                    leaves.push((cell, leaf));
+                    next_cell(cell, start.depth)
                 }
-                at = match decide(cell) {
-                    None => Some(cell.child(0)),
-                    Some(leaf) => {
-                        leaves.push((cell, leaf));
-                        next_cell(cell, start.depth)
-                    }
-                };
-            }
+            };
         }
-        *count = (leaves.len() - before) as u32;
     }
-    Some(Walk {
-        leaves,
-        level_leaves,
-        lane_leaves,
-    })
+    Some(Walk { leaves })
 }
 
 /// The first-split search of one patch over `splits` in order: the index of the split
@@ -184,7 +147,7 @@ mod tests {
     use super::*;
 
     #[test]
-    fn the_walk_finds_the_recursions_leaves_in_the_kernels_order() {
+    fn the_walk_finds_the_recursions_leaves_in_its_order() {
         // Split where a cell overlaps a disc near one corner, down to depth 5.
         let n = 840 << 5;
         let mut decide = |c: Cell| {
@@ -202,16 +165,11 @@ mod tests {
         for c in first_cells(n, (3, 3)) {
             recurse(c, &mut decide, &mut reference);
         }
-        let key = |c: &Cell| (c.i, c.j, c.w);
-        let mut got: Vec<_> = walk.leaves.iter().map(|(c, _)| key(c)).collect();
-        let mut want: Vec<_> = reference.iter().map(key).collect();
-        assert_ne!(got, want, "level leaves come first: another order");
-        got.sort_unstable();
-        want.sort_unstable();
+        let key = |c: &Cell| (c.i, c.j, c.w, c.depth);
+        let got: Vec<_> = walk.leaves.iter().map(|(c, _)| key(c)).collect();
+        let want: Vec<_> = reference.iter().map(key).collect();
         assert_eq!(got, want);
-        let lanes: u32 = walk.lane_leaves.iter().sum();
-        assert_eq!((walk.level_leaves + lanes) as usize, walk.leaves.len());
-        assert!(walk.level_leaves > 0 && lanes > 0);
+        assert!(want.iter().any(|k| k.3 == 5) && want.iter().any(|k| k.3 == 0));
     }
 
     #[test]

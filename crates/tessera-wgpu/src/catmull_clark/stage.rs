@@ -7,9 +7,9 @@
 //!
 //! | # | kernel | per | writes |
 //! |---|---|---|---|
-//! | 1 | `cc_traverse` (count) | patch (workgroup) | best first split, its leaves per lane, to full depth |
+//! | 1 | `cc_traverse` (count) | patch | the first-split search to full depth: best split, its leaves, its decisions |
 //! | 2–3 | scan | patch | each patch's first leaf |
-//! | 4 | `cc_traverse` (emit) | patch (workgroup) | the leaves; leaf and item dispatch sizes |
+//! | 4 | `cc_traverse` (emit) | patch | the best split's leaves, its decisions replayed; leaf and item dispatch sizes |
 //! | 5 | `cc_leaf_keys` (indirect) | leaf | corner keys in their charts (and across seams) and vertices |
 //! | 6 | `cc_hash_insert` (indirect) | item | the vertex hash |
 //! | 7 | `cc_hash_number` mark_first (indirect) | item | each key's first item |
@@ -22,13 +22,14 @@
 //! | 15 | `cc_vertex_eval` (indirect) | vertex | vertices (position, normal at the point's home; face, face u v) |
 //! | 16 | `cc_triangulate` (indirect) | leaf | indices |
 //!
-//! Marking takes one workgroup per patch and walks each cell's subtree to full depth
-//! (level by level in workgroup memory while a level is small, then one stack per lane;
-//! twin [`tessera_core::catmull_clark::traverse`]), so the script does not grow with the
-//! depth. The first split of each patch (`ku × kv` cells, up to 8 × 8) is the one with
-//! the fewest leaves, as on the CPU: the count pass tries them in order, stopping a trial
-//! once it reaches the best so far, and the emit pass walks the best one again to write
-//! its leaves where the scan says. No workgroup waits on another.
+//! Marking takes one invocation per patch and walks each cell of a first split to full
+//! depth, depth first and without a stack (twin
+//! [`tessera_core::catmull_clark::traverse`]), so the script does not grow with the
+//! depth. The first split of each patch (`ku × kv` cells, up to 8 × 7) is the one with
+//! the fewest leaves, found as on the CPU: the count pass tries them in order, skipping
+//! a trial that cannot win and stopping one once it reaches the best so far, and keeps
+//! every decision as a bit; the emit pass replays the best trial's bits to write its
+//! leaves where the scan says, without deciding again. No invocation waits on another.
 //!
 //! Capacities: the leaves, polygons, vertices, indices and the hash table. Kernels never
 //! write past them, and the counters record what the run needed. The output (vertices,
@@ -69,7 +70,7 @@ use tessera_core::catmull_clark::gpu_model::{patch_topology, point_homes, CcGpuM
 use glam::Vec3;
 use tessera_core::catmull_clark::{CcParams, LeafBound, PatchMesh, SurfaceModel};
 use tessera_core::gpu_types::{
-    CcCell, CcHashStatus, CcState, CcTessParams, CcVertexPoint, OutVertex, CC_SLOTS,
+    CcCell, CcHashStatus, CcState, CcTessParams, CcVertexPoint, OutVertex,
 };
 use tessera_core::Mesh;
 use wgpu::util::DeviceExt;
@@ -217,6 +218,11 @@ struct Buffers {
     output: MeshBuffers,
     /// The hash's first-item flags and the polygon sizes, in one scan.
     number_scan: PrefixSum,
+    /// Marking's words ([`marks_words`]): per patch its leaves then first leaf, the
+    /// trial chosen, its best trial's first decision block; then the decision blocks
+    /// ([`decision_blocks`], `[bits, next]` each), which grow with the leaves.
+    marks: wgpu::Buffer,
+    marks_scan: PrefixSum,
 }
 
 /// Bind groups of every dispatch, rebuilt when buffers are reallocated.
@@ -238,7 +244,6 @@ struct Fixed<'a> {
     topo: &'a wgpu::Buffer,
     homes: &'a wgpu::Buffer,
     state: &'a wgpu::Buffer,
-    marks: &'a wgpu::Buffer,
     args: &'a wgpu::Buffer,
     passes: &'a [wgpu::Buffer; 2],
 }
@@ -258,9 +263,6 @@ pub struct CcStage {
     topo: wgpu::Buffer,
     homes: wgpu::Buffer,
     state: wgpu::Buffer,
-    /// `traverse::Marks`: per patch its leaves and first leaf, best split, lanes' leaves.
-    marks: wgpu::Buffer,
-    marks_scan: PrefixSum,
     args: wgpu::Buffer,
     /// The pass number of `cc_traverse` (0 count, 1 emit), one uniform each.
     passes: [wgpu::Buffer; 2],
@@ -274,11 +276,19 @@ pub struct CcStage {
     binds: Binds,
 }
 
-/// Words of the marks buffer for `patches` patches: leaves per patch and the total, best
-/// `(leaves, trial)` per patch, leaves per patch and lane.
+/// Words of the marks buffer for `patches` patches (`shaders/shared/cc_tess.wgsl`): per
+/// patch its leaves (scanned into its first leaf; the total after them), the trial
+/// chosen, and the first block of the best trial's decisions.
 fn marks_words(patches: u32) -> u64 {
-    let p = patches.max(1) as u64;
-    p + 1 + 2 * p + CC_SLOTS as u64 * p
+    3 * patches.max(1) as u64 + 1
+}
+
+/// Blocks of 32 decisions of the marking's walks: two per patch, and as many more as
+/// leaves and four per patch. A walk of `d` decisions takes `d / 32` more blocks, and a
+/// patch's search keeps two walks (its best trial's, and the current one's, reused):
+/// fewer than a leaf for each 12, as each trial's walk stops once it reaches the best.
+fn decision_blocks(patches: u32, leaves: u32) -> u64 {
+    6 * patches.max(1) as u64 + leaves as u64
 }
 
 impl CcStage {
@@ -325,7 +335,6 @@ impl CcStage {
         let patch_count = model.mesh.patch_count() as u32;
         let gpu_model = CcGpuModel::new(model);
         let model_buffers = CcModelBuffers::new(device, queue, &gpu_model)?;
-        check_size(device, "patch marks", 4 * marks_words(patch_count))?;
         let topo = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("tessera cc topology"),
             contents: bytemuck::cast_slice(&patch_topology(&model.mesh)),
@@ -342,13 +351,7 @@ impl CcStage {
             "tessera cc state",
             std::mem::size_of::<CcState>() as u64,
         );
-        let marks = storage(
-            device,
-            "tessera cc patch marks",
-            4 * marks_words(patch_count),
-        );
-        // Each patch's leaves and the total after them.
-        let marks_scan = PrefixSum::new(device, &kernels.scan, &marks, patch_count + 1);
+
         let args = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("tessera cc dispatch args"),
             size: 36,
@@ -371,7 +374,6 @@ impl CcStage {
             topo: &topo,
             homes: &homes,
             state: &state,
-            marks: &marks,
             args: &args,
             passes: &passes,
         };
@@ -387,8 +389,6 @@ impl CcStage {
             topo,
             homes,
             state,
-            marks,
-            marks_scan,
             args,
             passes,
             readback: StatusReadback::new("tessera cc status readback", status_size()),
@@ -583,11 +583,11 @@ impl CcStage {
             let patches = self.patch_count;
             dispatches += k
                 .traverse
-                .dispatch(&mut pass, &binds.traverse[0], patches, 1);
-            dispatches += self.marks_scan.record(&mut pass, &k.scan);
+                .dispatch(&mut pass, &binds.traverse[0], patches.max(1), 64);
+            dispatches += b.marks_scan.record(&mut pass, &k.scan);
             dispatches += k
                 .traverse
-                .dispatch(&mut pass, &binds.traverse[1], patches, 1);
+                .dispatch(&mut pass, &binds.traverse[1], patches.max(1), 64);
         }
         stamp(encoder, "marking");
         {
@@ -684,8 +684,10 @@ impl CcStage {
             let all = need as u64 * s.leaves.max(1) as u64 / kept;
             all.min(u32::MAX as u64) as u32
         };
+        // The decision blocks beyond each patch's own grow with the leaves.
+        let blocks = s.decision_blocks.saturating_sub(4 * self.patch_count.max(1));
         let mut caps = CcCapacities {
-            leaves: grow(s.leaves, old.leaves),
+            leaves: grow(s.leaves.max(blocks), old.leaves),
             poly: grow(scaled(s.need_poly), old.poly),
             vertices: grow(scaled(s.vertices), old.vertices),
             indices: grow(scaled(s.need_indices), old.indices),
@@ -713,7 +715,6 @@ impl CcStage {
             topo: &self.topo,
             homes: &self.homes,
             state: &self.state,
-            marks: &self.marks,
             args: &self.args,
             passes: &self.passes,
         };
@@ -762,8 +763,6 @@ pub struct CcPolygons {
     pub first_leaf: Vec<u32>,
     /// Per patch: the trial of its first split.
     pub first_trial: Vec<u32>,
-    /// Per patch and lane: the leaves of the lane's walk.
-    pub lane_leaves: Vec<[u32; CC_SLOTS as usize]>,
     /// Per leaf: where its polygon starts in `verts`; one more entry for the end.
     pub offsets: Vec<u32>,
     /// Per leaf: the points found on each side.
@@ -789,9 +788,9 @@ impl CcStage {
         let leaves = status.state.leaves as u64;
         let p = self.patch_count as u64;
         let marks: Vec<u32> =
-            bytemuck::pod_collect_to_vec(&read(&self.marks, 0, 4 * marks_words(self.patch_count))?);
-        let best = &marks[(p + 1) as usize..(3 * p + 1) as usize];
-        let lanes = &marks[(3 * p + 1) as usize..];
+            bytemuck::pod_collect_to_vec(&read(&b.marks, 0, 4 * marks_words(self.patch_count))?);
+        let chosen_at = p as usize + 1;
+        let first_trial = marks[chosen_at..chosen_at + p as usize].to_vec();
         let offsets: Vec<u32> =
             bytemuck::pod_collect_to_vec(&read(&b.poly_offsets, 0, 4 * (leaves + 1))?);
         let side_base = 4 * (b.caps.leaves as u64 + 1);
@@ -810,12 +809,7 @@ impl CcStage {
                 point_bytes * items,
             )?),
             first_leaf: marks[..=p as usize].to_vec(),
-            first_trial: best.chunks(2).map(|b| b[1]).collect(),
-            lane_leaves: lanes
-                .chunks(CC_SLOTS as usize)
-                .take(p as usize)
-                .map(|c| c.try_into().expect("a lane count per lane"))
-                .collect(),
+            first_trial,
             offsets,
             side_counts,
             verts: bytemuck::pod_collect_to_vec(&read(&b.poly_verts, 0, 16 * total)?),
@@ -936,6 +930,10 @@ impl Buffers {
                 caps.vertices as u64 * std::mem::size_of::<OutVertex>() as u64,
             ),
             ("vertex hash", caps.hash_slots as u64 * 12),
+            (
+                "patch marks",
+                4 * marks_words(counts.0) + 8 * decision_blocks(counts.0, caps.leaves),
+            ),
         ] {
             check_size(device, what, bytes)?;
         }
@@ -963,6 +961,13 @@ impl Buffers {
                 (state, state_word(std::mem::offset_of!(CcState, leaves))),
             ),
         );
+        let marks = storage(
+            device,
+            "tessera cc patch marks",
+            4 * marks_words(counts.0) + 8 * decision_blocks(counts.0, caps.leaves),
+        );
+        // Each patch's leaves and the total after them.
+        let marks_scan = PrefixSum::new(device, &kernels.scan, &marks, counts.0 + 1);
         Ok(Buffers {
             caps,
             params,
@@ -980,6 +985,8 @@ impl Buffers {
             hash,
             output: MeshBuffers::with_capacity(device, caps.vertices, caps.indices),
             number_scan,
+            marks,
+            marks_scan,
         })
     }
 }
@@ -998,7 +1005,7 @@ impl Binds {
                 (slot::PARAMS, &b.params),
                 (slot::STATE, f.state),
                 (slot::LEAVES, &b.leaves),
-                (slot::MARKS, f.marks),
+                (slot::MARKS, &b.marks),
                 (slot::ARGS, f.args),
                 (slot::TOPO, f.topo),
                 (slot::HOMES, f.homes),
