@@ -29,6 +29,8 @@ struct CcHashSlotView {
 @group(0) @binding(55) var<storage, read> leaves: array<CcCell>;
 @group(0) @binding(59) var<storage, read> topo: array<CcPatchTopo>;
 @group(0) @binding(63) var<storage, read_write> poly_verts: array<vec4u>;
+// Marking's words (`shared/cc_tess.wgsl`): here the trial each patch chose.
+@group(0) @binding(57) var<storage, read> marks: array<u32>;
 
 // The slot of a key, or CC_NO_SLOT if it is not in the table (unmarked).
 fn cc_find(key: vec2u) -> u32 {
@@ -174,7 +176,7 @@ fn side_walk(cell: CcCell, s: u32) {
         return;
     }
     let q = across >> 2u;
-    let split = cc_trial_split(cc_first_trial(q));
+    let split = cc_trial_split(marks[cc_chosen_at(q)]);
     // Edges 0 and 2 of the patch across run along its u, 1 and 3 along its v.
     let k = select(split.y, split.x, ((across & 3u) % 2u) == 0u);
     let step = n / k;

@@ -1,18 +1,22 @@
-// Adaptive marking to full depth in one dispatch per pass, one invocation per patch.
-// The count pass runs the CPU's first-split search: trials in order, each walking the
-// cells of its split row by row and each cell's subtree depth first, without a stack
-// (`cc_next_cell`); a trial that cannot beat the best so far is skipped, one that
-// reaches it is stopped (ties go to the earlier trial). A cell is decided alone
-// (`cc_decide`), so the leaves do not depend on the order of work. Every decision is
-// kept as a bit, in a chain of blocks of 32, so the emit pass replays the best trial's
-// walk without deciding anything again, writing its leaves from the patch's first
-// leaf (scanned in between).
+// Adaptive marking to full depth in one dispatch per pass. The count pass takes one
+// invocation per patch and first split (trial): it walks the cells of the split row by
+// row, each cell's subtree depth first, without a stack (`cc_next_cell`), and keeps
+// every decision as a bit in a chain of blocks of 32. A trial that finishes offers
+// itself as the patch's best, !(leaves << 5 | trial) kept by atomicMax: the fewest
+// leaves, ties to the earlier trial, as the CPU's search. A trial is skipped, or
+// stopped, once it cannot beat a finished one; the best trial is never stopped, so the
+// choice does not depend on timing. The scan turns each patch's best into its first
+// leaf, and the emit pass (one invocation per patch) replays the best trial's bits to
+// write its leaves there: nothing is decided twice. A cell is decided alone
+// (`cc_decide`), so the leaves do not depend on the order of work.
 //
-// No workgroup memory, no barriers and no waiting on other invocations. A CPU device
-// (lavapipe) runs eight lanes at a time through every instruction of a loop until the
-// last lane is done, and stops every loop of those eight lanes after 65 535 iterations
-// in all: the emit pass has no decision code, and a walk cut short is reported
-// (overflow bit 4), never taken for a mesh.
+// No workgroup memory beyond the lanes' order, no waiting on other invocations. A CPU
+// device (lavapipe) runs eight lanes at a time through every instruction, and through a
+// loop until its last lane is done: with midpoint splits alone the lanes are eight
+// patches deciding side by side. It also stops every loop of those eight lanes after
+// 65 535 iterations in all, which one invocation per trial keeps far off; a walk cut
+// short is reported (overflow bit 4) if it could have been the best, never taken for a
+// mesh.
 //
 // The same entry runs for both passes, told apart by `cc_pass` (one pipeline).
 // Twin: `tessera_core::catmull_clark::traverse`.
@@ -23,6 +27,8 @@
 
 @group(0) @binding(55) var<storage, read_write> leaves: array<CcCell>;
 @group(0) @binding(68) var<uniform> cc_pass: vec4u;
+// `shared/cc_tess.wgsl` gives the layout.
+@group(0) @binding(57) var<storage, read_write> marks: array<atomic<u32>>;
 
 
 fn cc_corner(p: u32, i: u32, j: u32) -> vec3f {
@@ -143,63 +149,58 @@ fn cc_root_cell(t: u32, r: u32) -> vec2u {
     return vec2u((r % s.x) * (cc_params.grid / s.x), (r / s.x) * (cc_params.grid / s.y));
 }
 
-// The decision blocks of one walk: where the next bit goes (or comes from).
+// A trial's key: the fewest leaves, then the earliest trial, is the least.
+fn cc_key(leaves: u32, t: u32) -> u32 {
+    return (leaves << 5u) | t;
+}
+
+// The key of the best trial of patch p finished so far (0xffffffff: none).
+fn cc_best_so_far(p: u32) -> u32 {
+    return ~atomicLoad(&marks[cc_best_at(p)]);
+}
+
+// The decision blocks of one walk: where the next bit goes (or comes from). Block
+// p·T + t is trial t of patch p's own; further blocks are taken from the pool in turn
+// (`cc_state.decision_blocks`).
 struct CcChain {
     block: u32,
     bit: u32,
     bits: u32,
 }
 
-// The walks' decisions, 32 to a block `[bits, next block]` in the marks after the
-// patches' words: blocks 2p and 2p + 1 are patch p's own, further blocks are taken in
-// turn (`cc_state.decision_blocks`).
-fn cc_bits_at(b: u32) -> u32 {
-    return 3u * cc_params.patch_count + 1u + 2u * b;
-}
+const CC_NO_BLOCK: u32 = 0xffffffffu;
 
 fn cc_blocks() -> u32 {
     return (arrayLength(&marks) - cc_bits_at(0u)) / 2u;
 }
 
-// A free block for a chain that needs more than its patch's own; CC_NO_BLOCK once there
-// are no more (overflow bit 8: the run needs more).
-const CC_NO_BLOCK: u32 = 0xffffffffu;
-
+// A block from the pool; CC_NO_BLOCK once there are none (overflow bit 8: the run needs
+// more).
 fn cc_take_block() -> u32 {
-    let own = 2u * cc_params.patch_count;
+    let own = cc_params.patch_count * cc_params.trials;
     let b = own + atomicAdd(&cc_state.decision_blocks, 1u);
     if b >= cc_blocks() {
         atomicOr(&cc_state.overflow, 8u);
         return CC_NO_BLOCK;
     }
-    marks[cc_bits_at(b) + 1u] = CC_NO_BLOCK;
+    atomicStore(&marks[cc_bits_at(b) + 1u], CC_NO_BLOCK);
     return b;
 }
 
-// Records one decision; a full block is written out and the chain moves on to its next
-// block, taking one if it has none.
+// Records one decision; a full block is written out and the chain moves on to a block
+// from the pool.
 fn cc_record(c: ptr<function, CcChain>, split: bool) {
     if split {
-        (*c).bits |= 1u << (*c).bit;
+        (*c).bits |= 1u << ((*c).bit & 31u);
     }
     (*c).bit += 1u;
     if (*c).bit == 32u && (*c).block != CC_NO_BLOCK {
-        marks[cc_bits_at((*c).block)] = (*c).bits;
-        var next = marks[cc_bits_at((*c).block) + 1u];
-        if next == CC_NO_BLOCK {
-            next = cc_take_block();
-            marks[cc_bits_at((*c).block) + 1u] = next;
-        }
+        atomicStore(&marks[cc_bits_at((*c).block)], (*c).bits);
+        let next = cc_take_block();
+        atomicStore(&marks[cc_bits_at((*c).block) + 1u], next);
         (*c).block = next;
         (*c).bit = 0u;
         (*c).bits = 0u;
-    }
-}
-
-// Writes out the last, partly filled block.
-fn cc_flush(c: CcChain) {
-    if c.block != CC_NO_BLOCK && c.bit > 0u {
-        marks[cc_bits_at(c.block)] = c.bits;
     }
 }
 
@@ -207,120 +208,131 @@ fn cc_flush(c: CcChain) {
 fn cc_replay(c: ptr<function, CcChain>) -> bool {
     if (*c).bit == 32u {
         if (*c).block != CC_NO_BLOCK {
-            (*c).block = marks[cc_bits_at((*c).block) + 1u];
+            (*c).block = atomicLoad(&marks[cc_bits_at((*c).block) + 1u]);
         }
         (*c).bit = 0u;
         (*c).bits = 0u;
         if (*c).block != CC_NO_BLOCK {
-            (*c).bits = marks[cc_bits_at((*c).block)];
+            (*c).bits = atomicLoad(&marks[cc_bits_at((*c).block)]);
         }
     }
-    let split = ((*c).bits >> (*c).bit & 1u) != 0u;
+    let split = (((*c).bits >> (*c).bit) & 1u) != 0u;
     (*c).bit += 1u;
     return split;
 }
 
-fn cc_chain_at(block: u32) -> CcChain {
-    return CcChain(block, 0u, 0u);
+// Invocations per patch in the count pass: trials g, g + G, g + 2G, ... go to invocation
+// g, one after another. A few invocations per patch keep each within the device's loop
+// limit (see the top); more would leave more lanes with nothing to do.
+const CC_TRIAL_GROUPS: u32 = 6u;
+
+fn cc_trial_groups() -> u32 {
+    return min(CC_TRIAL_GROUPS, cc_params.trials);
 }
 
-// Counting: patch p's search, as `traverse::search`. One loop over every decision of
-// every trial, so that lanes of different patches keep deciding side by side.
-fn count_patch(p: u32) {
-    // Chain 0 holds the best trial's decisions, chain 1 the current one's (swapped when
-    // the current trial becomes the best). Blocks of a losing trial are reused.
-    var heads = vec2u(2u * p, 2u * p + 1u);
-    marks[cc_bits_at(heads.x) + 1u] = CC_NO_BLOCK;
-    marks[cc_bits_at(heads.y) + 1u] = CC_NO_BLOCK;
-    var chain = cc_chain_at(heads.y);
-    var best = 0xffffffffu;
-    var best_trial = CC_TRIALS;
-    var best_max = 0.0;
-    var best_unmet = 0u;
-    var t = 0u;
+// The first trial from t on, in steps of G, that could still beat the best finished
+// trial of patch p (ku·kv cells give at least ku·kv leaves); `trials` if none.
+fn cc_next_trial(p: u32, t: u32) -> u32 {
+    var k = t;
+    for (; k < cc_params.trials; k += cc_trial_groups()) {
+        let s = cc_trial_split(k);
+        if cc_key(s.x * s.y, k) <= cc_best_so_far(p) {
+            break;
+        }
+    }
+    return min(k, cc_params.trials);
+}
+
+// Counting: the trials of group g of patch p, each as `traverse::walk_trial` stopped at
+// the best, in one loop over their decisions.
+fn count_group(p: u32, g: u32) {
+    var t = cc_next_trial(p, g);
+    var chain = CcChain(p * cc_params.trials + t, 0u, 0u);
     var r = 0u;
     var mine = 0u;
-    var at_cell = cc_root_cell(0u, 0u);
-    var searching = true;
-    while searching {
-        let cell = cc_cell_of(p, t, at_cell);
-        let split = decide_counted(cell);
-        cc_record(&chain, split);
+    var at_cell = cc_root_cell(min(t, CC_TRIALS - 1u), 0u);
+    var counting = t < cc_params.trials;
+    while counting {
         var trial_over = false;
-        if split {
-            at_cell = cc_first_child(at_cell);
+        if cc_key(mine, t) > cc_best_so_far(p) {
+            // Above a finished trial, or level with one from an earlier trial.
+            trial_over = true;
         } else {
-            mine += 1u;
-            let next = cc_next_cell(t, at_cell);
-            if next.y != 0xffffffffu {
-                at_cell = next;
+            let cell = cc_cell_of(p, t, at_cell);
+            let split = decide_counted(cell);
+            cc_record(&chain, split);
+            if split {
+                at_cell = cc_first_child(at_cell);
             } else {
-                r += 1u;
+                mine += 1u;
+                let next = cc_next_cell(t, at_cell);
                 let s = cc_trial_split(t);
-                if r < s.x * s.y {
+                if next.y != 0xffffffffu {
+                    at_cell = next;
+                } else if r + 1u < s.x * s.y {
+                    r += 1u;
                     at_cell = cc_root_cell(t, r);
-                } else if mine < best {
-                    // Finished with fewer leaves than the best so far: the new best.
-                    cc_flush(chain);
-                    best = mine;
-                    best_trial = t;
-                    best_max = lane_max_bound;
-                    best_unmet = lane_unmet;
-                    heads = heads.yx;
+                } else {
+                    // Written out and offered at once: the lanes run the loop until
+                    // the last is done, and the others can stop as soon as this one
+                    // beats them.
+                    if chain.block != CC_NO_BLOCK && chain.bit > 0u {
+                        atomicStore(&marks[cc_bits_at(chain.block)], chain.bits);
+                    }
+                    atomicStore(&marks[cc_stats_at(p, t)], bitcast<u32>(lane_max_bound));
+                    atomicStore(&marks[cc_stats_at(p, t) + 1u], lane_unmet);
+                    atomicMax(&marks[cc_best_at(p)], ~cc_key(mine, t));
+                    atomicMax(&marks[p], ~cc_key(mine, t));
                     trial_over = true;
                 }
             }
-            // Reaching the best (a tie goes to the earlier trial): stopped.
-            trial_over = trial_over || mine >= best;
         }
         if trial_over {
-            // On to the next trial that could beat the best: ku·kv cells give at least
-            // ku·kv leaves.
-            t += 1u;
-            for (; t < cc_params.trials; t++) {
-                let s = cc_trial_split(t);
-                if s.x * s.y < best {
-                    break;
-                }
-            }
-            searching = t < cc_params.trials;
+            t = cc_next_trial(p, t + cc_trial_groups());
+            counting = t < cc_params.trials;
+            chain = CcChain(p * cc_params.trials + min(t, CC_TRIALS - 1u), 0u, 0u);
             r = 0u;
             mine = 0u;
             lane_max_bound = 0.0;
             lane_unmet = 0u;
             at_cell = cc_root_cell(min(t, CC_TRIALS - 1u), 0u);
-            chain = cc_chain_at(heads.y);
         }
     }
-    // The loop ends only when the search is over: otherwise the device cut it short.
-    if searching {
-        atomicOr(&cc_state.overflow, 4u);
+    // The loop ends only when the group is done: otherwise the device cut it short.
+    // What the trial had found so far is kept in case it could have been the best.
+    if counting {
+        atomicMax(&marks[cc_cut_at(p)], ~cc_key(mine, t));
     }
-    marks[p] = best;
-    marks[cc_chosen_at(p)] = best_trial;
-    marks[cc_head_at(p)] = heads.x;
-    atomicMax(&cc_state.max_bound_bits, bitcast<u32>(best_max));
-    atomicAdd(&cc_state.unmet, best_unmet);
 }
 
 // Emitting: the best trial's walk replayed, its leaves written from the patch's first.
 fn emit_patch(p: u32) {
-    let t = marks[cc_chosen_at(p)];
-    let first = marks[p];
-    // The count pass's leaves: at most that many are written here.
-    let count = marks[p + 1u] - first;
-    let head = marks[cc_head_at(p)];
-    var chain = CcChain(head, 0u, marks[cc_bits_at(head)]);
+    let key = cc_best_so_far(p);
+    atomicStore(&marks[cc_chosen_at(p)], select(key & 31u, CC_TRIALS, key == 0xffffffffu));
+    // A trial cut short that might have beaten the one chosen: no mesh.
+    if key == 0xffffffffu || ~atomicLoad(&marks[cc_cut_at(p)]) < key {
+        atomicOr(&cc_state.overflow, 4u);
+    }
+    if key == 0xffffffffu {
+        return;
+    }
+    let t = key & 31u;
+    let count = key >> 5u;
+    let first = atomicLoad(&marks[p]);
+    let own = p * cc_params.trials + t;
+    var chain = CcChain(own, 0u, atomicLoad(&marks[cc_bits_at(own)]));
+    let s = cc_trial_split(t);
+    let area = s.x * s.y;
     var r = 0u;
     var mine = 0u;
     var at_cell = cc_root_cell(t, 0u);
     var walking = true;
-    let area = cc_trial_split(t).x * cc_trial_split(t).y;
     while walking {
         let cell = cc_cell_of(p, t, at_cell);
         if cc_replay(&chain) {
             at_cell = cc_first_child(at_cell);
         } else {
+            // At most what the count pass found.
             let k = first + mine;
             if mine < count && k < cc_params.leaf_capacity && k < arrayLength(&leaves) {
                 leaves[k] = cell;
@@ -339,16 +351,19 @@ fn emit_patch(p: u32) {
     if walking {
         atomicOr(&cc_state.overflow, 4u);
     }
-    // The replay must find what the search counted.
+    // The replay must find what the count pass counted.
     if mine != count {
         atomicOr(&cc_state.overflow, 2u);
     }
+    atomicMax(&cc_state.max_bound_bits, atomicLoad(&marks[cc_stats_at(p, t)]));
+    atomicAdd(&cc_state.unmet, atomicLoad(&marks[cc_stats_at(p, t) + 1u]));
 }
 
 // Whether patch p has an extraordinary vertex (its tree splits at the root): its bounds
 // walk chains of pieces and its walks go deeper.
 fn cc_irregular(p: u32) -> bool {
-    return cc_roots[p] != CC_NO_ROOT && (cc_nodes[cc_roots[p]].kind & CC_NODE_KIND_MASK) != CC_NODE_BEZIER;
+    return p < cc_params.patch_count && cc_roots[p] != CC_NO_ROOT
+        && (cc_nodes[cc_roots[p]].kind & CC_NODE_KIND_MASK) != CC_NODE_BEZIER;
 }
 
 @compute @workgroup_size(64)
@@ -357,14 +372,20 @@ fn main(@builtin(global_invocation_id) gid: vec3u, @builtin(num_workgroups) grou
     let x = cc_invocation(gid, groups);
     let emitting = cc_pass.x == 1u;
     let patches = cc_params.patch_count;
-    // Counting, the patches at a vertex of each workgroup search side by side, after the
-    // others (`shared/lane_order.wgsl`).
-    let valid = x < patches;
-    let ordered = lane_order(lid, valid, x, valid && cc_irregular(x));
+    // Counting, invocation x takes group g of patch p, in blocks of 8 patches: a group
+    // of 8 lanes decides the same trials of 8 patches, the first group first.
+    let per_patch = select(cc_trial_groups(), 1u, emitting);
+    let block = x / (8u * per_patch);
+    let within = x % (8u * per_patch);
+    let mine = (block * 8u + within % 8u) * per_patch + within / 8u;
+    // The patches at a vertex of each workgroup run side by side, after the others
+    // (`shared/lane_order.wgsl`).
+    let valid = mine < patches * per_patch;
+    let ordered = lane_order(lid, valid, mine, valid && cc_irregular(mine / per_patch));
     if x == 0u {
         if emitting {
             // The scan left the total after the patches' offsets.
-            let total = marks[patches];
+            let total = atomicLoad(&marks[patches]);
             cc_state.leaves = total;
             if total > cc_params.leaf_capacity {
                 atomicOr(&cc_state.overflow, 1u);
@@ -374,25 +395,28 @@ fn main(@builtin(global_invocation_id) gid: vec3u, @builtin(num_workgroups) grou
             cc_write_args(6u, 8u * n);
         } else {
             // Scanned as no leaves: the total lands here.
-            marks[patches] = 0u;
+            atomicStore(&marks[patches], 0xffffffffu);
         }
     }
-    let p = select(x, ordered, !emitting);
-    if p >= patches {
+    let item = select(x, ordered, !emitting);
+    let p = item / per_patch;
+    let g = item % per_patch;
+    if item == LANE_NONE || p >= patches {
         return;
     }
     // A hole has no surface (and no tree): no leaves, no trial.
     if cc_roots[p] == CC_NO_ROOT {
-        if !emitting {
-            marks[p] = 0u;
-            marks[cc_chosen_at(p)] = CC_TRIALS;
+        if emitting {
+            atomicStore(&marks[cc_chosen_at(p)], CC_TRIALS);
+        } else if g == 0u {
+            atomicStore(&marks[p], 0xffffffffu);
         }
         return;
     }
     if emitting {
         emit_patch(p);
     } else {
-        count_patch(p);
+        count_group(p, g);
         atomicAdd(&cc_state.bounds, lane_bounds);
         atomicAdd(&cc_state.proven, lane_proven);
     }

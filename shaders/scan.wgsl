@@ -26,6 +26,11 @@ struct ScanParams {
     n_b: u32,
     live_slot_b: u32,
     lists: u32,
+    // The first list's values are read as (x ^ xor) >> shift: keys that pack a count
+    // with other bits are scanned in place as their counts.
+    xor: u32,
+    shift: u32,
+    pad: u32,
 }
 
 @group(0) @binding(0) var<uniform> scan: ScanParams;
@@ -60,7 +65,7 @@ fn scan_len(list: u32) -> u32 {
 
 fn load(list: u32, i: u32) -> u32 {
     if list == 0u {
-        return data[i];
+        return (data[i] ^ scan.xor) >> scan.shift;
     }
     return data_b[i];
 }

@@ -32,25 +32,39 @@ struct CcHashStatusView {
 
 @group(0) @binding(50) var<uniform> cc_params: CcTessParams;
 @group(0) @binding(51) var<storage, read_write> cc_state: CcCounters;
-// Marking's words (`stage::marks_words`, see cc_traverse.wgsl), P patches: per patch
-// its leaves, then its first leaf (scanned in place, the total at P); per patch the
-// trial chosen; per patch the first block of its best trial's decisions.
-@group(0) @binding(57) var<storage, read_write> marks: array<u32>;
+// Marking's words (binding 57, `stage::marks_words`, see cc_traverse.wgsl), P patches
+// and T trials:
+// - [0, P]: per patch the key of its best trial, !(leaves << 5 | trial), then its first
+//   leaf (scanned in place, the total at P);
+// - [P + 1, 2P + 1): the same key, kept; [2P + 1, 3P + 1): the key of the best trial
+//   the device cut short; [3P + 1, 4P + 1): the trial chosen;
+// - per patch and trial, what its leaves guarantee: the largest bound, the leaves over
+//   the tolerance;
+// - blocks of 32 decisions, `[bits, next]`: one per patch and trial, then a pool.
+// Declared by the kernels that use it (atomic where marking writes it).
+
 // Indirect dispatch arguments: [3..6] the leaves, [6..9] the hash items (eight per leaf:
 // `cc_leaf_keys`).
 @group(0) @binding(58) var<storage, read_write> args: array<u32>;
 
-fn cc_chosen_at(p: u32) -> u32 {
+fn cc_best_at(p: u32) -> u32 {
     return cc_params.patch_count + 1u + p;
 }
 
-fn cc_head_at(p: u32) -> u32 {
+fn cc_cut_at(p: u32) -> u32 {
     return 2u * cc_params.patch_count + 1u + p;
 }
 
-// The trial of patch p's first split (CC_TRIALS for a hole).
-fn cc_first_trial(p: u32) -> u32 {
-    return marks[cc_chosen_at(p)];
+fn cc_chosen_at(p: u32) -> u32 {
+    return 3u * cc_params.patch_count + 1u + p;
+}
+
+fn cc_stats_at(p: u32, t: u32) -> u32 {
+    return 4u * cc_params.patch_count + 1u + 2u * (p * cc_params.trials + t);
+}
+
+fn cc_bits_at(block: u32) -> u32 {
+    return cc_stats_at(cc_params.patch_count, 0u) + 2u * block;
 }
 
 fn cc_invocation(gid: vec3u, groups: vec3u) -> u32 {

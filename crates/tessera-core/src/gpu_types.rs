@@ -620,8 +620,6 @@ mod tests {
         let cpu: Vec<(u32, u32)> = crate::catmull_clark::first_splits().collect();
         let gpu: Vec<(u32, u32)> = (0..CC_TRIALS).map(cc_trial_split).collect();
         assert_eq!(gpu, cpu);
-        // The kernel keys a trial as leaves << 5 | trial.
-        assert!(CC_TRIALS <= 32);
     }
 }
 
@@ -772,6 +770,8 @@ pub struct CcCell {
 
 /// First splits tried per patch: 4 odd squares, then the 14 near-square rectangles.
 pub const CC_TRIALS: u32 = 18;
+// Marking keys a trial as `leaves << 5 | trial`.
+const _: () = assert!(CC_TRIALS <= 32);
 /// No patch across an edge (an open boundary or a hole).
 pub const CC_NO_NEIGHBOUR: u32 = u32::MAX;
 
@@ -912,7 +912,7 @@ pub struct CcState {
     /// Cells split on the split proof alone, without a bound: with `bounds`, the cells
     /// tested.
     pub proven: u32,
-    /// Blocks of 32 decisions the walks took beyond the two of each patch's own (also
-    /// beyond capacity: what is needed).
+    /// Blocks of 32 decisions the walks took from the pool, beyond each trial's own
+    /// (also beyond capacity: what is needed).
     pub decision_blocks: u32,
 }

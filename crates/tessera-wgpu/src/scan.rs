@@ -40,6 +40,25 @@ impl PrefixSum {
         Self::plan(device, kernels, data, n, None)
     }
 
+    /// Plans the scan of the first `n` values of `data` read as `(x ^ xor) >> shift`,
+    /// in place: keys that pack a count with other bits are scanned as their counts.
+    pub fn of_keys(
+        device: &wgpu::Device,
+        kernels: &ScanKernels,
+        data: &wgpu::Buffer,
+        n: u32,
+        (xor, shift): (u32, u32),
+    ) -> Self {
+        let no_live = storage(device, "tessera scan no live count", 4);
+        Self::bind(
+            device,
+            kernels,
+            (data, n, u32::MAX, &no_live),
+            None,
+            (xor, shift),
+        )
+    }
+
     /// Plans the scan of the first `live[slot] + 1` (at most `n`) values of `data`, the
     /// count written by an earlier kernel: a list sized for its capacity costs what it
     /// holds. Values beyond are left as they are.
@@ -62,7 +81,7 @@ impl PrefixSum {
         b: (&wgpu::Buffer, u32, (&wgpu::Buffer, u32)),
     ) -> Self {
         let (data, n, (live, slot)) = a;
-        Self::bind(device, kernels, (data, n, slot, live), Some(b))
+        Self::bind(device, kernels, (data, n, slot, live), Some(b), (0, 0))
     }
 
     fn plan(
@@ -74,7 +93,7 @@ impl PrefixSum {
     ) -> Self {
         let no_live = storage(device, "tessera scan no live count", 4);
         let (live_buffer, slot) = live.unwrap_or((&no_live, u32::MAX));
-        Self::bind(device, kernels, (data, n, slot, live_buffer), None)
+        Self::bind(device, kernels, (data, n, slot, live_buffer), None, (0, 0))
     }
 
     fn bind(
@@ -82,6 +101,7 @@ impl PrefixSum {
         kernels: &ScanKernels,
         (data, n, slot, live): (&wgpu::Buffer, u32, u32, &wgpu::Buffer),
         b: Option<(&wgpu::Buffer, u32, (&wgpu::Buffer, u32))>,
+        (xor, shift): (u32, u32),
     ) -> Self {
         // A single list binds two small buffers of its own in the second list's place.
         let unused = storage(device, "tessera scan no second list", 4);
@@ -92,7 +112,7 @@ impl PrefixSum {
         };
         let uniform = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("tessera scan params"),
-            contents: bytemuck::bytes_of(&[n, slot, n_b, slot_b, lists, 0, 0, 0]),
+            contents: bytemuck::bytes_of(&[n, slot, n_b, slot_b, lists, xor, shift, 0]),
             usage: wgpu::BufferUsages::UNIFORM,
         });
         let sums = storage(device, "tessera scan sums", 4 * SCAN_GROUPS as u64);

@@ -316,7 +316,11 @@ fn the_marking_kernel_writes_its_twins_leaves_in_order() {
         let leaves = marking_leaves(&model, &params).expect("twin");
         for l in &leaves {
             let p = l.patch_id as usize;
-            assert_eq!(got.first_trial[p], l.trial_depth & 0xff, "{name}: patch {p}: first split");
+            assert_eq!(
+                got.first_trial[p],
+                l.trial_depth & 0xff,
+                "{name}: patch {p}: first split"
+            );
         }
         assert_eq!(got.leaves.len(), leaves.len(), "{name}: leaves");
         for (l, (g, t)) in got.leaves.iter().zip(&leaves).enumerate() {

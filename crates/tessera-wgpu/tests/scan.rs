@@ -89,3 +89,38 @@ fn a_scan_bounded_by_a_live_count_scans_that_many_and_leaves_the_rest() {
     }
     gpu.check().expect("no wgpu validation errors");
 }
+
+#[test]
+fn a_scan_of_keys_sums_the_counts_they_pack() {
+    let gpu = Gpu::new().expect("a wgpu adapter (CI installs Mesa's lavapipe)");
+    let kernels = ScanKernels::new(&gpu.device);
+    // Keys as marking leaves them: !(count << 5 | trial).
+    let n = 70_000usize;
+    let counts: Vec<u32> = (0..n as u32)
+        .map(|i| i.wrapping_mul(2_654_435_761) >> 26)
+        .collect();
+    let keys: Vec<u32> = counts
+        .iter()
+        .enumerate()
+        .map(|(i, &c)| !((c << 5) | (i as u32 % 18)))
+        .collect();
+    let buffer = gpu
+        .device
+        .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("scan test"),
+            contents: bytemuck::cast_slice(&keys),
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+        });
+    let scan = PrefixSum::of_keys(&gpu.device, &kernels, &buffer, n as u32, (!0, 5));
+    let mut encoder = gpu.device.create_command_encoder(&Default::default());
+    {
+        let mut pass = encoder.begin_compute_pass(&Default::default());
+        scan.record(&mut pass, &kernels);
+    }
+    gpu.queue.submit([encoder.finish()]);
+    let got: Vec<u32> = gpu.read_pod(&buffer, n).expect("readback");
+    let mut want = counts;
+    exclusive_scan(&mut want);
+    assert_eq!(got, want);
+    gpu.check().expect("no wgpu validation errors");
+}

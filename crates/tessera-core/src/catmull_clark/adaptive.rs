@@ -424,10 +424,7 @@ pub fn tessellate_adaptive(model: &SurfaceModel, params: &CcParams) -> Result<Cc
 /// What `cc_traverse` writes for `params` (flatness bound): every leaf in the GPU's
 /// order. The twin's output for the tests.
 #[doc(hidden)]
-pub fn marking_leaves(
-    model: &SurfaceModel,
-    params: &CcParams,
-) -> Result<Vec<CcCell>> {
+pub fn marking_leaves(model: &SurfaceModel, params: &CcParams) -> Result<Vec<CcCell>> {
     params.validate(model)?;
     let mut eval = Evaluator::new(model, params);
     let flatness = CcParams {

@@ -7,7 +7,7 @@
 //!
 //! | # | kernel | per | writes |
 //! |---|---|---|---|
-//! | 1 | `cc_traverse` (count) | patch | the first-split search to full depth: best split, its leaves, its decisions |
+//! | 1 | `cc_traverse` (count) | patch and group of trials | the first-split search to full depth: best split, its leaves, its decisions |
 //! | 2–3 | scan | patch | each patch's first leaf |
 //! | 4 | `cc_traverse` (emit) | patch | the best split's leaves, its decisions replayed; leaf and item dispatch sizes |
 //! | 5 | `cc_leaf_keys` (indirect) | leaf | corner keys in their charts (and across seams) and vertices |
@@ -22,14 +22,14 @@
 //! | 15 | `cc_vertex_eval` (indirect) | vertex | vertices (position, normal at the point's home; face, face u v) |
 //! | 16 | `cc_triangulate` (indirect) | leaf | indices |
 //!
-//! Marking takes one invocation per patch and walks each cell of a first split to full
-//! depth, depth first and without a stack (twin
-//! [`tessera_core::catmull_clark::traverse`]), so the script does not grow with the
-//! depth. The first split of each patch (`ku × kv` cells, up to 8 × 7) is the one with
-//! the fewest leaves, found as on the CPU: the count pass tries them in order, skipping
-//! a trial that cannot win and stopping one once it reaches the best so far, and keeps
-//! every decision as a bit; the emit pass replays the best trial's bits to write its
-//! leaves where the scan says, without deciding again. No invocation waits on another.
+//! Marking walks each cell of a first split to full depth, depth first and without a
+//! stack (twin [`tessera_core::catmull_clark::traverse`]), so the script does not grow
+//! with the depth. The first split of each patch (`ku × kv` cells, up to 8 × 7) is the one with
+//! the fewest leaves, ties to the earlier, as on the CPU: the count pass walks the
+//! trials in a few invocations per patch, skipping a trial that cannot beat a finished
+//! one and stopping one once it cannot, and keeps every decision as a bit; the emit pass
+//! replays the best trial's bits to write its leaves where the scan says, without
+//! deciding again. No invocation waits on another.
 //!
 //! Capacities: the leaves, polygons, vertices, indices and the hash table. Kernels never
 //! write past them, and the counters record what the run needed. The output (vertices,
@@ -70,7 +70,7 @@ use tessera_core::catmull_clark::gpu_model::{patch_topology, point_homes, CcGpuM
 use glam::Vec3;
 use tessera_core::catmull_clark::{CcParams, LeafBound, PatchMesh, SurfaceModel};
 use tessera_core::gpu_types::{
-    CcCell, CcHashStatus, CcState, CcTessParams, CcVertexPoint, OutVertex,
+    CcCell, CcHashStatus, CcState, CcTessParams, CcVertexPoint, OutVertex, CC_TRIALS,
 };
 use tessera_core::Mesh;
 use wgpu::util::DeviceExt;
@@ -113,6 +113,8 @@ mod slot {
 /// Offsets into the dispatch-arguments buffer (written by the emit pass of marking): the
 /// leaves, then the hash items (eight per leaf).
 const LEAF_ARGS: u64 = 12;
+/// Invocations per patch of marking's count pass (`CC_TRIAL_GROUPS` in `cc_traverse.wgsl`).
+const TRIAL_GROUPS: u32 = 6;
 const ITEM_ARGS: u64 = 24;
 
 /// Every kernel of the stage, compiled once per device (part of [`Kernels`]).
@@ -218,9 +220,7 @@ struct Buffers {
     output: MeshBuffers,
     /// The hash's first-item flags and the polygon sizes, in one scan.
     number_scan: PrefixSum,
-    /// Marking's words ([`marks_words`]): per patch its leaves then first leaf, the
-    /// trial chosen, its best trial's first decision block; then the decision blocks
-    /// ([`decision_blocks`], `[bits, next]` each), which grow with the leaves.
+    /// Marking's words ([`marks_words`]), which grow with the leaves.
     marks: wgpu::Buffer,
     marks_scan: PrefixSum,
 }
@@ -276,19 +276,27 @@ pub struct CcStage {
     binds: Binds,
 }
 
-/// Words of the marks buffer for `patches` patches (`shaders/shared/cc_tess.wgsl`): per
-/// patch its leaves (scanned into its first leaf; the total after them), the trial
-/// chosen, and the first block of the best trial's decisions.
-fn marks_words(patches: u32) -> u64 {
+/// Words of the marks buffer (`shaders/shared/cc_tess.wgsl`) for `patches` patches and
+/// `leaves` leaves, any first split: per patch the key of its best trial (scanned into
+/// its first leaf; the total after them), the same key kept, the key of the best trial
+/// cut short, the trial chosen; per patch and trial two words of what its leaves
+/// guarantee and a block of 32 decisions; then the pool of blocks ([`pool_blocks`]).
+fn marks_words(patches: u32, leaves: u32) -> u64 {
+    let p = patches.max(1) as u64;
+    let trials = CC_TRIALS as u64;
+    4 * p + 1 + 2 * p * trials + 2 * (p * trials + pool_blocks(patches, leaves))
+}
+
+/// The words of the marks buffer cleared before each run (the keys).
+fn marks_cleared(patches: u32) -> u64 {
     3 * patches.max(1) as u64 + 1
 }
 
-/// Blocks of 32 decisions of the marking's walks: two per patch, and as many more as
-/// leaves and four per patch. A walk of `d` decisions takes `d / 32` more blocks, and a
-/// patch's search keeps two walks (its best trial's, and the current one's, reused):
-/// fewer than a leaf for each 12, as each trial's walk stops once it reaches the best.
-fn decision_blocks(patches: u32, leaves: u32) -> u64 {
-    6 * patches.max(1) as u64 + leaves as u64
+/// Blocks of 32 decisions for the walks longer than one block: as many as leaves, and
+/// four per patch. A walk of `d` decisions takes `d / 32` of them, and each trial stops
+/// once its leaves reach the best, so a patch's trials take about a block per 8 leaves.
+fn pool_blocks(patches: u32, leaves: u32) -> u64 {
+    4 * patches.max(1) as u64 + leaves as u64
 }
 
 impl CcStage {
@@ -575,15 +583,20 @@ impl CcStage {
         let args = &self.args;
         let mut dispatches = 0;
         encoder.clear_buffer(&self.state, 0, None);
+        // The trials' keys start from none (atomics in the count pass).
+        encoder.clear_buffer(&b.marks, 0, Some(4 * marks_cleared(self.patch_count)));
         encoder.clear_buffer(&b.hash.status, 0, None);
         encoder.clear_buffer(&b.hash.table, 0, None);
         stamp(encoder, "");
         {
             let mut pass = passes.begin(encoder, "tessera cc marking", false);
             let patches = self.patch_count;
+            // `cc_traverse.wgsl`: blocks of 8 patches, a few invocations per patch.
+            let groups = self.params.first_split.trials().min(TRIAL_GROUPS);
+            let counting = patches.max(1).div_ceil(8) * 8 * groups;
             dispatches += k
                 .traverse
-                .dispatch(&mut pass, &binds.traverse[0], patches.max(1), 64);
+                .dispatch(&mut pass, &binds.traverse[0], counting, 64);
             dispatches += b.marks_scan.record(&mut pass, &k.scan);
             dispatches += k
                 .traverse
@@ -663,7 +676,9 @@ impl CcStage {
                 "the device cut the marking's walk short (a loop-iteration limit per invocation, as lavapipe's 65535)".into(),
             ));
         }
-        if status.state.overflow & 2 != 0 {
+        // A pool of decision blocks too small (bit 8) leaves replays short: that
+        // disagreement is grown away, any other is a bug.
+        if status.state.overflow & 2 != 0 && status.state.overflow & 8 == 0 {
             return Err(Error::Wgpu(
                 "the marking's two passes disagreed on a patch's leaves".into(),
             ));
@@ -684,8 +699,10 @@ impl CcStage {
             let all = need as u64 * s.leaves.max(1) as u64 / kept;
             all.min(u32::MAX as u64) as u32
         };
-        // The decision blocks beyond each patch's own grow with the leaves.
-        let blocks = s.decision_blocks.saturating_sub(4 * self.patch_count.max(1));
+        // The pool of decision blocks grows with the leaves.
+        let blocks = s
+            .decision_blocks
+            .saturating_sub(4 * self.patch_count.max(1));
         let mut caps = CcCapacities {
             leaves: grow(s.leaves.max(blocks), old.leaves),
             poly: grow(scaled(s.need_poly), old.poly),
@@ -787,9 +804,12 @@ impl CcStage {
         };
         let leaves = status.state.leaves as u64;
         let p = self.patch_count as u64;
-        let marks: Vec<u32> =
-            bytemuck::pod_collect_to_vec(&read(&b.marks, 0, 4 * marks_words(self.patch_count))?);
-        let chosen_at = p as usize + 1;
+        let marks: Vec<u32> = bytemuck::pod_collect_to_vec(&read(
+            &b.marks,
+            0,
+            4 * (marks_cleared(self.patch_count) + p),
+        )?);
+        let chosen_at = marks_cleared(self.patch_count) as usize;
         let first_trial = marks[chosen_at..chosen_at + p as usize].to_vec();
         let offsets: Vec<u32> =
             bytemuck::pod_collect_to_vec(&read(&b.poly_offsets, 0, 4 * (leaves + 1))?);
@@ -930,10 +950,7 @@ impl Buffers {
                 caps.vertices as u64 * std::mem::size_of::<OutVertex>() as u64,
             ),
             ("vertex hash", caps.hash_slots as u64 * 12),
-            (
-                "patch marks",
-                4 * marks_words(counts.0) + 8 * decision_blocks(counts.0, caps.leaves),
-            ),
+            ("patch marks", 4 * marks_words(counts.0, caps.leaves)),
         ] {
             check_size(device, what, bytes)?;
         }
@@ -964,10 +981,10 @@ impl Buffers {
         let marks = storage(
             device,
             "tessera cc patch marks",
-            4 * marks_words(counts.0) + 8 * decision_blocks(counts.0, caps.leaves),
+            4 * marks_words(counts.0, caps.leaves),
         );
-        // Each patch's leaves and the total after them.
-        let marks_scan = PrefixSum::new(device, &kernels.scan, &marks, counts.0 + 1);
+        // Each patch's leaves, from the key of its best trial, and the total after them.
+        let marks_scan = PrefixSum::of_keys(device, &kernels.scan, &marks, counts.0 + 1, (!0, 5));
         Ok(Buffers {
             caps,
             params,
