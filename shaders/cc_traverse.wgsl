@@ -222,9 +222,9 @@ fn cc_replay(c: ptr<function, CcChain>) -> bool {
 }
 
 // Invocations per patch in the count pass: trials g, g + G, g + 2G, ... go to invocation
-// g, one after another. A few invocations per patch keep each within the device's loop
-// limit (see the top); more would leave more lanes with nothing to do.
-const CC_TRIAL_GROUPS: u32 = 6u;
+// g, one after another. One trial each: three in one invocation already ran past the
+// device's loop limit at a deep extraordinary vertex (see the top).
+const CC_TRIAL_GROUPS: u32 = 18u;
 
 fn cc_trial_groups() -> u32 {
     return min(CC_TRIAL_GROUPS, cc_params.trials);

@@ -1,7 +1,6 @@
 //! Adaptive marking as the GPU runs it, one patch at a time: twin of
-//! `shaders/cc_traverse.wgsl`, which marks every patch to full depth in one dispatch (a
-//! few invocations per patch, each walking some of its trials) rather than one dispatch
-//! per level.
+//! `shaders/cc_traverse.wgsl`, which marks every patch to full depth in one dispatch (an
+//! invocation per patch and trial) rather than one dispatch per level.
 //!
 //! A trial (a first split `ku × kv`) is walked cell by cell of the split, row by row,
 //! each cell's subtree depth first, quadrant 0 first. The leaves come out in that order.

@@ -7,7 +7,7 @@
 //!
 //! | # | kernel | per | writes |
 //! |---|---|---|---|
-//! | 1 | `cc_traverse` (count) | patch and group of trials | the first-split search to full depth: best split, its leaves, its decisions |
+//! | 1 | `cc_traverse` (count) | patch and trial | the first-split search to full depth: best split, its leaves, its decisions |
 //! | 2–3 | scan | patch | each patch's first leaf |
 //! | 4 | `cc_traverse` (emit) | patch | the best split's leaves, its decisions replayed; leaf and item dispatch sizes |
 //! | 5 | `cc_leaf_keys` (indirect) | leaf | corner keys in their charts (and across seams) and vertices |
@@ -26,7 +26,7 @@
 //! stack (twin [`tessera_core::catmull_clark::traverse`]), so the script does not grow
 //! with the depth. The first split of each patch (`ku × kv` cells, up to 8 × 7) is the one with
 //! the fewest leaves, ties to the earlier, as on the CPU: the count pass walks the
-//! trials in a few invocations per patch, skipping a trial that cannot beat a finished
+//! trials in an invocation each, skipping a trial that cannot beat a finished
 //! one and stopping one once it cannot, and keeps every decision as a bit; the emit pass
 //! replays the best trial's bits to write its leaves where the scan says, without
 //! deciding again. No invocation waits on another.
@@ -114,7 +114,7 @@ mod slot {
 /// leaves, then the hash items (eight per leaf).
 const LEAF_ARGS: u64 = 12;
 /// Invocations per patch of marking's count pass (`CC_TRIAL_GROUPS` in `cc_traverse.wgsl`).
-const TRIAL_GROUPS: u32 = 6;
+const TRIAL_GROUPS: u32 = 18;
 const ITEM_ARGS: u64 = 24;
 
 /// Every kernel of the stage, compiled once per device (part of [`Kernels`]).
@@ -591,7 +591,7 @@ impl CcStage {
         {
             let mut pass = passes.begin(encoder, "tessera cc marking", false);
             let patches = self.patch_count;
-            // `cc_traverse.wgsl`: blocks of 8 patches, a few invocations per patch.
+            // `cc_traverse.wgsl`: blocks of 8 patches, one invocation per trial.
             let groups = self.params.first_split.trials().min(TRIAL_GROUPS);
             let counting = patches.max(1).div_ceil(8) * 8 * groups;
             dispatches += k
