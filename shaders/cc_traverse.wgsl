@@ -221,42 +221,27 @@ fn cc_replay(c: ptr<function, CcChain>) -> bool {
     return split;
 }
 
-// Invocations per patch in the count pass: trials g, g + G, g + 2G, ... go to invocation
-// g, one after another. One trial each: three in one invocation already ran past the
-// device's loop limit at a deep extraordinary vertex (see the top).
-const CC_TRIAL_GROUPS: u32 = 18u;
-
-fn cc_trial_groups() -> u32 {
-    return min(CC_TRIAL_GROUPS, cc_params.trials);
-}
-
-// The first trial from t on, in steps of G, that could still beat the best finished
-// trial of patch p (ku·kv cells give at least ku·kv leaves); `trials` if none.
-fn cc_next_trial(p: u32, t: u32) -> u32 {
-    var k = t;
-    for (; k < cc_params.trials; k += cc_trial_groups()) {
-        let s = cc_trial_split(k);
-        if cc_key(s.x * s.y, k) <= cc_best_so_far(p) {
-            break;
-        }
+// Counting: trial t of patch p, as `traverse::walk_trial` stopped at the best. One
+// trial per invocation: even three in one ran past the device's loop limit at a deep
+// extraordinary vertex (see the top).
+fn count_trial(p: u32, t: u32) {
+    let s = cc_trial_split(t);
+    let area = s.x * s.y;
+    // A split into ku·kv cells has at least ku·kv leaves: skipped if a finished trial
+    // already beats that.
+    if cc_key(area, t) > cc_best_so_far(p) {
+        return;
     }
-    return min(k, cc_params.trials);
-}
-
-// Counting: the trials of group g of patch p, each as `traverse::walk_trial` stopped at
-// the best, in one loop over their decisions.
-fn count_group(p: u32, g: u32) {
-    var t = cc_next_trial(p, g);
     var chain = CcChain(p * cc_params.trials + t, 0u, 0u);
     var r = 0u;
     var mine = 0u;
-    var at_cell = cc_root_cell(min(t, CC_TRIALS - 1u), 0u);
-    var counting = t < cc_params.trials;
-    while counting {
-        var trial_over = false;
+    var at_cell = cc_root_cell(t, 0u);
+    var walking = true;
+    var stopped = false;
+    while walking && !stopped {
         if cc_key(mine, t) > cc_best_so_far(p) {
             // Above a finished trial, or level with one from an earlier trial.
-            trial_over = true;
+            stopped = true;
         } else {
             let cell = cc_cell_of(p, t, at_cell);
             let split = decide_counted(cell);
@@ -266,16 +251,16 @@ fn count_group(p: u32, g: u32) {
             } else {
                 mine += 1u;
                 let next = cc_next_cell(t, at_cell);
-                let s = cc_trial_split(t);
                 if next.y != 0xffffffffu {
                     at_cell = next;
-                } else if r + 1u < s.x * s.y {
+                } else if r + 1u < area {
                     r += 1u;
                     at_cell = cc_root_cell(t, r);
                 } else {
-                    // Written out and offered at once: the lanes run the loop until
-                    // the last is done, and the others can stop as soon as this one
-                    // beats them.
+                    // Written out and offered at once, not after the loop: the lanes
+                    // run the loop until the last is done, and the others can stop as
+                    // soon as this one beats them.
+                    walking = false;
                     if chain.block != CC_NO_BLOCK && chain.bit > 0u {
                         atomicStore(&marks[cc_bits_at(chain.block)], chain.bits);
                     }
@@ -283,24 +268,13 @@ fn count_group(p: u32, g: u32) {
                     atomicStore(&marks[cc_stats_at(p, t) + 1u], lane_unmet);
                     atomicMax(&marks[cc_best_at(p)], ~cc_key(mine, t));
                     atomicMax(&marks[p], ~cc_key(mine, t));
-                    trial_over = true;
                 }
             }
         }
-        if trial_over {
-            t = cc_next_trial(p, t + cc_trial_groups());
-            counting = t < cc_params.trials;
-            chain = CcChain(p * cc_params.trials + min(t, CC_TRIALS - 1u), 0u, 0u);
-            r = 0u;
-            mine = 0u;
-            lane_max_bound = 0.0;
-            lane_unmet = 0u;
-            at_cell = cc_root_cell(min(t, CC_TRIALS - 1u), 0u);
-        }
     }
-    // The loop ends only when the group is done: otherwise the device cut it short.
-    // What the trial had found so far is kept in case it could have been the best.
-    if counting {
+    // The loop ends only when the walk is over or stopped: otherwise the device cut it
+    // short. What it had found so far is kept in case it could have been the best.
+    if walking && !stopped {
         atomicMax(&marks[cc_cut_at(p)], ~cc_key(mine, t));
     }
 }
@@ -372,9 +346,9 @@ fn main(@builtin(global_invocation_id) gid: vec3u, @builtin(num_workgroups) grou
     let x = cc_invocation(gid, groups);
     let emitting = cc_pass.x == 1u;
     let patches = cc_params.patch_count;
-    // Counting, invocation x takes group g of patch p, in blocks of 8 patches: a group
-    // of 8 lanes decides the same trials of 8 patches, the first group first.
-    let per_patch = select(cc_trial_groups(), 1u, emitting);
+    // Counting, invocation x takes trial t of patch p, in blocks of 8 patches: a group
+    // of 8 lanes decides the same trial of 8 patches, the first trial first.
+    let per_patch = select(cc_params.trials, 1u, emitting);
     let block = x / (8u * per_patch);
     let within = x % (8u * per_patch);
     let mine = (block * 8u + within % 8u) * per_patch + within / 8u;
@@ -400,7 +374,7 @@ fn main(@builtin(global_invocation_id) gid: vec3u, @builtin(num_workgroups) grou
     }
     let item = select(x, ordered, !emitting);
     let p = item / per_patch;
-    let g = item % per_patch;
+    let t = item % per_patch;
     if item == LANE_NONE || p >= patches {
         return;
     }
@@ -408,7 +382,7 @@ fn main(@builtin(global_invocation_id) gid: vec3u, @builtin(num_workgroups) grou
     if cc_roots[p] == CC_NO_ROOT {
         if emitting {
             atomicStore(&marks[cc_chosen_at(p)], CC_TRIALS);
-        } else if g == 0u {
+        } else if t == 0u {
             atomicStore(&marks[p], 0xffffffffu);
         }
         return;
@@ -416,7 +390,7 @@ fn main(@builtin(global_invocation_id) gid: vec3u, @builtin(num_workgroups) grou
     if emitting {
         emit_patch(p);
     } else {
-        count_group(p, g);
+        count_trial(p, t);
         atomicAdd(&cc_state.bounds, lane_bounds);
         atomicAdd(&cc_state.proven, lane_proven);
     }

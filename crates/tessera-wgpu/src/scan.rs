@@ -37,7 +37,7 @@ impl PrefixSum {
 
     /// Plans the scan of the first `n` `u32` of `data` (which needs `STORAGE` usage).
     pub fn new(device: &wgpu::Device, kernels: &ScanKernels, data: &wgpu::Buffer, n: u32) -> Self {
-        Self::plan(device, kernels, data, n, None)
+        Self::plan(device, kernels, data, n, None, (0, 0))
     }
 
     /// Plans the scan of the first `n` values of `data` read as `(x ^ xor) >> shift`,
@@ -47,16 +47,9 @@ impl PrefixSum {
         kernels: &ScanKernels,
         data: &wgpu::Buffer,
         n: u32,
-        (xor, shift): (u32, u32),
+        transform: (u32, u32),
     ) -> Self {
-        let no_live = storage(device, "tessera scan no live count", 4);
-        Self::bind(
-            device,
-            kernels,
-            (data, n, u32::MAX, &no_live),
-            None,
-            (xor, shift),
-        )
+        Self::plan(device, kernels, data, n, None, transform)
     }
 
     /// Plans the scan of the first `live[slot] + 1` (at most `n`) values of `data`, the
@@ -69,7 +62,7 @@ impl PrefixSum {
         n: u32,
         live: (&wgpu::Buffer, u32),
     ) -> Self {
-        Self::plan(device, kernels, data, n, Some(live))
+        Self::plan(device, kernels, data, n, Some(live), (0, 0))
     }
 
     /// Plans the scans of two lists, each as [`with_live_count`](Self::with_live_count),
@@ -90,10 +83,17 @@ impl PrefixSum {
         data: &wgpu::Buffer,
         n: u32,
         live: Option<(&wgpu::Buffer, u32)>,
+        transform: (u32, u32),
     ) -> Self {
         let no_live = storage(device, "tessera scan no live count", 4);
         let (live_buffer, slot) = live.unwrap_or((&no_live, u32::MAX));
-        Self::bind(device, kernels, (data, n, slot, live_buffer), None, (0, 0))
+        Self::bind(
+            device,
+            kernels,
+            (data, n, slot, live_buffer),
+            None,
+            transform,
+        )
     }
 
     fn bind(

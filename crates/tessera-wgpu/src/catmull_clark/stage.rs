@@ -113,8 +113,6 @@ mod slot {
 /// Offsets into the dispatch-arguments buffer (written by the emit pass of marking): the
 /// leaves, then the hash items (eight per leaf).
 const LEAF_ARGS: u64 = 12;
-/// Invocations per patch of marking's count pass (`CC_TRIAL_GROUPS` in `cc_traverse.wgsl`).
-const TRIAL_GROUPS: u32 = 18;
 const ITEM_ARGS: u64 = 24;
 
 /// Every kernel of the stage, compiled once per device (part of [`Kernels`]).
@@ -592,8 +590,8 @@ impl CcStage {
             let mut pass = passes.begin(encoder, "tessera cc marking", false);
             let patches = self.patch_count;
             // `cc_traverse.wgsl`: blocks of 8 patches, one invocation per trial.
-            let groups = self.params.first_split.trials().min(TRIAL_GROUPS);
-            let counting = patches.max(1).div_ceil(8) * 8 * groups;
+            let trials = self.params.first_split.trials();
+            let counting = patches.max(1).div_ceil(8) * 8 * trials;
             dispatches += k
                 .traverse
                 .dispatch(&mut pass, &binds.traverse[0], counting, 64);
