@@ -367,6 +367,7 @@ fn catmull_clark_parameters_and_counters_match_their_rust_twins() {
         ("vertices", offset_of!(CcState, vertices)),
         ("bounds", offset_of!(CcState, bounds)),
         ("proven", offset_of!(CcState, proven)),
+        ("decision_blocks", offset_of!(CcState, decision_blocks)),
     ];
     let members: Vec<(&str, usize)> = members
         .iter()
