@@ -307,7 +307,7 @@ const TABLES: &[(&str, &str, &str)] = &[
         "Per model, tolerance and first split: the adaptive stage on the GPU, the CPU \
          reference, and the uniform tessellation (CPU and GPU) at the smallest grid whose \
          measured max error is at or under the GPU output's; then where the GPU time \
-         goes, the script's fixed cost with every list empty, and the scaling from 3e-3 \
+         goes, the script's fixed cost with one leaf per patch, and the scaling from 3e-3 \
          to the first tolerance with 10× the triangles.",
     ),
 ];

@@ -53,8 +53,8 @@ struct Row {
     /// has timestamp queries: (phase, ms).
     phases: Vec<(String, f64)>,
     /// Flatness bounds computed per output leaf, the search's trials included: the GPU
-    /// drops a losing trial only against the best of earlier rounds, the CPU as soon as
-    /// it reaches the best so far.
+    /// runs a patch's trials side by side and stops one once a finished trial beats it,
+    /// the CPU tries them in turn and stops one as soon as it reaches the best so far.
     gpu_bounds_per_leaf: f64,
     cpu_bounds_per_leaf: f64,
 }
@@ -82,7 +82,7 @@ struct Scaling {
 }
 
 /// The script's fixed cost: the stage on the cube with ε the whole diagonal, one leaf per
-/// patch, so that every level's list is empty. What a mode costs before any work.
+/// patch. What a mode costs before any work.
 #[derive(Serialize)]
 struct Overhead {
     first_split: FirstSplit,
@@ -98,8 +98,8 @@ struct Results<'a> {
     overhead: &'a [Overhead],
 }
 
-/// One run with a timestamp after each phase of the stage script: (phase, ms), the
-/// search rounds summed. Empty without timestamp queries.
+/// One run with a timestamp after each phase of the stage script: (phase, ms). Empty
+/// without timestamp queries.
 fn gpu_phases(gpu: &Gpu, stage: &mut CcStage) -> Vec<(String, f64)> {
     let needed = wgpu::Features::TIMESTAMP_QUERY | wgpu::Features::TIMESTAMP_QUERY_INSIDE_ENCODERS;
     if !gpu.device.features().contains(needed) {
@@ -133,20 +133,14 @@ fn gpu_phases(gpu: &Gpu, stage: &mut CcStage) -> Vec<(String, f64)> {
         .map(|c| u64::from_le_bytes(c.try_into().expect("8 bytes")))
         .collect();
     let period = gpu.queue.get_timestamp_period() as f64;
-    let mut phases: Vec<(String, f64)> = Vec::new();
-    for (k, name) in names.iter().enumerate() {
-        let ms = ticks[k + 1].saturating_sub(ticks[k]) as f64 * period / 1e6;
-        let name = if name.starts_with("search round") {
-            "first-split search".to_string()
-        } else {
-            name.clone()
-        };
-        match phases.last_mut() {
-            Some(last) if last.0 == name => last.1 += ms,
-            _ => phases.push((name, ms)),
-        }
-    }
-    phases
+    names
+        .iter()
+        .enumerate()
+        .map(|(k, name)| {
+            let ms = ticks[k + 1].saturating_sub(ticks[k]) as f64 * period / 1e6;
+            (name.clone(), ms)
+        })
+        .collect()
 }
 
 /// A stage run to completion once (growing its buffers), then timed: the stage, what
@@ -470,7 +464,7 @@ fn table(rows: &[Row], scaling: &[Scaling], overhead: &[Overhead]) -> String {
             );
         }
     }
-    s += "\nThe script's fixed cost (the cube with ε the whole diagonal: one leaf per patch, every level's list empty; median of 5 runs):\n\n| first split | patches | triangles | GPU ms |\n|---|---|---|---|\n";
+    s += "\nThe script's fixed cost (the cube with ε the whole diagonal: one leaf per patch; median of 5 runs):\n\n| first split | patches | triangles | GPU ms |\n|---|---|---|---|\n";
     for o in overhead {
         s += &format!(
             "| {} | {} | {} | {:.1} |\n",
