@@ -173,6 +173,36 @@ struct CcCorner {
     hull_radius: f32,
 }
 
+struct CcWeight {
+    point: u32,
+    weight: f32,
+}
+
+struct CcPatchStencil {
+    ring: u32,
+    table: u32,
+    nets: u32,
+    corners: u32,
+}
+
+struct CcStencilTable {
+    records: u32,
+    record_count: u32,
+    columns: u32,
+    pad: u32,
+}
+
+const CC_RECORD_NET: u32 = 0u;
+const CC_RECORD_BALL: u32 = 1u;
+const CC_RECORD_CORNER: u32 = 2u;
+
+struct CcPieceRecord {
+    kind: u32,
+    weights: u32,
+    counts: u32,
+    out: u32,
+}
+
 struct CcPoint {
     patch_id: u32,
     u: u32,

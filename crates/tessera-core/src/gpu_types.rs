@@ -676,6 +676,69 @@ pub struct CcCorner {
     pub hull_radius: f32,
 }
 
+/// One term of a level-1 point's stencil: weight `weight` on control point `point`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
+pub struct CcWeight {
+    /// Index of the control point.
+    pub point: u32,
+    /// Its weight.
+    pub weight: f32,
+}
+
+/// What one patch's pieces are derived from: its one-ring (level-1 points) and the
+/// table shared by the patches whose one-rings are alike.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq, Eq)]
+pub struct CcPatchStencil {
+    /// First of the patch's one-ring points in the ring list.
+    pub ring: u32,
+    /// Its table.
+    pub table: u32,
+    /// Its first net (binding 23).
+    pub nets: u32,
+    /// Its first corner record (binding 24).
+    pub corners: u32,
+}
+
+/// A table shared by patches whose one-rings are alike: its records and how many
+/// one-ring points its rows weigh.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq, Eq)]
+pub struct CcStencilTable {
+    /// First record.
+    pub records: u32,
+    /// Records: one per Bézier net, ball and corner of the quadtree, in node order.
+    pub record_count: u32,
+    /// One-ring points: the length of every row.
+    pub columns: u32,
+    /// Padding.
+    pub pad: u32,
+}
+
+/// A net: 16 rows, point 0 then the offsets of points 1..16 from it.
+pub const CC_RECORD_NET: u32 = 0;
+/// A split node's ball: the limit point, then the one-ring's offsets from it.
+pub const CC_RECORD_BALL: u32 = 1;
+/// A corner node: as a ball, then pairs of rows whose cross products sum to the normal.
+pub const CC_RECORD_CORNER: u32 = 2;
+
+/// One piece of a table: its rows (each `columns` weights, one per one-ring point) and
+/// where in the patch's nets or corners it goes.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq, Eq)]
+pub struct CcPieceRecord {
+    /// [`CC_RECORD_NET`], [`CC_RECORD_BALL`] or [`CC_RECORD_CORNER`]; for a corner,
+    /// which node corner is the vertex in bits 8..16.
+    pub kind: u32,
+    /// First weight of its first row.
+    pub weights: u32,
+    /// Ball and corner: one-ring rows in the low 16 bits, normal pairs above.
+    pub counts: u32,
+    /// Index among the patch's nets (a net) or corner records (a ball or corner).
+    pub out: u32,
+}
+
 /// A point to evaluate: patch and fixed-point parameters (see [`CC_PARAM_ONE`]).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq, Eq, Hash)]

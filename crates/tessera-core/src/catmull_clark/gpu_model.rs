@@ -12,14 +12,15 @@ use glam::Vec3;
 
 use super::gpu_uniform::{grid_place, GridPlace};
 use super::keys::{face_corner, seam, topo_chart_key, topo_face_uv};
-use super::patch::{Node, SurfaceModel};
+use super::patch::SurfaceModel;
 use super::polygon::cell_corner;
+use super::stencil::CcStencils;
 use super::topology::PatchMesh;
 use super::vertex_hash::split_key;
 use crate::gpu_types::{
     CcCell, CcCorner, CcNode, CcPatchTopo, CcPoint, CcVertexPoint, GpuPatch, OutVertex,
-    CC_NODE_BALL_SHIFT, CC_NODE_BEZIER, CC_NODE_CORNER, CC_NODE_KIND_MASK, CC_NODE_SPLIT,
-    CC_NO_HOME, CC_NO_KEY, CC_NO_NEIGHBOUR, CC_NO_ROOT, CC_PARAM_ONE,
+    CC_NODE_BEZIER, CC_NODE_KIND_MASK, CC_NODE_SPLIT, CC_NO_HOME, CC_NO_KEY, CC_NO_NEIGHBOUR,
+    CC_PARAM_ONE,
 };
 
 /// Flattened quadtrees of all patches.
@@ -38,70 +39,23 @@ pub struct CcGpuModel {
     /// Corner nodes and the balls of split nodes on a chain at an extraordinary vertex
     /// (binding 24).
     pub corners: Vec<CcCorner>,
+    /// Per patch, its first net and first corner (binding 25): a node's index counts
+    /// within its patch, so that patches alike share their nodes.
+    pub bases: Vec<[u32; 2]>,
 }
 
 impl CcGpuModel {
-    /// Flattens the quadtrees of `model`; holes get [`CC_NO_ROOT`] and no nodes.
+    /// The quadtrees of `model`'s patches as the GPU stage derives them from the control
+    /// points ([`CcStencils`]: its tables, applied by the kernels' CPU twins); holes get
+    /// [`CC_NO_ROOT`](crate::gpu_types::CC_NO_ROOT) and no nodes.
     pub fn new(model: &SurfaceModel) -> Self {
-        let mut out = CcGpuModel::default();
-        for (p, surface) in model.patches.iter().enumerate() {
-            // Holes shape their neighbours (through the quadtrees built from their
-            // one-rings) but have no surface of their own.
-            if surface.nodes.is_empty() || model.mesh.hole[p] {
-                out.roots.push(CC_NO_ROOT);
-                continue;
-            }
-            let base = out.nodes.len() as u32;
-            out.roots.push(base);
-            for (id, node) in surface.nodes.iter().enumerate() {
-                let f = |v: glam::DVec3| v.as_vec3().to_array();
-                let gpu = match node {
-                    Node::Bezier(net) => {
-                        let mut cp = [0f32; 48];
-                        cp[0..3].copy_from_slice(&f(net[0]));
-                        for k in 1..16 {
-                            cp[3 * k..3 * k + 3].copy_from_slice(&f(net[k] - net[0]));
-                        }
-                        out.nets.push(GpuPatch { cp });
-                        CcNode {
-                            kind: CC_NODE_BEZIER,
-                            index: out.nets.len() as u32 - 1,
-                        }
-                    }
-                    Node::Split(children) => {
-                        out.splits.push(children.map(|c| base + c));
-                        // A chain node's ball, as a corner record: kind's high bits.
-                        let ball = surface.balls[id].map_or(0, |b| {
-                            out.corners.push(CcCorner {
-                                limit: f(b.limit),
-                                corner: 0,
-                                normal: [0.0; 3],
-                                hull_radius: b.radius as f32,
-                            });
-                            out.corners.len() as u32
-                        });
-                        CcNode {
-                            kind: CC_NODE_SPLIT | ball << CC_NODE_BALL_SHIFT,
-                            index: out.splits.len() as u32 - 1,
-                        }
-                    }
-                    Node::Corner(c) => {
-                        out.corners.push(CcCorner {
-                            limit: f(c.limit),
-                            corner: c.corner as u32,
-                            normal: f(c.normal),
-                            hull_radius: c.hull_radius as f32,
-                        });
-                        CcNode {
-                            kind: CC_NODE_CORNER,
-                            index: out.corners.len() as u32 - 1,
-                        }
-                    }
-                };
-                out.nodes.push(gpu);
-            }
-        }
-        out
+        let control: Vec<Vec3> = model
+            .mesh
+            .control_points
+            .iter()
+            .map(|p| p.as_vec3())
+            .collect();
+        CcStencils::new(&model.mesh, model.depth).model(&control)
     }
 
     /// Bytes uploaded ([`SurfaceModel::upload_bytes`] computes it without building this).
@@ -112,6 +66,7 @@ impl CcGpuModel {
             + size_of_val(self.splits.as_slice())
             + size_of_val(self.nets.as_slice())
             + size_of_val(self.corners.as_slice())
+            + size_of_val(self.bases.as_slice())
     }
 }
 
@@ -173,6 +128,7 @@ fn net_point(net: &GpuPatch, u: f32, v: f32) -> (Vec3, Vec3) {
 /// of the tessellators' grids outside it; see [`super::TREE_DEPTH`]).
 pub fn cc_eval(model: &CcGpuModel, point: CcPoint) -> (Vec3, Vec3) {
     let mut nd = model.nodes[model.roots[point.patch_id as usize] as usize];
+    let [nets, corners] = model.bases[point.patch_id as usize];
     let (mut x, mut y, mut size) = (point.u, point.v, CC_PARAM_ONE);
     // Down to the node holding the point, then one evaluation (as the kernel: there an
     // evaluation inside the loop would run on every level).
@@ -204,9 +160,9 @@ pub fn cc_eval(model: &CcGpuModel, point: CcPoint) -> (Vec3, Vec3) {
     }
     if nd.kind & CC_NODE_KIND_MASK == CC_NODE_BEZIER {
         let (u, v) = (x as f32 / size as f32, y as f32 / size as f32);
-        return net_point(&model.nets[nd.index as usize], u, v);
+        return net_point(&model.nets[(nets + nd.index) as usize], u, v);
     }
-    let c = model.corners[nd.index as usize];
+    let c = model.corners[(corners + nd.index) as usize];
     (Vec3::from(c.limit), Vec3::from(c.normal))
 }
 

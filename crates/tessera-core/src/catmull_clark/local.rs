@@ -84,6 +84,72 @@ impl LocalMesh {
         Self::compact(points, faces.iter().map(|&q| quads[q as usize]), sharp)
     }
 
+    /// The same one-ring in an order that depends on the local topology alone, with the
+    /// level-1 point of each local point: the target, then the quads around each of its
+    /// corners in turn, walked across shared edges (one way, then the other from the
+    /// target where a boundary stops the walk), each rotated to start at that corner;
+    /// points numbered as they first appear. Patches whose one-rings are alike get the
+    /// same local mesh, so that the stencil tables can share one table between them.
+    pub fn gather_canonical(
+        points: &[DVec3],
+        quads: &[[u32; 4]],
+        point_quads: &[Vec<u32>],
+        sharp: &Sharpness,
+        target: usize,
+    ) -> (Self, Vec<u32>) {
+        let mut order: Vec<(u32, usize)> = vec![(target as u32, 0)];
+        let seen = |order: &[(u32, usize)], q: u32| order.iter().any(|&(o, _)| o == q);
+        for &v in &quads[target] {
+            let at = |q: u32| quads[q as usize].iter().position(|&w| w == v);
+            // The quad across the edge from `v` to its neighbour `w`, other than `q`.
+            let across = |q: u32, w: u32| {
+                point_quads[v as usize]
+                    .iter()
+                    .copied()
+                    .find(|&o| o != q && quads[o as usize].contains(&w))
+            };
+            let mut fan = Vec::new();
+            for forward in [true, false] {
+                let mut q = target as u32;
+                for _ in 0..point_quads[v as usize].len() {
+                    let k = at(q).unwrap_or(0);
+                    let w = quads[q as usize][if forward { (k + 3) % 4 } else { (k + 1) % 4 }];
+                    match across(q, w) {
+                        Some(o) if o != target as u32 && !fan.contains(&o) => {
+                            fan.push(o);
+                            q = o;
+                        }
+                        _ => break,
+                    }
+                }
+            }
+            // Quads the walks missed (a fan that is not a disc) keep the mesh's order.
+            fan.extend(
+                point_quads[v as usize]
+                    .iter()
+                    .filter(|&&o| o != target as u32),
+            );
+            for q in fan {
+                if !seen(&order, q) {
+                    order.push((q, at(q).unwrap_or(0)));
+                }
+            }
+        }
+        let rotated: Vec<[u32; 4]> = order
+            .iter()
+            .map(|&(q, k)| std::array::from_fn(|i| quads[q as usize][(k + i) % 4]))
+            .collect();
+        let mut ids: Vec<u32> = Vec::new();
+        for quad in &rotated {
+            for &v in quad {
+                if !ids.contains(&v) {
+                    ids.push(v);
+                }
+            }
+        }
+        (Self::compact(points, rotated.into_iter(), sharp), ids)
+    }
+
     /// Renumbers the points the given quads use; the first quad becomes the target.
     fn compact(points: &[DVec3], quads: impl Iterator<Item = [u32; 4]>, sharp: &Sharpness) -> Self {
         let mut map: HashMap<u32, u32> = HashMap::default();
@@ -122,7 +188,7 @@ impl LocalMesh {
     }
 
     /// Quads around point `v`, and for each the position of `v` in it.
-    fn around(&self, v: u32) -> impl Iterator<Item = (usize, usize)> + '_ {
+    pub(crate) fn around(&self, v: u32) -> impl Iterator<Item = (usize, usize)> + '_ {
         self.quads
             .iter()
             .enumerate()

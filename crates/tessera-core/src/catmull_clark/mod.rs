@@ -39,6 +39,7 @@ pub mod local;
 pub mod patch;
 pub mod polygon;
 pub mod refine;
+pub mod stencil;
 pub mod topology;
 pub mod traverse;
 pub mod triangle_bound;

@@ -90,21 +90,41 @@ impl PatchSurface {
             &mesh.sharpness,
             p,
         );
+        Self::from_ring(ring, mesh.scheme, depth, &mut |_, _| {})
+    }
+
+    /// The quadtree over the target of `ring`, subdividing at most `depth ≥ 1` times;
+    /// `observe` sees each node's one-ring as the node is made (the stencil tables read
+    /// the rings their balls are taken from).
+    pub fn from_ring(
+        ring: LocalMesh,
+        scheme: Scheme,
+        depth: u32,
+        observe: &mut dyn FnMut(u32, &LocalMesh),
+    ) -> Self {
         let creased = !ring.sharp.is_empty();
         let mut s = PatchSurface {
             nodes: Vec::new(),
             balls: Vec::new(),
-            scheme: mesh.scheme,
+            scheme,
             creased,
         };
-        s.add(ring, 0, depth.max(1), None);
+        s.add(ring, 0, depth.max(1), None, observe);
         s
     }
 
     /// `chain_normal`: the vertex normal, computed where the chain below `depth` starts
     /// (deeper one-rings are too small for double precision to give it accurately).
-    fn add(&mut self, ring: LocalMesh, level: u32, depth: u32, chain_normal: Option<DVec3>) -> u32 {
+    fn add(
+        &mut self,
+        ring: LocalMesh,
+        level: u32,
+        depth: u32,
+        chain_normal: Option<DVec3>,
+        observe: &mut dyn FnMut(u32, &LocalMesh),
+    ) -> u32 {
         let id = self.nodes.len() as u32;
+        observe(id, &ring);
         let (scheme, rule) = (self.scheme, self.scheme.boundary);
         self.balls.push(None);
         if let Some(net) = ring.regular_net(rule) {
@@ -167,7 +187,7 @@ impl PatchSurface {
         let children = ring.children(&scheme);
         let mut ids = [0u32; 4];
         for (c, child) in children.into_iter().enumerate() {
-            ids[c] = self.add(child, level + 1, depth, normal);
+            ids[c] = self.add(child, level + 1, depth, normal, observe);
         }
         self.nodes[id as usize] = Node::Split(ids);
         id

@@ -65,6 +65,9 @@ pub struct PatchMesh {
     pub control_faces: Vec<Vec<u32>>,
     /// Control vertices, unreferenced ones included.
     pub control_vertices: usize,
+    /// Their positions, as loaded or last moved: what the GPU stage's stencils
+    /// ([`super::stencil`]) start from.
+    pub control_points: Vec<DVec3>,
     /// Diagonal of the bounding box of the control points that faces use, as loaded:
     /// what a relative tolerance is a fraction of ([`crate::Tolerance`]). Moving the
     /// points keeps it.
@@ -143,6 +146,7 @@ impl PatchMesh {
             unreferenced_vertices,
             control_faces: mesh.faces.clone(),
             control_vertices: mesh.positions.len(),
+            control_points: mesh.positions.clone(),
             control_diag: mesh.bbox_diag(),
         })
     }
@@ -176,6 +180,7 @@ impl PatchMesh {
         );
         Ok(PatchMesh {
             points: level1.points,
+            control_points: positions.to_vec(),
             ..self.clone()
         })
     }
