@@ -235,6 +235,10 @@ fn count(@builtin(global_invocation_id) gid: vec3u, @builtin(num_workgroups) gro
 fn emit(@builtin(global_invocation_id) gid: vec3u, @builtin(local_invocation_index) lid: u32,
     @builtin(num_workgroups) groups: vec3u) {
     let mine = cc_invocation(gid, groups);
+    // The polygons go to the stage's own buffers; the output comes after this dispatch.
+    if mine == 0u {
+        finish_run();
+    }
     let valid = leaf_in_range(mine);
     let l = lane_order(lid, valid, mine, valid && any(cc_side_counts(mine) != vec4u(0u)));
     if l != LANE_NONE {
@@ -264,4 +268,23 @@ fn emit_leaf(l: u32) {
         }
         at += 1u + counts[s];
     }
+}
+
+// Once the polygons are counted and the vertices numbered, and before any output is
+// written (invocation 0 of `emit`, which the leaf dispatch always has): what the run
+// needed, and whether the mesh fits (the hash's overflow and its vertex count came from
+// `cc_hash_number`'s assign_gather). Only then are the vertices evaluated (`drawn_vertices`
+// is their count) and the triangles and draw arguments written (`cc_triangulate`), so
+// that a run that overflows leaves the last complete mesh drawn.
+fn finish_run() {
+    let n = min(cc_state.leaves, cc_params.leaf_capacity);
+    let polys = poly_offsets[n];
+    cc_state.need_poly = polys;
+    cc_state.need_indices = 3u * (polys - 2u * n);
+    if polys > cc_params.poly_capacity || cc_state.need_indices > cc_params.index_capacity
+        || cc_state.vertices > cc_params.vertex_capacity {
+        atomicOr(&cc_state.overflow, 1u);
+    }
+    let ok = atomicLoad(&cc_state.overflow) == 0u;
+    cc_state.drawn_vertices = select(0u, cc_state.vertices, ok);
 }

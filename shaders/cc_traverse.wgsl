@@ -54,7 +54,7 @@ fn cc_decide(cell: CcCell) -> CcDecision {
     let depth = cell.trial_depth >> 8u;
     // Only at a vertex: a regular patch's bound is one Bézier piece, about as costly as
     // the proof's five evaluations.
-    let regular = (cc_nodes[cc_roots[p]].kind & CC_NODE_KIND_MASK) == CC_NODE_BEZIER;
+    let regular = (cc_nodes[cc_roots[p].node].kind & CC_NODE_KIND_MASK) == CC_NODE_BEZIER;
     if depth < cc_params.max_depth && !regular {
         let w = size.x / 2u;
         let h = size.y / 2u;
@@ -336,8 +336,8 @@ fn emit_patch(p: u32) {
 // Whether patch p has an extraordinary vertex (its tree splits at the root): its bounds
 // walk chains of pieces and its walks go deeper.
 fn cc_irregular(p: u32) -> bool {
-    return p < cc_params.patch_count && cc_roots[p] != CC_NO_ROOT
-        && (cc_nodes[cc_roots[p]].kind & CC_NODE_KIND_MASK) != CC_NODE_BEZIER;
+    return p < cc_params.patch_count && cc_roots[p].node != CC_NO_ROOT
+        && (cc_nodes[cc_roots[p].node].kind & CC_NODE_KIND_MASK) != CC_NODE_BEZIER;
 }
 
 @compute @workgroup_size(64)
@@ -365,7 +365,8 @@ fn main(@builtin(global_invocation_id) gid: vec3u, @builtin(num_workgroups) grou
                 atomicOr(&cc_state.overflow, 1u);
             }
             let n = min(total, cc_params.leaf_capacity);
-            cc_write_args(3u, n);
+            // At least one leaf invocation: `cc_polygon`'s emit finishes the run.
+            cc_write_args(3u, max(n, 1u));
             cc_write_args(6u, 8u * n);
         } else {
             // Scanned as no leaves: the total lands here.
@@ -379,7 +380,7 @@ fn main(@builtin(global_invocation_id) gid: vec3u, @builtin(num_workgroups) grou
         return;
     }
     // A hole has no surface (and no tree): no leaves, no trial.
-    if cc_roots[p] == CC_NO_ROOT {
+    if cc_roots[p].node == CC_NO_ROOT {
         if emitting {
             atomicStore(&marks[cc_chosen_at(p)], CC_TRIALS);
         } else if t == 0u {

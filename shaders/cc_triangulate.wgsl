@@ -1,12 +1,9 @@
 // One invocation per leaf: its polygon zipped into triangles between two opposite
 // corners (no new vertices, no zero-area triangles; proof in
 // `tessera_core::catmull_clark::triangulate`, the twin). A polygon of m vertices gives
-// m - 2 triangles, so leaf l writes from index 3 · (poly_offsets[l] - 2 l). `finish`,
-// once the polygons are counted and the vertices numbered and before any output is
-// written, records what the run needed (vertices too: the vertex buffer holds fewer
-// than the hash's items) and decides whether the mesh fits: only then are the vertices
-// evaluated, the triangles written and the draw arguments set, so that a run that
-// overflows leaves the last complete mesh drawn.
+// m - 2 triangles, so leaf l writes from index 3 · (poly_offsets[l] - 2 l), and
+// invocation 0 the draw arguments. Nothing is written when the mesh does not fit
+// (`finish_run` in cc_polygon.wgsl).
 
 #include "shared/cc_tess.wgsl"
 #include "shared/cc_poly.wgsl"
@@ -16,11 +13,6 @@
 @group(0) @binding(64) var<storage, read> vertices: array<OutVertex>;
 @group(0) @binding(65) var<storage, read_write> indices: array<u32>;
 @group(0) @binding(66) var<storage, read_write> draw: DrawIndexedIndirectArgs;
-// [0]: the output vertices the hash counted (`gather_points`); 0 when the mesh does not
-// fit, so that `cc_vertex_eval` writes none.
-@group(0) @binding(32) var<storage, read_write> vertex_count: array<u32>;
-
-@group(0) @binding(43) var<storage, read> hash_status: CcHashStatusView;
 
 const CC_DIAGONAL_MARGIN: f32 = 1e-4;
 
@@ -61,9 +53,17 @@ fn cc_gcd(a: u32, b: u32) -> u32 {
 fn main(@builtin(global_invocation_id) gid: vec3u, @builtin(num_workgroups) groups: vec3u) {
     let l = cc_invocation(gid, groups);
     let n = min(cc_state.leaves, cc_params.leaf_capacity);
-    // `finish` found that the mesh does not fit.
+    // `finish_run` (cc_polygon.wgsl) found that the mesh does not fit.
     if atomicLoad(&cc_state.overflow) != 0u {
         return;
+    }
+    // The leaf dispatch always has invocation 0.
+    if l == 0u {
+        draw.index_count = cc_state.need_indices;
+        draw.instance_count = 1u;
+        draw.first_index = 0u;
+        draw.base_vertex = 0;
+        draw.first_instance = 0u;
     }
     if l >= n || l >= arrayLength(&leaves) || l + 1u >= arrayLength(&poly_offsets) {
         return;
@@ -123,27 +123,4 @@ fn main(@builtin(global_invocation_id) gid: vec3u, @builtin(num_workgroups) grou
         }
     }
     put_triangle(poly_vertex(start + 1u + a).x, poly_vertex(end).x, poly_vertex(start + m - 1u - b).x);
-}
-
-@compute @workgroup_size(1)
-fn finish() {
-    let n = min(cc_state.leaves, cc_params.leaf_capacity);
-    let polys = poly_offsets[n];
-    let count = 3u * (polys - 2u * n);
-    cc_state.need_poly = polys;
-    cc_state.need_indices = count;
-    cc_state.vertices = hash_status.unique;
-    if hash_status.overflow != 0u || polys > cc_params.poly_capacity
-        || count > cc_params.index_capacity || cc_state.vertices > cc_params.vertex_capacity {
-        atomicOr(&cc_state.overflow, 1u);
-    }
-    let ok = atomicLoad(&cc_state.overflow) == 0u;
-    vertex_count[0] = select(0u, cc_state.vertices, ok);
-    if ok {
-        draw.index_count = count;
-        draw.instance_count = 1u;
-        draw.first_index = 0u;
-        draw.base_vertex = 0;
-        draw.first_instance = 0u;
-    }
 }

@@ -556,8 +556,10 @@ fn cc_box_bound(p: u32, bx: vec4u, c: array<vec3f, 4>) -> f32 {
     walk_overflow = false;
     bound_start(c);
     // A patch without a vertex is one Bézier piece.
-    bs_track_dev = (cc_nodes[cc_roots[p]].kind & CC_NODE_KIND_MASK) != CC_NODE_BEZIER;
-    var e = CcWalkEntry(cc_roots[p], 0u, 0u, 0u, CC_WALK_ONE, false, vec4f(0.0), 0u);
+    // Patches alike share nodes: a node's net or corner counts from the patch's first.
+    let root = cc_roots[p];
+    bs_track_dev = (cc_nodes[root.node].kind & CC_NODE_KIND_MASK) != CC_NODE_BEZIER;
+    var e = CcWalkEntry(root.node, 0u, 0u, 0u, CC_WALK_ONE, false, vec4f(0.0), 0u);
     // Bounded: every node is visited once, and trees are finite; the cap guards a
     // corrupt upload.
     for (var guard = 0u; guard < 65536u; guard++) {
@@ -565,13 +567,13 @@ fn cc_box_bound(p: u32, bx: vec4u, c: array<vec3f, 4>) -> f32 {
         let kind = nd.kind & CC_NODE_KIND_MASK;
         var piece = false;
         var vertex = false;
-        var corner = nd.index;
+        var corner = root.corners + nd.index;
         if walk_place(&e) {
             if kind == CC_NODE_SPLIT {
                 // A node whose ball is small enough enters as its vertex.
                 let ball = nd.kind >> CC_NODE_BALL_SHIFT;
                 if !walk_cut && ball != 0u && walk_small(e.level) {
-                    corner = ball - 1u;
+                    corner = root.corners + ball - 1u;
                     vertex = cc_corners[corner].hull_radius <= walk_max_ball;
                 }
                 if !vertex {
@@ -583,7 +585,7 @@ fn cc_box_bound(p: u32, bx: vec4u, c: array<vec3f, 4>) -> f32 {
             }
         }
         if piece {
-            cc_load_net(nd.index);
+            cc_load_net(root.nets + nd.index);
             if walk_cut {
                 cc_clip_net();
             }

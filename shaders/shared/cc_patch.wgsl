@@ -4,7 +4,9 @@
 
 #include "shared/types.wgsl"
 
-@group(0) @binding(20) var<storage, read> cc_roots: array<u32>;
+// Per patch, its root node and first net and corner (`CcRoot`): patches alike share
+// their nodes, whose nets and corners count from the patch's first.
+@group(0) @binding(20) var<storage, read> cc_roots: array<CcRoot>;
 @group(0) @binding(21) var<storage, read> cc_nodes: array<CcNode>;
 @group(0) @binding(22) var<storage, read> cc_splits: array<vec4u>;
 // The Bézier nets as a read-only storage texture (`tessera_core::gpu_types::NetTexture`:
@@ -113,7 +115,8 @@ fn cc_net_point(k: u32, u: f32, v: f32) -> CcSample {
 }
 
 fn cc_eval(point: CcPoint) -> CcSample {
-    var nd = cc_nodes[cc_roots[point.patch_id]];
+    let root = cc_roots[point.patch_id];
+    var nd = cc_nodes[root.node];
     var x = point.u;
     var y = point.v;
     var size = CC_PARAM_ONE;
@@ -148,10 +151,10 @@ fn cc_eval(point: CcPoint) -> CcSample {
     }
     let kind = nd.kind & CC_NODE_KIND_MASK;
     if kind == CC_NODE_BEZIER {
-        return cc_net_point(nd.index, f32(x) / f32(size), f32(y) / f32(size));
+        return cc_net_point(root.nets + nd.index, f32(x) / f32(size), f32(y) / f32(size));
     }
     if kind == CC_NODE_CORNER {
-        let c = cc_corners[nd.index];
+        let c = cc_corners[root.corners + nd.index];
         return CcSample(
             vec3f(c.limit[0], c.limit[1], c.limit[2]),
             vec3f(c.normal[0], c.normal[1], c.normal[2]),

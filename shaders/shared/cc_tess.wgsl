@@ -9,6 +9,7 @@
 
 // `tessera_core::gpu_types::CcState`.
 struct CcCounters {
+    drawn_vertices: u32,
     leaves: u32,
     overflow: atomic<u32>,
     need_poly: u32,

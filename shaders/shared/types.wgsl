@@ -173,6 +173,13 @@ struct CcCorner {
     hull_radius: f32,
 }
 
+struct CcRoot {
+    node: u32,
+    nets: u32,
+    corners: u32,
+    pad: u32,
+}
+
 struct CcWeight {
     point: u32,
     weight: f32,
@@ -183,6 +190,7 @@ struct CcPatchStencil {
     table: u32,
     nets: u32,
     corners: u32,
+    records: u32,
 }
 
 struct CcStencilTable {

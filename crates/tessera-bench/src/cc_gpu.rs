@@ -4,7 +4,8 @@
 //! uniform stage's on the same device), and how the GPU time grows with the output (from
 //! 3e-3 of the diagonal to the first of [`SCALING_FINE`] with 10× the triangles, as the
 //! target reads: 10× the triangles in at most 11× the time); with the first-split
-//! search (the default) and with midpoint splits alone (the paper's).
+//! search (the default) and with midpoint splits alone (the paper's); and a frame of
+//! animation (moved control points) on the car and Spot against building the stage anew.
 //! Writes `OUT/catmull_clark_gpu.{json,md}`.
 
 use std::path::Path;
@@ -91,11 +92,108 @@ struct Overhead {
     gpu_ms: f64,
 }
 
+/// A frame of animation: moved control points written with `update_points` and the run
+/// that follows, against building the stage anew for them (the patches rebuilt on the
+/// CPU, the stage made and run to completion), at 3e-3 with the default first split.
+#[derive(Serialize)]
+struct Animation {
+    model: String,
+    patches: usize,
+    control_points: usize,
+    /// Bytes `update_points` writes per frame.
+    upload_bytes_per_frame: usize,
+    /// Bytes a stage made anew uploads.
+    anew_upload_bytes: usize,
+    /// Median of a frame: the points moved, then the run.
+    frame_ms: f64,
+    /// Median of a run whose points did not move (the stencil step skipped).
+    still_ms: f64,
+    /// Median of building the stage anew for moved points and running it to completion.
+    anew_ms: f64,
+    frame_over_anew: f64,
+}
+
 #[derive(Serialize)]
 struct Results<'a> {
     rows: &'a [Row],
     scaling: &'a [Scaling],
     overhead: &'a [Overhead],
+    animation: &'a [Animation],
+}
+
+/// The control points of `model` moved for frame `k`: each by a wave of 1% of `diag`.
+fn wave(model: &SurfaceModel, diag: f64, k: usize) -> Vec<glam::DVec3> {
+    model
+        .mesh
+        .control_points
+        .iter()
+        .enumerate()
+        .map(|(i, p)| {
+            let phase = 0.7 * k as f64 + 0.1 * i as f64;
+            *p + 0.01 * diag * glam::DVec3::new(phase.sin(), phase.cos(), (2.0 * phase).sin())
+        })
+        .collect()
+}
+
+/// [`Animation`] of `model`.
+fn animation(
+    gpu: &Gpu,
+    kernels: &Kernels,
+    name: &str,
+    model: &SurfaceModel,
+    repeats: usize,
+) -> Animation {
+    let diag = model.mesh.control_diag;
+    let params = CcParams {
+        tolerance: Tolerance::Relative(3e-3),
+        max_depth: MAX_DEPTH,
+        first_split: Default::default(),
+        leaf_bound: Default::default(),
+    };
+    let (mut stage, _, still_ms) = timed_stage(gpu, kernels, model, &params, repeats);
+    let frames: Vec<Vec<glam::Vec3>> = (0..4)
+        .map(|k| wave(model, diag, k).iter().map(|p| p.as_vec3()).collect())
+        .collect();
+    let mut k = 0;
+    let frame_ms = gpu_median_ms(gpu, repeats, |e| {
+        stage
+            .update_points(&gpu.queue, &frames[k % frames.len()])
+            .expect("same topology");
+        k += 1;
+        stage.prepare(&gpu.device, &gpu.queue, e).expect("prepare")
+    });
+    let mut anew_upload_bytes = 0;
+    let anew_ms = median(
+        (0..repeats)
+            .map(|k| {
+                let moved = wave(model, diag, k);
+                let t = Instant::now();
+                let rebuilt = model.with_control_points(&moved).expect("same topology");
+                let mut anew = CcStage::new(&gpu.device, &gpu.queue, kernels, &rebuilt, &params)
+                    .expect("stage");
+                anew.run_blocking(&gpu.device, &gpu.queue).expect("run");
+                anew_upload_bytes = anew.upload_bytes();
+                t.elapsed().as_secs_f64() * 1e3
+            })
+            .collect(),
+    );
+    gpu.check().expect("no wgpu errors");
+    let row = Animation {
+        model: name.to_string(),
+        patches: model.mesh.surface_patches().count(),
+        control_points: model.mesh.control_vertices,
+        upload_bytes_per_frame: stage.update_bytes(),
+        anew_upload_bytes,
+        frame_ms,
+        still_ms,
+        anew_ms,
+        frame_over_anew: frame_ms / anew_ms,
+    };
+    eprintln!(
+        "cc gpu animation {name}: frame {frame_ms:.1} ms ({} B), still {still_ms:.1} ms, anew {anew_ms:.1} ms ({} B)",
+        row.upload_bytes_per_frame, row.anew_upload_bytes
+    );
+    row
 }
 
 /// One run with a timestamp after each phase of the stage script: (phase, ms). Empty
@@ -253,6 +351,7 @@ pub fn run(assets: &Path, out_dir: &Path, quick: bool, model_filter: Option<&str
         .collect();
     let mut rows = Vec::new();
     let mut scaling = Vec::new();
+    let mut animated = Vec::new();
     for file in models
         .iter()
         .filter(|f| model_filter.is_none_or(|m| f.contains(m)))
@@ -268,6 +367,9 @@ pub fn run(assets: &Path, out_dir: &Path, quick: bool, model_filter: Option<&str
             .unwrap()
             .to_string_lossy()
             .into();
+        if ["catmark_car", "spot_control_mesh"].contains(&name.as_str()) {
+            animated.push(animation(&gpu, &kernels, &name, &model, repeats.max(5)));
+        }
         for (first_split, rel) in [FirstSplit::Search, FirstSplit::Midpoint]
             .into_iter()
             .flat_map(|f| [(f, 3e-3), (f, 5e-4)])
@@ -405,11 +507,18 @@ pub fn run(assets: &Path, out_dir: &Path, quick: bool, model_filter: Option<&str
         rows: &rows,
         scaling: &scaling,
         overhead: &overhead,
+        animation: &animated,
     };
-    crate::write_results(out_dir, name, &results, table(&rows, &scaling, &overhead));
+    let text = table(&rows, &scaling, &overhead, &animated);
+    crate::write_results(out_dir, name, &results, text);
 }
 
-fn table(rows: &[Row], scaling: &[Scaling], overhead: &[Overhead]) -> String {
+fn table(
+    rows: &[Row],
+    scaling: &[Scaling],
+    overhead: &[Overhead],
+    animation: &[Animation],
+) -> String {
     let mut s = String::from(
         "| model | device | patches | ε (of diagonal) | first split | triangles | measured max (of diag.) | GPU ms | CPU ms | GPU/CPU | GPU Mtri/s | uniform n (same error) | uniform tris | uniform CPU ms | **GPU/uniform** | uniform GPU ms | **GPU/uniform GPU** |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
     );
@@ -490,6 +599,23 @@ fn table(rows: &[Row], scaling: &[Scaling], overhead: &[Overhead]) -> String {
             r.time_per_triangle_ratio,
             r.fine_unmet
         );
+    }
+    if !animation.is_empty() {
+        s += "\nAnimation at 3e-3, default first split: a frame writes the moved control points (`update_points`) and runs, against building the stage anew for them (patches rebuilt on the CPU, stage made, run to completion); medians of 5:\n\n| model | patches | control points | bytes per frame | frame ms | run ms, points still | anew ms | bytes anew | **frame / anew** |\n|---|---|---|---|---|---|---|---|---|\n";
+        for a in animation {
+            s += &format!(
+                "| {} | {} | {} | {} | {:.1} | {:.1} | {:.1} | {} | **{:.3}** |\n",
+                a.model,
+                a.patches,
+                a.control_points,
+                a.upload_bytes_per_frame,
+                a.frame_ms,
+                a.still_ms,
+                a.anew_ms,
+                a.anew_upload_bytes,
+                a.frame_over_anew
+            );
+        }
     }
     s
 }

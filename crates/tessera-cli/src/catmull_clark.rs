@@ -62,8 +62,10 @@ struct Stats {
     /// Patches with an extraordinary corner (evaluated through their quadtree).
     irregular_patches: usize,
     evaluations: u64,
-    /// Size of the patch quadtrees in f32 (what a GPU stage uploads).
-    upload_bytes: usize,
+    /// GPU backend: what the stage uploaded when it was made (the adaptive stage's
+    /// stencil tables and control points, the uniform stage's quadtrees); null on the
+    /// CPU, which uploads nothing.
+    upload_bytes: Option<usize>,
     leaves: usize,
     /// Adaptive: the largest guaranteed bound of any leaf (≤ tolerance when `unmet` is 0).
     guaranteed_error: Option<f64>,
@@ -159,6 +161,7 @@ pub fn tessellate(args: TessellateArgs) -> Result<(), Error> {
 
     let t = Instant::now();
     let mut dispatches = None;
+    let mut upload_bytes = None;
     let (out, tolerance, segments) = match method {
         Method::Uniform => {
             let n = match args.level {
@@ -170,8 +173,9 @@ pub fn tessellate(args: TessellateArgs) -> Result<(), Error> {
             };
             let out = if on_gpu {
                 let mut gpu_timings = GpuTimings::default();
-                let out = run_gpu_uniform(&model, n, &mut gpu_timings)?;
+                let (out, uploaded) = run_gpu_uniform(&model, n, &mut gpu_timings)?;
                 timings.gpu = Some(gpu_timings);
+                upload_bytes = Some(uploaded);
                 out
             } else {
                 tessellate_uniform(&model, n)?
@@ -192,9 +196,10 @@ pub fn tessellate(args: TessellateArgs) -> Result<(), Error> {
             let tolerance = params.epsilon(&model);
             if on_gpu {
                 let mut gpu_timings = GpuTimings::default();
-                let (out, recorded) = run_gpu(&model, &params, &mut gpu_timings)?;
+                let (out, recorded, uploaded) = run_gpu(&model, &params, &mut gpu_timings)?;
                 timings.gpu = Some(gpu_timings);
                 dispatches = Some(recorded);
+                upload_bytes = Some(uploaded);
                 (out, Some(tolerance), None)
             } else {
                 (tessellate_adaptive(&model, &params)?, Some(tolerance), None)
@@ -251,7 +256,7 @@ pub fn tessellate(args: TessellateArgs) -> Result<(), Error> {
         patches: model.mesh.surface_patches().count(),
         irregular_patches: model.patches.iter().filter(|p| !p.is_regular()).count(),
         evaluations: out.evaluations,
-        upload_bytes: model.upload_bytes(),
+        upload_bytes,
         leaves: out.leaves,
         guaranteed_error: tolerance.map(|_| out.max_bound),
         unmet: tolerance.map(|_| out.unmet),
@@ -336,14 +341,15 @@ pub fn info(input: &Path) -> Result<(), Error> {
 }
 
 /// The adaptive stage on the GPU: a first run that grows the buffers, then the timed run
-/// and the readback; with the dispatches the run recorded. Evaluations are the output
+/// and the readback; with the dispatches the run recorded and the bytes the stage
+/// uploaded when it was made. Evaluations are the output
 /// vertices (the GPU evaluates each once, a seam copy at its point's home like the
 /// others; the cell corners its flatness test reads are not counted).
 pub fn run_gpu(
     model: &SurfaceModel,
     params: &CcParams,
     timings: &mut GpuTimings,
-) -> Result<(CcTessellation, u32), Error> {
+) -> Result<(CcTessellation, u32, usize), Error> {
     let gpu = crate::gpu::open(timings)?;
     let kernels = Kernels::new(&gpu.device);
     let (stage, status) = crate::gpu::run(&gpu, timings, || {
@@ -362,15 +368,16 @@ pub fn run_gpu(
         proven: status.state.proven as u64,
         triangle_bounds: 0,
     };
-    Ok((tessellation, stage.dispatches()))
+    Ok((tessellation, stage.dispatches(), stage.upload_bytes()))
 }
 
-/// The uniform stage on the GPU: a first run, the timed run and the readback.
+/// The uniform stage on the GPU: a first run, the timed run and the readback; with the
+/// bytes the stage uploaded.
 pub fn run_gpu_uniform(
     model: &SurfaceModel,
     segments: u32,
     timings: &mut GpuTimings,
-) -> Result<CcTessellation, Error> {
+) -> Result<(CcTessellation, usize), Error> {
     let gpu = crate::gpu::open(timings)?;
     let kernels = Kernels::new(&gpu.device);
     let (stage, _) = crate::gpu::run(&gpu, timings, || {
@@ -385,7 +392,7 @@ pub fn run_gpu_uniform(
     let t = Instant::now();
     let mesh = stage.read_mesh(&gpu.device, &gpu.queue)?;
     timings.readback = ms(t);
-    Ok(CcTessellation {
+    let tessellation = CcTessellation {
         evaluations: mesh.vertices.len() as u64,
         leaves: model.mesh.surface_patches().count() * (segments as usize).pow(2),
         mesh,
@@ -394,5 +401,6 @@ pub fn run_gpu_uniform(
         bounds: 0,
         proven: 0,
         triangle_bounds: 0,
-    })
+    };
+    Ok((tessellation, stage.upload_bytes()))
 }

@@ -676,6 +676,22 @@ pub struct CcCorner {
     pub hull_radius: f32,
 }
 
+/// Where patch `p`'s quadtree starts: its root node ([`CC_NO_ROOT`] for a hole), and its
+/// first net and corner, which the nodes' indices count from (patches alike share their
+/// nodes).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq, Eq)]
+pub struct CcRoot {
+    /// Root node.
+    pub node: u32,
+    /// First net (binding 23).
+    pub nets: u32,
+    /// First corner (binding 24).
+    pub corners: u32,
+    /// Padding.
+    pub pad: u32,
+}
+
 /// One term of a level-1 point's stencil: weight `weight` on control point `point`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
@@ -699,6 +715,9 @@ pub struct CcPatchStencil {
     pub nets: u32,
     /// Its first corner record (binding 24).
     pub corners: u32,
+    /// Its first record among all patches': the stencil kernel's invocation `r` makes
+    /// record `r - records` of the last patch whose `records` is at most `r`.
+    pub records: u32,
 }
 
 /// A table shared by patches whose one-rings are alike: its records and how many
@@ -954,6 +973,9 @@ pub struct CcTessParams {
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable, PartialEq, Eq)]
 pub struct CcState {
+    /// The output vertices to evaluate: `vertices` when the mesh fits, else 0 (word 0,
+    /// which `cc_vertex_eval` reads as its count).
+    pub drawn_vertices: u32,
     /// Leaves of the output: those of each patch's best trial (also beyond capacity:
     /// what is needed).
     pub leaves: u32,

@@ -64,6 +64,10 @@ pub const SOURCES: &[(&str, &str)] = &[
         include_str!("../../../shaders/shared/lane_order.wgsl"),
     ),
     (
+        "cc_stencil.wgsl",
+        include_str!("../../../shaders/cc_stencil.wgsl"),
+    ),
+    (
         "cc_traverse.wgsl",
         include_str!("../../../shaders/cc_traverse.wgsl"),
     ),

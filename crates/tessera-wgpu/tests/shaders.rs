@@ -358,6 +358,7 @@ fn catmull_clark_parameters_and_counters_match_their_rust_twins() {
     let (size, members) = layout(&module, "CcCounters");
     assert_eq!(size as usize, size_of::<CcState>());
     let rust = [
+        ("drawn_vertices", offset_of!(CcState, drawn_vertices)),
         ("leaves", offset_of!(CcState, leaves)),
         ("overflow", offset_of!(CcState, overflow)),
         ("need_poly", offset_of!(CcState, need_poly)),

@@ -18,7 +18,7 @@ use super::stencil::CcStencils;
 use super::topology::PatchMesh;
 use super::vertex_hash::split_key;
 use crate::gpu_types::{
-    CcCell, CcCorner, CcNode, CcPatchTopo, CcPoint, CcVertexPoint, GpuPatch, OutVertex,
+    CcCell, CcCorner, CcNode, CcPatchTopo, CcPoint, CcRoot, CcVertexPoint, GpuPatch, OutVertex,
     CC_NODE_BEZIER, CC_NODE_KIND_MASK, CC_NODE_SPLIT, CC_NO_HOME, CC_NO_KEY, CC_NO_NEIGHBOUR,
     CC_PARAM_ONE,
 };
@@ -26,9 +26,11 @@ use crate::gpu_types::{
 /// Flattened quadtrees of all patches.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct CcGpuModel {
-    /// Root node of each patch, [`CC_NO_ROOT`] for a hole.
-    pub roots: Vec<u32>,
-    /// Every patch's nodes, patch after patch (binding 21).
+    /// Per patch, its root node ([`CC_NO_ROOT`](crate::gpu_types::CC_NO_ROOT) for a
+    /// hole) and first net and corner (binding 20).
+    pub roots: Vec<CcRoot>,
+    /// The nodes, shared by patches alike (binding 21): a net's or corner's index counts
+    /// from its patch's first.
     pub nodes: Vec<CcNode>,
     /// Children of split nodes, in quadrant order `[0,½]², [½,1]×[0,½], [½,1]², [0,½]×[½,1]`.
     pub splits: Vec<[u32; 4]>,
@@ -39,9 +41,6 @@ pub struct CcGpuModel {
     /// Corner nodes and the balls of split nodes on a chain at an extraordinary vertex
     /// (binding 24).
     pub corners: Vec<CcCorner>,
-    /// Per patch, its first net and first corner (binding 25): a node's index counts
-    /// within its patch, so that patches alike share their nodes.
-    pub bases: Vec<[u32; 2]>,
 }
 
 impl CcGpuModel {
@@ -58,7 +57,7 @@ impl CcGpuModel {
         CcStencils::new(&model.mesh, model.depth).model(&control)
     }
 
-    /// Bytes uploaded ([`SurfaceModel::upload_bytes`] computes it without building this).
+    /// Bytes of the arrays, as a stage that uploads them does.
     pub fn byte_size(&self) -> usize {
         use std::mem::size_of_val;
         size_of_val(self.roots.as_slice())
@@ -66,7 +65,6 @@ impl CcGpuModel {
             + size_of_val(self.splits.as_slice())
             + size_of_val(self.nets.as_slice())
             + size_of_val(self.corners.as_slice())
-            + size_of_val(self.bases.as_slice())
     }
 }
 
@@ -127,8 +125,9 @@ fn net_point(net: &GpuPatch, u: f32, v: f32) -> (Vec3, Vec3) {
 /// square at an extraordinary vertex gets the vertex (the stored depth puts every point
 /// of the tessellators' grids outside it; see [`super::TREE_DEPTH`]).
 pub fn cc_eval(model: &CcGpuModel, point: CcPoint) -> (Vec3, Vec3) {
-    let mut nd = model.nodes[model.roots[point.patch_id as usize] as usize];
-    let [nets, corners] = model.bases[point.patch_id as usize];
+    let root = model.roots[point.patch_id as usize];
+    let (nets, corners) = (root.nets, root.corners);
+    let mut nd = model.nodes[root.node as usize];
     let (mut x, mut y, mut size) = (point.u, point.v, CC_PARAM_ONE);
     // Down to the node holding the point, then one evaluation (as the kernel: there an
     // evaluation inside the loop would run on every level).

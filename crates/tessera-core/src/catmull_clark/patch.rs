@@ -321,24 +321,6 @@ impl SurfaceModel {
         ))
     }
 
-    /// Bytes of the quadtrees as the GPU reads them ([`super::gpu_model::CcGpuModel`]):
-    /// a root per patch (4 B), a node per node (8 B), and a Bézier net (192 B), a split's
-    /// four children (16 B, plus 32 B for its ball on a chain at a vertex) or a corner
-    /// (32 B) each. Holes upload only their root.
-    pub fn upload_bytes(&self) -> usize {
-        4 * self.patches.len()
-            + self
-                .mesh
-                .surface_patches()
-                .flat_map(|p| self.patches[p].nodes.iter().zip(&self.patches[p].balls))
-                .map(|(n, ball)| match n {
-                    Node::Bezier(_) => 8 + 192,
-                    Node::Split(_) => 8 + 16 + if ball.is_some() { 32 } else { 0 },
-                    Node::Corner(_) => 8 + 32,
-                })
-                .sum::<usize>()
-    }
-
     /// Exact point of control face `face` at `(u, v)` in the face's own
     /// parameterisation ([`PatchMesh::face_point`], OpenSubdiv Bfr's); `None` outside
     /// its domain, or on a hole.

@@ -37,7 +37,7 @@ use super::patch::{Node, PatchSurface};
 use super::refine::{refine_sharp, Scheme};
 use super::topology::PatchMesh;
 use crate::gpu_types::{
-    CcCorner, CcNode, CcPatchStencil, CcPieceRecord, CcStencilTable, CcWeight, GpuPatch,
+    CcCorner, CcNode, CcPatchStencil, CcPieceRecord, CcRoot, CcStencilTable, CcWeight, GpuPatch,
     CC_NODE_BALL_SHIFT, CC_NODE_BEZIER, CC_NODE_CORNER, CC_NODE_SPLIT, CC_NO_ROOT, CC_RECORD_BALL,
     CC_RECORD_CORNER, CC_RECORD_NET,
 };
@@ -56,11 +56,10 @@ pub struct CcStencils {
     pub level1_weights: Vec<CcWeight>,
     /// Every patch's one-ring, level-1 point ids in canonical order, patch after patch.
     pub rings: Vec<u32>,
-    /// Per patch: its one-ring, table and first net and corner record.
+    /// Per patch: its one-ring, table, first net and corner, and first record.
     pub patches: Vec<CcPatchStencil>,
-    /// Per patch, its first record among all patches' (and the total, last): the
-    /// kernel's invocation `r` makes record `r - patch_records[p]` of patch `p`.
-    pub patch_records: Vec<u32>,
+    /// Records of all patches: the kernel's invocations.
+    pub record_count: u32,
     /// The shared tables.
     pub tables: Vec<CcStencilTable>,
     /// The tables' records.
@@ -95,7 +94,6 @@ impl CcStencils {
         let mut out = CcStencils {
             level1_offsets,
             level1_weights,
-            patch_records: vec![0],
             ..Default::default()
         };
         let mut index: HashMap<String, u32> = HashMap::default();
@@ -104,12 +102,16 @@ impl CcStencils {
         let mut roots: Vec<u32> = Vec::new();
         let (mut nets, mut corners) = (0u32, 0u32);
         for p in 0..mesh.patch_count() {
-            let records = out.patch_records[p];
+            let records = out.record_count;
             if mesh.hole[p] {
-                out.patches.push(bytemuck::Zeroable::zeroed());
-                out.patch_records.push(records);
-                out.structure.roots.push(CC_NO_ROOT);
-                out.structure.bases.push([0, 0]);
+                out.patches.push(CcPatchStencil {
+                    records,
+                    ..bytemuck::Zeroable::zeroed()
+                });
+                out.structure.roots.push(CcRoot {
+                    node: CC_NO_ROOT,
+                    ..bytemuck::Zeroable::zeroed()
+                });
                 continue;
             }
             let (ring, ids) = LocalMesh::gather_canonical(
@@ -132,11 +134,16 @@ impl CcStencils {
                 table: t,
                 nets,
                 corners,
+                records,
             });
             out.rings.extend(ids);
-            out.patch_records.push(records + table.records.len() as u32);
-            out.structure.roots.push(roots[t as usize]);
-            out.structure.bases.push([nets, corners]);
+            out.record_count += table.records.len() as u32;
+            out.structure.roots.push(CcRoot {
+                node: roots[t as usize],
+                nets,
+                corners,
+                pad: 0,
+            });
             for (kind, _, _) in &table.records {
                 if *kind & 0xff == CC_RECORD_NET {
                     nets += 1;
@@ -204,11 +211,6 @@ impl CcStencils {
         base
     }
 
-    /// Records the kernel makes in all (its invocations).
-    pub fn record_count(&self) -> u32 {
-        self.patch_records.last().copied().unwrap_or(0)
-    }
-
     /// Level-1 points.
     pub fn level1_count(&self) -> usize {
         self.level1_offsets.len().saturating_sub(1)
@@ -222,12 +224,10 @@ impl CcStencils {
             + size_of_val(self.level1_weights.as_slice())
             + size_of_val(self.rings.as_slice())
             + size_of_val(self.patches.as_slice())
-            + size_of_val(self.patch_records.as_slice())
             + size_of_val(self.tables.as_slice())
             + size_of_val(self.records.as_slice())
             + size_of_val(self.weights.as_slice())
             + size_of_val(s.roots.as_slice())
-            + size_of_val(s.bases.as_slice())
             + size_of_val(s.nodes.as_slice())
             + size_of_val(s.splits.as_slice())
     }
@@ -242,14 +242,14 @@ impl CcStencils {
             + size_of_val(self.weights.as_slice())
     }
 
-    /// Bytes patch `p` alone uploads: its one-ring's ids, its words (stencil, first
-    /// record, root, bases).
+    /// Bytes patch `p` alone uploads: its one-ring's ids and its words (stencil, root).
     pub fn patch_bytes(&self, p: usize) -> usize {
-        if self.structure.roots[p] == CC_NO_ROOT {
-            return 32;
+        let words = std::mem::size_of::<CcPatchStencil>() + std::mem::size_of::<CcRoot>();
+        if self.structure.roots[p].node == CC_NO_ROOT {
+            return words;
         }
         let columns = self.tables[self.patches[p].table as usize].columns as usize;
-        4 * columns + 32
+        4 * columns + words
     }
 
     /// The quadtrees of the control points `control` (one per control vertex): the
@@ -419,7 +419,6 @@ fn records_of(
 /// products sum to the normal: from the root's ring moved so that the vertex's limit
 /// point is the origin, down `path` and [`NORMAL_STEPS`] steps more toward the vertex,
 /// doubled at each step so that the offsets stay near unit size.
-
 fn normal_rows(
     root: &LocalMesh,
     path: &[usize],
@@ -570,19 +569,19 @@ pub fn level1(stencils: &CcStencils, control: &[Vec3]) -> Vec<Vec3> {
 pub fn pieces(stencils: &CcStencils, level1: &[Vec3]) -> (Vec<GpuPatch>, Vec<CcCorner>) {
     let mut nets = vec![GpuPatch { cp: [0.0; 48] }; stencils.structure.nets.len()];
     let mut corners = vec![CcCorner::default_zeroed(); stencils.structure.corners.len()];
-    for r in 0..stencils.record_count() {
-        let p = record_patch(&stencils.patch_records, r);
+    for r in 0..stencils.record_count {
+        let p = record_patch(&stencils.patches, r);
         let ps = stencils.patches[p];
         let table = stencils.tables[ps.table as usize];
-        let rec = stencils.records[(table.records + r - stencils.patch_records[p]) as usize];
+        let rec = stencils.records[(table.records + r - ps.records) as usize];
         let m = table.columns as usize;
         let ring = |i: usize| level1[stencils.rings[ps.ring as usize + i] as usize];
         let origin = ring(0);
         let row = |k: usize| {
             let w = &stencils.weights[rec.weights as usize + k * m..];
             let mut acc = Vec3::ZERO;
-            for i in 0..m {
-                acc += (ring(i) - origin) * w[i];
+            for (i, &w) in w.iter().take(m).enumerate() {
+                acc += (ring(i) - origin) * w;
             }
             acc
         };
@@ -615,14 +614,14 @@ pub fn pieces(stencils: &CcStencils, level1: &[Vec3]) -> (Vec<GpuPatch>, Vec<CcC
     (nets, corners)
 }
 
-/// The patch of record `r`: the last `p` with `patch_records[p] ≤ r` that has records
-/// (as the kernel's binary search).
-pub fn record_patch(patch_records: &[u32], r: u32) -> usize {
-    let (mut lo, mut hi) = (0usize, patch_records.len() - 1);
-    // patch_records[lo] <= r < patch_records[hi]
+/// The patch of record `r` (below the total): the last whose first record is at most
+/// `r`, by the kernel's binary search.
+pub fn record_patch(patches: &[CcPatchStencil], r: u32) -> usize {
+    // patches[lo].records <= r, and r is before patch hi's records (or hi is the end).
+    let (mut lo, mut hi) = (0usize, patches.len());
     while hi - lo > 1 {
         let mid = (lo + hi) / 2;
-        if patch_records[mid] <= r {
+        if patches[mid].records <= r {
             lo = mid;
         } else {
             hi = mid;
@@ -648,15 +647,20 @@ mod tests {
         let mut out = CcGpuModel::default();
         for (p, surface) in model.patches.iter().enumerate() {
             if surface.nodes.is_empty() || model.mesh.hole[p] {
-                out.roots.push(CC_NO_ROOT);
-                out.bases.push([0, 0]);
+                out.roots.push(CcRoot {
+                    node: CC_NO_ROOT,
+                    ..bytemuck::Zeroable::zeroed()
+                });
                 continue;
             }
             let base = out.nodes.len() as u32;
-            out.roots.push(base);
-            out.bases
-                .push([out.nets.len() as u32, out.corners.len() as u32]);
-            let [nets, corners] = out.bases[p];
+            let (nets, corners) = (out.nets.len() as u32, out.corners.len() as u32);
+            out.roots.push(CcRoot {
+                node: base,
+                nets,
+                corners,
+                pad: 0,
+            });
             let f = |v: DVec3| v.as_vec3().to_array();
             for (id, node) in surface.nodes.iter().enumerate() {
                 out.nodes.push(match node {
@@ -751,20 +755,26 @@ mod tests {
             let m = model(name);
             let got = CcGpuModel::new(&m);
             let want = flatten(&m);
-            assert_eq!(got.bases, want.bases, "{name}: bases");
+            let bases = |g: &CcGpuModel| {
+                g.roots
+                    .iter()
+                    .map(|r| (r.nets, r.corners))
+                    .collect::<Vec<_>>()
+            };
+            assert_eq!(bases(&got), bases(&want), "{name}: bases");
             for p in 0..m.mesh.patch_count() {
                 assert_eq!(
-                    got.roots[p] == CC_NO_ROOT,
-                    want.roots[p] == CC_NO_ROOT,
+                    got.roots[p].node == CC_NO_ROOT,
+                    want.roots[p].node == CC_NO_ROOT,
                     "{name}: hole {p}"
                 );
-                if want.roots[p] == CC_NO_ROOT {
+                if want.roots[p].node == CC_NO_ROOT {
                     continue;
                 }
                 // The same nodes, children counted from the root.
                 let n = m.patches[p].nodes.len();
                 let node = |g: &CcGpuModel, k: usize| {
-                    let root = g.roots[p];
+                    let root = g.roots[p].node;
                     let nd = g.nodes[root as usize + k];
                     let children = (nd.kind & 0xff == CC_NODE_SPLIT)
                         .then(|| g.splits[nd.index as usize].map(|c| c - root));

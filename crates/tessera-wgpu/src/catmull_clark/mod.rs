@@ -9,12 +9,15 @@
 //! [`tessera_core::catmull_clark::vertex_hash`]).
 
 mod stage;
+mod stencil;
 mod uniform;
 
 pub(crate) use stage::CcKernels;
 #[doc(hidden)]
 pub use stage::{CcCapacities, CcPolygons};
 pub use stage::{CcStage, CcStatus};
+#[doc(hidden)]
+pub use stencil::CcStencilBuffers;
 pub(crate) use uniform::CcUniformKernels;
 pub use uniform::{CcUniformStage, UniformParams};
 
@@ -23,7 +26,7 @@ use tessera_core::gpu_types::{CcHashSlot, CcHashStatus, NetTexture};
 use wgpu::util::DeviceExt;
 
 use crate::error::{Error, Result};
-use crate::kernel::{check_size, check_upload, storage, upload_texture, Kernel};
+use crate::kernel::{check_size, check_upload, storage, storage_texture, upload_texture, Kernel};
 use crate::scan::{PrefixSum, ScanKernels};
 
 /// The flattened quadtrees on the GPU (bindings 20–24 of the Catmull-Clark kernels).
@@ -57,6 +60,21 @@ impl CcModelBuffers {
     /// storage buffer the device can bind, or its nets than a texture the device can
     /// create (before anything is created).
     pub fn new(device: &wgpu::Device, queue: &wgpu::Queue, model: &CcGpuModel) -> Result<Self> {
+        Self::create(device, queue, model, true)
+    }
+
+    /// As [`new`](Self::new) for the quadtrees the stencil step derives: the shape is
+    /// uploaded, the nets and corners are only made room for.
+    pub fn derived(device: &wgpu::Device, queue: &wgpu::Queue, shape: &CcGpuModel) -> Result<Self> {
+        Self::create(device, queue, shape, false)
+    }
+
+    fn create(
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        model: &CcGpuModel,
+        geometry: bool,
+    ) -> Result<Self> {
         let names = [
             "patch roots",
             "quadtree nodes",
@@ -87,21 +105,41 @@ impl CcModelBuffers {
                 usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
             })
         };
-        let nets = upload_texture(
-            device,
-            queue,
-            "tessera cc net texture",
-            wgpu::TextureFormat::Rgba32Float,
-            (width, height),
-            bytemuck::cast_slice(&NetTexture::new(&model.nets).texels),
-        );
+        let format = wgpu::TextureFormat::Rgba32Float;
+        let nets = if geometry {
+            upload_texture(
+                device,
+                queue,
+                "tessera cc net texture",
+                format,
+                (width, height),
+                bytemuck::cast_slice(&NetTexture::new(&model.nets).texels),
+            )
+        } else {
+            storage_texture(
+                device,
+                "tessera cc net texture",
+                format,
+                (width, height),
+                // Read back by the tests that compare the stencil step with its twin.
+                wgpu::TextureUsages::COPY_SRC,
+            )
+        };
+        let corners = if geometry {
+            init("tessera cc corners", bytemuck::cast_slice(&model.corners))
+        } else {
+            // Never smaller than one corner: bindings are never empty.
+            let bytes = std::mem::size_of_val(model.corners.as_slice())
+                .max(std::mem::size_of::<tessera_core::gpu_types::CcCorner>());
+            storage(device, "tessera cc corners", bytes as u64)
+        };
         Ok(CcModelBuffers {
             roots: init("tessera cc roots", bytemuck::cast_slice(&model.roots)),
             nodes: init("tessera cc nodes", bytemuck::cast_slice(&model.nodes)),
             splits: init("tessera cc splits", bytemuck::cast_slice(&model.splits)),
             nets_view: nets.create_view(&Default::default()),
             nets,
-            corners: init("tessera cc corners", bytemuck::cast_slice(&model.corners)),
+            corners,
             sizes: byte_sizes(model),
         })
     }

@@ -7,20 +7,24 @@
 //!
 //! | # | kernel | per | writes |
 //! |---|---|---|---|
-//! | 1 | `cc_traverse` (count) | patch and trial | the first-split search to full depth: best split, its leaves, its decisions |
-//! | 2–3 | scan | patch | each patch's first leaf |
-//! | 4 | `cc_traverse` (emit) | patch | the best split's leaves, its decisions replayed; leaf and item dispatch sizes |
-//! | 5 | `cc_leaf_keys` (indirect) | leaf | corner keys in their charts (and across seams) and vertices |
-//! | 6 | `cc_hash_insert` (indirect) | item | the vertex hash |
-//! | 7 | `cc_hash_number` mark_first (indirect) | item | each key's first item |
-//! | 8 | `cc_polygon` count (indirect) | leaf | points on each side (found in the hash) |
-//! | 9–10 | scan of both | item, leaf | vertex numbers, polygon offsets |
-//! | 11 | `cc_hash_number` assign (indirect) | item | vertex ids |
-//! | 12 | `cc_hash_number` gather_points (indirect) | item | one point per vertex |
-//! | 13 | `cc_triangulate` finish | 1 | whether the mesh fits, draw arguments, what the run needed |
-//! | 14 | `cc_polygon` emit (indirect) | leaf | polygons: corners + marked points on the sides |
+//! | 1 | `cc_stencil` level1 | level-1 point | the first subdivision step of the control points (only when they moved) |
+//! | 2 | `cc_stencil` pieces | net, ball or corner | every patch's quadtree from its one-ring, through tables shared by patches alike (only when the points moved) |
+//! | 3 | `cc_traverse` (count) | patch and trial | the first-split search to full depth: best split, its leaves, its decisions |
+//! | 4–5 | scan | patch | each patch's first leaf |
+//! | 6 | `cc_traverse` (emit) | patch | the best split's leaves, its decisions replayed; leaf and item dispatch sizes |
+//! | 7 | `cc_leaf_keys` (indirect) | leaf | corner keys in their charts (and across seams) and vertices |
+//! | 8 | `cc_hash_insert` (indirect) | item | the vertex hash |
+//! | 9 | `cc_hash_number` mark_first (indirect) | item | each key's first item |
+//! | 10 | `cc_polygon` count (indirect) | leaf | points on each side (found in the hash) |
+//! | 11–12 | scan of both | item, leaf | vertex numbers, polygon offsets |
+//! | 13 | `cc_hash_number` assign_gather (indirect) | item | vertex ids, one point per vertex, the hash's outcome |
+//! | 14 | `cc_polygon` emit (indirect) | leaf | polygons: corners + marked points on the sides; invocation 0: whether the mesh fits, what the run needed |
 //! | 15 | `cc_vertex_eval` (indirect) | vertex | vertices (position, normal at the point's home; face, face u v) |
-//! | 16 | `cc_triangulate` (indirect) | leaf | indices |
+//! | 16 | `cc_triangulate` (indirect) | leaf | indices; invocation 0: the draw arguments |
+//!
+//! Only the control points move per frame ([`CcStage::update_points`] writes them and a
+//! word): the tables they are derived through are built once per topology
+//! ([`tessera_core::catmull_clark::stencil`]), as OpenSubdiv's stencil tables are.
 //!
 //! Marking walks each cell of a first split to full depth, depth first and without a
 //! stack (twin [`tessera_core::catmull_clark::traverse`]), so the script does not grow
@@ -65,7 +69,8 @@
 //! ```
 
 use std::sync::Arc;
-use tessera_core::catmull_clark::gpu_model::{patch_topology, point_homes, CcGpuModel};
+use tessera_core::catmull_clark::gpu_model::{patch_topology, point_homes};
+use tessera_core::catmull_clark::stencil::CcStencils;
 
 use glam::Vec3;
 use tessera_core::catmull_clark::{CcParams, LeafBound, PatchMesh, SurfaceModel};
@@ -75,6 +80,7 @@ use tessera_core::gpu_types::{
 use tessera_core::Mesh;
 use wgpu::util::DeviceExt;
 
+use super::stencil::{CcStencilBuffers, CcStencilKernels};
 use super::{CcHashBinds, CcHashKernels, CcModelBuffers, CcVertexEval, CcVertexHash};
 use crate::error::{Error, Result};
 use crate::kernel::{check_size, storage, Kernel};
@@ -106,8 +112,8 @@ mod slot {
     pub const HASH_STATUS: u32 = 43;
     pub const HASH_OFFSETS: u32 = 44;
     pub const IDS: u32 = 45;
+    pub const UNIQUE_KEYS: u32 = 46;
     pub const VERTEX_POINTS: u32 = 30;
-    pub const VERTEX_COUNT: u32 = 32;
 }
 
 /// Offsets into the dispatch-arguments buffer (written by the emit pass of marking): the
@@ -119,14 +125,14 @@ const ITEM_ARGS: u64 = 24;
 pub(crate) struct CcKernels {
     traverse: Kernel,
     leaf_keys: Kernel,
-    gather_points: Kernel,
+    assign_gather: Kernel,
     polygon_count: Kernel,
     polygon_emit: Kernel,
-    finish: Kernel,
     triangulate: Kernel,
     hash: CcHashKernels,
     eval: CcVertexEval,
     scan: ScanKernels,
+    stencil: CcStencilKernels,
 }
 
 impl CcKernels {
@@ -135,15 +141,21 @@ impl CcKernels {
         CcKernels {
             traverse: k("cc_traverse.wgsl", "main"),
             leaf_keys: k("cc_leaf_keys.wgsl", "main"),
-            gather_points: k("cc_hash_number.wgsl", "gather_points"),
+            assign_gather: k("cc_hash_number.wgsl", "assign_gather"),
             polygon_count: k("cc_polygon.wgsl", "count"),
             polygon_emit: k("cc_polygon.wgsl", "emit"),
-            finish: k("cc_triangulate.wgsl", "finish"),
             triangulate: k("cc_triangulate.wgsl", "main"),
             hash: CcHashKernels::new(device),
             eval: CcVertexEval::new(device),
             scan: ScanKernels::new(device),
+            stencil: CcStencilKernels::new(device),
         }
+    }
+}
+
+impl CcKernels {
+    pub(crate) fn stencil(&self) -> &CcStencilKernels {
+        &self.stencil
     }
 }
 
@@ -211,7 +223,6 @@ struct Buffers {
     keys: wgpu::Buffer,
     item_points: wgpu::Buffer,
     vertex_points: wgpu::Buffer,
-    vertex_count: wgpu::Buffer,
     poly_offsets: wgpu::Buffer,
     poly_verts: wgpu::Buffer,
     hash: CcVertexHash,
@@ -228,13 +239,14 @@ struct Binds {
     /// The count pass, then the emit pass.
     traverse: [wgpu::BindGroup; 2],
     leaf_keys: wgpu::BindGroup,
-    gather_points: wgpu::BindGroup,
+    assign_gather: wgpu::BindGroup,
     polygon_count: wgpu::BindGroup,
     polygon_emit: wgpu::BindGroup,
-    finish: wgpu::BindGroup,
     triangulate: wgpu::BindGroup,
     hash: CcHashBinds,
     eval: wgpu::BindGroup,
+    /// The stencil step's two kernels.
+    stencil: [wgpu::BindGroup; 2],
 }
 
 /// What the stage keeps for its whole life (the model's size fixes it).
@@ -244,13 +256,16 @@ struct Fixed<'a> {
     state: &'a wgpu::Buffer,
     args: &'a wgpu::Buffer,
     passes: &'a [wgpu::Buffer; 2],
+    stencil: &'a CcStencilBuffers,
 }
 
 /// The adaptive Catmull-Clark tessellation stage of one model.
 pub struct CcStage {
     kernels: Arc<CcKernels>,
     model: CcModelBuffers,
-    /// The patches as built, kept to move the control points and to check parameters.
+    /// The tables the quadtrees are derived from, and the control points.
+    stencil: CcStencilBuffers,
+    /// The patches as built, kept to check parameters.
     patches: PatchMesh,
     /// Levels of the uploaded quadtrees.
     depth: u32,
@@ -299,7 +314,7 @@ fn pool_blocks(patches: u32, leaves: u32) -> u64 {
 
 impl CcStage {
     /// Dispatches in every run, whatever the model, tolerance, depth or first split.
-    pub const DISPATCHES: u32 = 10 + 3 * PrefixSum::DISPATCHES;
+    pub const DISPATCHES: u32 = 12 + 2 * PrefixSum::DISPATCHES;
 
     /// Phases [`profile_phases`](Self::profile_phases) times: marking, vertices (keys,
     /// hash, numbering, evaluation), polygons and triangles.
@@ -339,8 +354,17 @@ impl CcStage {
         gpu_leaf_bound(params)?;
         let kernels = kernels.cc();
         let patch_count = model.mesh.patch_count() as u32;
-        let gpu_model = CcGpuModel::new(model);
-        let model_buffers = CcModelBuffers::new(device, queue, &gpu_model)?;
+        // Built once per topology; every run's first step derives the quadtrees from
+        // the control points through them.
+        let stencils = CcStencils::new(&model.mesh, model.depth);
+        let model_buffers = CcModelBuffers::derived(device, queue, &stencils.structure)?;
+        let control: Vec<Vec3> = model
+            .mesh
+            .control_points
+            .iter()
+            .map(|p| p.as_vec3())
+            .collect();
+        let stencil = CcStencilBuffers::new(device, &stencils, &control)?;
         let topo = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("tessera cc topology"),
             contents: bytemuck::cast_slice(&patch_topology(&model.mesh)),
@@ -382,11 +406,13 @@ impl CcStage {
             state: &state,
             args: &args,
             passes: &passes,
+            stencil: &stencil,
         };
         let binds = Binds::new(device, &kernels, &model_buffers, &fixed, &buffers);
         Ok(CcStage {
             kernels,
             model: model_buffers,
+            stencil,
             patches: model.mesh.clone(),
             depth: model.depth,
             patch_count,
@@ -433,16 +459,17 @@ impl CcStage {
     }
 
     /// New positions of the control vertices, same topology and order as the mesh the
-    /// stage was made from: the patches are rebuilt on the CPU and written through
-    /// `queue` in place; the next [`prepare`](Self::prepare) tessellates the moved
-    /// surface.
+    /// stage was made from: written through `queue` as they are, with one word that
+    /// makes the next [`prepare`](Self::prepare) derive the patches from them on the GPU
+    /// (see [`update_bytes`](Self::update_bytes)). The CPU only checks them.
     pub fn update_points(&mut self, queue: &wgpu::Queue, points: &[Vec3]) -> Result<()> {
-        let points: Vec<_> = points.iter().map(|p| p.as_dvec3()).collect();
-        let patches = self.patches.with_control_points(&points)?;
-        let model = SurfaceModel::new(patches, self.depth);
-        self.model.update(queue, &CcGpuModel::new(&model))?;
-        self.patches = model.mesh;
-        Ok(())
+        self.stencil.update(queue, points)
+    }
+
+    /// Bytes [`update_points`](Self::update_points) writes: 12 per control point and a
+    /// word.
+    pub fn update_bytes(&self) -> usize {
+        self.stencil.update_bytes()
     }
 
     /// The tolerance, depth and first split of the next runs.
@@ -461,9 +488,10 @@ impl CcStage {
         &self.buffers.output
     }
 
-    /// Bytes of the uploaded model.
+    /// Bytes uploaded when the stage is made: the stencil tables, the quadtrees' shape
+    /// and the control points (the nets and corners are derived on the GPU).
     pub fn upload_bytes(&self) -> usize {
-        self.model.byte_size()
+        self.stencil.table_bytes() + self.stencil.update_bytes()
     }
 
     /// Dispatches the last recorded run held ([`DISPATCHES`](Self::DISPATCHES)), counted
@@ -587,6 +615,12 @@ impl CcStage {
         encoder.clear_buffer(&b.hash.table, 0, None);
         stamp(encoder, "");
         {
+            // The quadtrees from the control points (nothing to do unless they moved).
+            let mut pass = passes.begin(encoder, "tessera cc stencils", false);
+            dispatches += self.stencil.record(&mut pass, &k.stencil, &binds.stencil);
+        }
+        self.stencil.settle(encoder);
+        {
             let mut pass = passes.begin(encoder, "tessera cc marking", false);
             let patches = self.patch_count;
             // `cc_traverse.wgsl`: blocks of 8 patches, one invocation per trial.
@@ -619,15 +653,11 @@ impl CcStage {
                 k.polygon_count
                     .dispatch_indirect(&mut pass, &binds.polygon_count, args, LEAF_ARGS);
             dispatches += b.number_scan.record(&mut pass, &k.scan);
-            dispatches += k
-                .hash
-                .assign
-                .dispatch_indirect(&mut pass, &hash.assign, args, ITEM_ARGS);
             dispatches +=
-                k.gather_points
-                    .dispatch_indirect(&mut pass, &binds.gather_points, args, ITEM_ARGS);
-            // Whether everything fits: only then is the output written.
-            dispatches += k.finish.dispatch(&mut pass, &binds.finish, 1, 1);
+                k.assign_gather
+                    .dispatch_indirect(&mut pass, &binds.assign_gather, args, ITEM_ARGS);
+            // Its invocation 0 decides whether everything fits: only then is the output
+            // written.
             dispatches +=
                 k.polygon_emit
                     .dispatch_indirect(&mut pass, &binds.polygon_emit, args, LEAF_ARGS);
@@ -732,6 +762,7 @@ impl CcStage {
             state: &self.state,
             args: &self.args,
             passes: &self.passes,
+            stencil: &self.stencil,
         };
         self.binds = Binds::new(device, &self.kernels, &self.model, &fixed, &buffers);
         let old = std::mem::replace(&mut self.buffers, buffers);
@@ -994,7 +1025,6 @@ impl Buffers {
                 "tessera cc vertex points",
                 point_bytes * caps.vertices as u64,
             ),
-            vertex_count: storage(device, "tessera cc vertex count", 4),
             poly_offsets,
             poly_verts: storage(device, "tessera cc polygons", 16 * caps.poly as u64),
             hash,
@@ -1037,8 +1067,8 @@ impl Binds {
                 (slot::HASH_STATUS, &b.hash.status),
                 (slot::HASH_OFFSETS, &b.hash.offsets),
                 (slot::IDS, &b.hash.ids),
+                (slot::UNIQUE_KEYS, &b.hash.unique_keys),
                 (slot::VERTEX_POINTS, &b.vertex_points),
-                (slot::VERTEX_COUNT, &b.vertex_count),
             ]);
             e
         };
@@ -1051,19 +1081,20 @@ impl Binds {
         Binds {
             traverse: [bind(&k.traverse, &count), bind(&k.traverse, &emit)],
             leaf_keys: bind(&k.leaf_keys, &count),
-            gather_points: bind(&k.gather_points, &count),
+            assign_gather: bind(&k.assign_gather, &count),
             polygon_count: bind(&k.polygon_count, &count),
             polygon_emit: bind(&k.polygon_emit, &count),
-            finish: bind(&k.finish, &count),
             triangulate: bind(&k.triangulate, &count),
             hash: b.hash.bind(device, &k.hash, &b.keys),
             eval: k.eval.bind(
                 device,
                 model,
                 &b.vertex_points,
-                &b.vertex_count,
+                // Its count is the counters' word 0, the vertices of a mesh that fits.
+                f.state,
                 b.output.vertices(),
             ),
+            stencil: f.stencil.bind(device, &k.stencil, model),
         }
     }
 }

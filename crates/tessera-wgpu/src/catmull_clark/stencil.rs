@@ -1,0 +1,204 @@
+//! The first step of the adaptive stage's script: every patch's quadtree (its Bézier
+//! nets, balls and corners) derived on the GPU from the control points, through the
+//! stencil tables uploaded once per topology (`shaders/cc_stencil.wgsl`, twin
+//! [`tessera_core::catmull_clark::stencil`]). Moving the points uploads the points and
+//! one word; a run whose points did not move skips the step's work.
+
+use glam::Vec3;
+use tessera_core::catmull_clark::stencil::CcStencils;
+use wgpu::util::DeviceExt;
+
+use super::CcModelBuffers;
+use crate::error::{Error, Result};
+use crate::kernel::{check_upload, storage, Kernel};
+
+/// The step's two kernels, compiled once per device.
+pub(crate) struct CcStencilKernels {
+    level1: Kernel,
+    pieces: Kernel,
+}
+
+impl CcStencilKernels {
+    pub fn new(device: &wgpu::Device) -> Self {
+        CcStencilKernels {
+            level1: Kernel::new(device, "cc_stencil.wgsl", "level1"),
+            pieces: Kernel::new(device, "cc_stencil.wgsl", "pieces"),
+        }
+    }
+}
+
+/// The tables on the GPU, the control points, and the flag that says they moved.
+#[doc(hidden)]
+pub struct CcStencilBuffers {
+    control: wgpu::Buffer,
+    /// A uniform: whether the points moved since the last run (word 0, cleared after
+    /// the step), the records, the level-1 points.
+    step: wgpu::Buffer,
+    tables: Vec<wgpu::Buffer>,
+    level1_points: wgpu::Buffer,
+    level1_count: u32,
+    record_count: u32,
+    control_count: usize,
+    table_bytes: usize,
+}
+
+/// Binding numbers of the tables, in the order [`CcStencilBuffers::tables`] holds them.
+const TABLE_SLOTS: [u32; 7] = [71, 72, 74, 75, 77, 78, 79];
+
+impl CcStencilBuffers {
+    /// Uploads the tables and the control points `control`; the first run derives the
+    /// quadtrees. [`Error::ModelTooLarge`] if a table is larger than a storage buffer the
+    /// device can bind.
+    pub fn new(device: &wgpu::Device, stencils: &CcStencils, control: &[Vec3]) -> Result<Self> {
+        use bytemuck::cast_slice;
+        let parts: [(&'static str, &[u8]); 7] = [
+            (
+                "level-1 stencil offsets",
+                cast_slice(&stencils.level1_offsets),
+            ),
+            ("level-1 stencils", cast_slice(&stencils.level1_weights)),
+            ("patch one-rings", cast_slice(&stencils.rings)),
+            ("patch stencils", cast_slice(&stencils.patches)),
+            ("stencil tables", cast_slice(&stencils.tables)),
+            ("stencil records", cast_slice(&stencils.records)),
+            ("stencil weights", cast_slice(&stencils.weights)),
+        ];
+        let level1_bytes = 16 * stencils.level1_count() as u64;
+        for (what, bytes) in parts {
+            check_upload(device, what, bytes.len() as u64)?;
+        }
+        check_upload(device, "level-1 points", level1_bytes)?;
+        check_upload(device, "control points", 12 * control.len() as u64)?;
+        let zero = [0u8; 16];
+        let init = |label: &str, bytes: &[u8]| {
+            device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some(label),
+                // A binding is never empty.
+                contents: if bytes.is_empty() { &zero } else { bytes },
+                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+            })
+        };
+        let tables = parts
+            .iter()
+            .map(|(what, bytes)| init(what, bytes))
+            .collect();
+        let control_buffer = init("tessera cc control points", cast_slice(control));
+        let level1_count = stencils.level1_count() as u32;
+        let step = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("tessera cc stencil step"),
+            contents: cast_slice(&[1u32, stencils.record_count, level1_count, 0]),
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+        });
+        Ok(CcStencilBuffers {
+            control: control_buffer,
+            step,
+            tables,
+            level1_points: storage(device, "tessera cc level-1 points", level1_bytes),
+            level1_count,
+            record_count: stencils.record_count,
+            control_count: control.len(),
+            table_bytes: stencils.upload_bytes(),
+        })
+    }
+
+    /// New positions of the control points (same count): written through `queue`, with
+    /// the word that makes the next run derive the quadtrees again. Nothing else moves.
+    pub fn update(&self, queue: &wgpu::Queue, control: &[Vec3]) -> Result<()> {
+        if control.len() != self.control_count {
+            return Err(Error::Core(tessera_core::Error::Param(format!(
+                "{} control points given, the mesh has {}",
+                control.len(),
+                self.control_count
+            ))));
+        }
+        if let Some(i) = control.iter().position(|p| {
+            !p.is_finite() || p.abs().max_element() as f64 > tessera_core::io::MAX_COORDINATE
+        }) {
+            return Err(Error::Core(tessera_core::Error::Param(format!(
+                "control point {i} is {}: coordinates must be finite and within ±{:e}",
+                control[i],
+                tessera_core::io::MAX_COORDINATE
+            ))));
+        }
+        queue.write_buffer(&self.control, 0, bytemuck::cast_slice(control));
+        queue.write_buffer(&self.step, 0, bytemuck::cast_slice(&[1u32]));
+        Ok(())
+    }
+
+    /// Bytes [`update`](Self::update) writes per frame.
+    pub fn update_bytes(&self) -> usize {
+        12 * self.control_count + 4
+    }
+
+    /// Bytes uploaded once: the tables and the quadtrees' shape.
+    pub fn table_bytes(&self) -> usize {
+        self.table_bytes
+    }
+
+    /// The bind groups of both kernels, writing into `model`.
+    pub(crate) fn bind(
+        &self,
+        device: &wgpu::Device,
+        kernels: &CcStencilKernels,
+        model: &CcModelBuffers,
+    ) -> [wgpu::BindGroup; 2] {
+        let mut entries: Vec<(u32, &wgpu::Buffer)> = TABLE_SLOTS
+            .iter()
+            .zip(&self.tables)
+            .map(|(&slot, buffer)| (slot, buffer))
+            .collect();
+        entries.extend([
+            (70, &self.control),
+            (73, &self.level1_points),
+            (81, &model.corners),
+            (82, &self.step),
+        ]);
+        let nets = [(80, &model.nets_view)];
+        [
+            kernels.level1.bind(device, &entries),
+            kernels.pieces.bind_with_textures(device, &entries, &nets),
+        ]
+    }
+
+    /// Records the step into `pass`; returns the dispatches recorded (two).
+    pub(crate) fn record(
+        &self,
+        pass: &mut wgpu::ComputePass,
+        kernels: &CcStencilKernels,
+        binds: &[wgpu::BindGroup; 2],
+    ) -> u32 {
+        kernels
+            .level1
+            .dispatch(pass, &binds[0], self.level1_count.max(1), 64)
+            + kernels
+                .pieces
+                .dispatch(pass, &binds[1], self.record_count.max(1), 64)
+    }
+
+    /// The step alone on its own submission, writing into `model` (made by
+    /// [`CcModelBuffers::derived`] from the same tables): for the tests that compare the
+    /// kernels with their twins.
+    pub fn run(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        kernels: &crate::Kernels,
+        model: &CcModelBuffers,
+    ) -> u32 {
+        let cc = kernels.cc();
+        let binds = self.bind(device, cc.stencil(), model);
+        let mut encoder = device.create_command_encoder(&Default::default());
+        let dispatches = {
+            let mut pass = encoder.begin_compute_pass(&Default::default());
+            self.record(&mut pass, cc.stencil(), &binds)
+        };
+        self.settle(&mut encoder);
+        queue.submit([encoder.finish()]);
+        dispatches
+    }
+
+    /// After the step, in the same encoder: the next run skips it unless the points move.
+    pub(crate) fn settle(&self, encoder: &mut wgpu::CommandEncoder) {
+        encoder.clear_buffer(&self.step, 0, Some(4));
+    }
+}
