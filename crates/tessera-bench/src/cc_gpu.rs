@@ -89,7 +89,27 @@ struct Overhead {
     first_split: FirstSplit,
     patches: usize,
     triangles: usize,
-    gpu_ms: f64,
+    /// GPU time by timestamp queries, median of 9 runs (`None` without timestamps).
+    timestamp_ms: Option<f64>,
+    /// Wall time of a run (record, submit, wait), median of 9.
+    wall_ms: f64,
+}
+
+/// Median GPU time of 9 runs of `stage` by timestamp queries, where the device has them.
+fn timestamp_median_ms(gpu: &Gpu, stage: &mut CcStage) -> Option<f64> {
+    let mut timer = tessera_wgpu::GpuTimer::new(&gpu.device, &gpu.queue)?;
+    let runs = (0..9)
+        .map(|_| {
+            let mut encoder = gpu.device.create_command_encoder(&Default::default());
+            stage
+                .prepare_timed(&gpu.device, &gpu.queue, &mut encoder, timer.timestamps())
+                .expect("prepare");
+            timer.resolve(&gpu.device, &mut encoder);
+            gpu.queue.submit([encoder.finish()]);
+            timer.read_ms(&gpu.device).expect("timestamps")
+        })
+        .collect();
+    Some(median(runs))
 }
 
 /// A frame of animation: moved control points written with `update_points` and the run
@@ -113,12 +133,44 @@ struct Animation {
     frame_over_anew: f64,
 }
 
+/// Ten copies of the car as one control mesh against the car alone, at 3e-3: how the GPU
+/// time grows with the patches (the target: at most 11× the time).
+#[derive(Serialize)]
+struct Copies {
+    first_split: FirstSplit,
+    copies: usize,
+    patches: usize,
+    triangles: usize,
+    one_ms: f64,
+    copies_ms: f64,
+    patches_ratio: f64,
+    time_ratio: f64,
+}
+
+/// `control` repeated `n` times in a row along x, one control mesh (smooth).
+fn copies_of(control: &tessera_core::catmull_clark::ControlMesh, n: usize) -> tessera_core::catmull_clark::ControlMesh {
+    let step = 1.1 * control.bbox_diag();
+    let count = control.positions.len() as u32;
+    let mut out = tessera_core::catmull_clark::ControlMesh::new(Vec::new(), Vec::new());
+    out.boundary = control.boundary;
+    for k in 0..n {
+        let shift = glam::DVec3::new(step * k as f64, 0.0, 0.0);
+        out.positions.extend(control.positions.iter().map(|p| *p + shift));
+        let base = k as u32 * count;
+        out.faces.extend(control.faces.iter().map(|f| f.iter().map(|v| v + base).collect()));
+        out.face_lines.extend(&control.face_lines);
+        out.holes.extend(&control.holes);
+    }
+    out
+}
+
 #[derive(Serialize)]
 struct Results<'a> {
     rows: &'a [Row],
     scaling: &'a [Scaling],
     overhead: &'a [Overhead],
     animation: &'a [Animation],
+    copies: &'a [Copies],
 }
 
 /// The control points of `model` moved for frame `k`: each by a wave of 1% of `diag`.
@@ -340,18 +392,22 @@ pub fn run(assets: &Path, out_dir: &Path, quick: bool, model_filter: Option<&str
                 first_split,
                 leaf_bound: Default::default(),
             };
-            let (_, status, gpu_ms) = timed_stage(&gpu, &kernels, &cube, &params, repeats.max(5));
+            let (mut stage, status, wall_ms) = timed_stage(&gpu, &kernels, &cube, &params, 9);
+            let timestamp_ms = timestamp_median_ms(&gpu, &mut stage);
+            gpu.check().expect("no wgpu errors");
             Overhead {
                 first_split,
                 patches: cube.mesh.surface_patches().count(),
                 triangles: status.indices as usize / 3,
-                gpu_ms,
+                timestamp_ms,
+                wall_ms,
             }
         })
         .collect();
     let mut rows = Vec::new();
     let mut scaling = Vec::new();
     let mut animated = Vec::new();
+    let mut copies = Vec::new();
     for file in models
         .iter()
         .filter(|f| model_filter.is_none_or(|m| f.contains(m)))
@@ -369,6 +425,37 @@ pub fn run(assets: &Path, out_dir: &Path, quick: bool, model_filter: Option<&str
             .into();
         if ["catmark_car", "spot_control_mesh"].contains(&name.as_str()) {
             animated.push(animation(&gpu, &kernels, &name, &model, repeats.max(5)));
+        }
+        if name == "catmark_car" && !quick {
+            let ten = copies_of(&control, 10);
+            let many = SurfaceModel::new(PatchMesh::new(&ten).expect("valid"), TREE_DEPTH);
+            for first_split in [FirstSplit::Search, FirstSplit::Midpoint] {
+                // ε in model units, the same for both: the copies' box is larger.
+                let params = CcParams {
+                    tolerance: Tolerance::Absolute(3e-3 * diag),
+                    max_depth: MAX_DEPTH,
+                    first_split,
+                    leaf_bound: Default::default(),
+                };
+                let (_, _, one_ms) = timed_stage(&gpu, &kernels, &model, &params, repeats);
+                let (_, status, copies_ms) = timed_stage(&gpu, &kernels, &many, &params, repeats);
+                let row = Copies {
+                    first_split,
+                    copies: 10,
+                    patches: many.mesh.surface_patches().count(),
+                    triangles: status.indices as usize / 3,
+                    one_ms,
+                    copies_ms,
+                    patches_ratio: many.mesh.surface_patches().count() as f64
+                        / model.mesh.surface_patches().count() as f64,
+                    time_ratio: copies_ms / one_ms,
+                };
+                eprintln!(
+                    "cc gpu ten cars {first_split:?}: {} patches, {one_ms:.1} → {copies_ms:.1} ms",
+                    row.patches
+                );
+                copies.push(row);
+            }
         }
         for (first_split, rel) in [FirstSplit::Search, FirstSplit::Midpoint]
             .into_iter()
@@ -508,8 +595,9 @@ pub fn run(assets: &Path, out_dir: &Path, quick: bool, model_filter: Option<&str
         scaling: &scaling,
         overhead: &overhead,
         animation: &animated,
+        copies: &copies,
     };
-    let text = table(&rows, &scaling, &overhead, &animated);
+    let text = table(&rows, &scaling, &overhead, &animated) + &copies_table(&copies);
     crate::write_results(out_dir, name, &results, text);
 }
 
@@ -573,14 +661,18 @@ fn table(
             );
         }
     }
-    s += "\nThe script's fixed cost (the cube with ε the whole diagonal: one leaf per patch; median of 5 runs):\n\n| first split | patches | triangles | GPU ms |\n|---|---|---|---|\n";
+    s += "\nThe script's fixed cost (the cube with ε the whole diagonal: one leaf per patch; medians of 9 runs; the target: at most 2 ms of GPU time):\n\n| first split | patches | triangles | **GPU ms (timestamps)** | wall ms |\n|---|---|---|---|---|\n";
     for o in overhead {
+        let stamps = o
+            .timestamp_ms
+            .map_or("no timestamps".to_string(), |ms| format!("{ms:.2}"));
         s += &format!(
-            "| {} | {} | {} | {:.1} |\n",
+            "| {} | {} | {} | **{}** | {:.2} |\n",
             o.first_split.name(),
             o.patches,
             o.triangles,
-            o.gpu_ms
+            stamps,
+            o.wall_ms
         );
     }
     s += "\nScaling with the output (GPU), from 3e-3 to the first tolerance with 10× the triangles (the target: time per triangle ratio at most 1.1):\n\n| model | first split | triangles (3e-3 → fine) | fine ε | GPU ms | triangles ratio | GPU time ratio | **time per triangle ratio** | leaves unmet at the depth limit |\n|---|---|---|---|---|---|---|---|---|\n";
@@ -616,6 +708,26 @@ fn table(
                 a.frame_over_anew
             );
         }
+    }
+    s
+}
+
+fn copies_table(copies: &[Copies]) -> String {
+    if copies.is_empty() {
+        return String::new();
+    }
+    let mut s = String::from("\nScaling with the patches (GPU): ten copies of the car as one control mesh, ε 3e-3 of one car's diagonal (the target: at most 11× the time):\n\n| first split | patches | triangles | one car ms | ten cars ms | patches ratio | **time ratio** |\n|---|---|---|---|---|---|---|\n");
+    for c in copies {
+        s += &format!(
+            "| {} | {} | {} | {:.1} | {:.1} | {:.1}× | **{:.1}×** |\n",
+            c.first_split.name(),
+            c.patches,
+            c.triangles,
+            c.one_ms,
+            c.copies_ms,
+            c.patches_ratio,
+            c.time_ratio
+        );
     }
     s
 }
