@@ -148,16 +148,25 @@ struct Copies {
 }
 
 /// `control` repeated `n` times in a row along x, one control mesh (smooth).
-fn copies_of(control: &tessera_core::catmull_clark::ControlMesh, n: usize) -> tessera_core::catmull_clark::ControlMesh {
+fn copies_of(
+    control: &tessera_core::catmull_clark::ControlMesh,
+    n: usize,
+) -> tessera_core::catmull_clark::ControlMesh {
     let step = 1.1 * control.bbox_diag();
     let count = control.positions.len() as u32;
     let mut out = tessera_core::catmull_clark::ControlMesh::new(Vec::new(), Vec::new());
     out.boundary = control.boundary;
     for k in 0..n {
         let shift = glam::DVec3::new(step * k as f64, 0.0, 0.0);
-        out.positions.extend(control.positions.iter().map(|p| *p + shift));
+        out.positions
+            .extend(control.positions.iter().map(|p| *p + shift));
         let base = k as u32 * count;
-        out.faces.extend(control.faces.iter().map(|f| f.iter().map(|v| v + base).collect()));
+        out.faces.extend(
+            control
+                .faces
+                .iter()
+                .map(|f| f.iter().map(|v| v + base).collect()),
+        );
         out.face_lines.extend(&control.face_lines);
         out.holes.extend(&control.holes);
     }

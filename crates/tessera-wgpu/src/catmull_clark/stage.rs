@@ -83,7 +83,7 @@ use wgpu::util::DeviceExt;
 use super::stencil::{CcStencilBuffers, CcStencilKernels};
 use super::{CcHashBinds, CcHashKernels, CcModelBuffers, CcVertexEval, CcVertexHash};
 use crate::error::{Error, Result};
-use crate::kernel::{check_size, storage, Kernel};
+use crate::kernel::{check_size, storage, storage_limit, Kernel};
 use crate::output::MeshBuffers;
 use crate::scan::{PrefixSum, ScanKernels};
 use crate::stage::{GrowingStage, Passes, RunTimestamps, StatusReadback};
@@ -184,6 +184,40 @@ impl CcCapacities {
             vertices: 48 * p,
             indices: 3 * 96 * p,
             hash_slots: 2 * 64 * p,
+        }
+    }
+
+    /// The same proportions, shrunk until every buffer they size holds at most `limit`
+    /// bytes: a first guess for a large model must not refuse what a smaller start
+    /// would grow to.
+    fn within(self, limit: u64) -> Self {
+        // Bytes per unit: a leaf's eight hash items (the largest per-leaf buffer), a
+        // polygon vertex, an index, a vertex, a hash slot.
+        let item = 8 * std::mem::size_of::<CcVertexPoint>() as u64;
+        let vertex = std::mem::size_of::<OutVertex>() as u64;
+        let need = [
+            self.leaves as u64 * item,
+            self.poly as u64 * 16,
+            self.indices as u64 * 4,
+            self.vertices as u64 * vertex,
+            self.hash_slots.next_power_of_two() as u64 * 12,
+        ];
+        let most = need.into_iter().max().unwrap_or(0);
+        if most <= limit {
+            return self;
+        }
+        let f = 0.9 * limit as f64 / most as f64;
+        let scale = |n: u32| ((n as f64 * f) as u32).max(1);
+        let mut hash_slots = scale(self.hash_slots).next_power_of_two();
+        if hash_slots as u64 * 12 > limit {
+            hash_slots /= 2;
+        }
+        CcCapacities {
+            leaves: scale(self.leaves),
+            poly: scale(self.poly),
+            vertices: scale(self.vertices),
+            indices: scale(self.indices),
+            hash_slots,
         }
     }
 }
@@ -332,7 +366,8 @@ impl CcStage {
         model: &SurfaceModel,
         params: &CcParams,
     ) -> Result<Self> {
-        let caps = CcCapacities::guess(model.mesh.patch_count() as u32);
+        let caps =
+            CcCapacities::guess(model.mesh.patch_count() as u32).within(storage_limit(device));
         Self::with_capacity(device, queue, kernels, model, params, caps)
     }
 
@@ -1096,5 +1131,29 @@ impl Binds {
             ),
             stencil: f.stencil.bind(device, &k.stencil, model),
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_first_guess_for_many_patches_fits_the_device() {
+        // Ten cars' patches: the plain guess asks for more than a 128 MiB binding, the
+        // guess within it fits every buffer and keeps the small model's guess as it is.
+        let limit = 128 << 20;
+        let big = CcCapacities::guess(63_000);
+        let item = 8 * std::mem::size_of::<CcVertexPoint>() as u64;
+        assert!(big.leaves as u64 * item > limit);
+        let fitted = big.within(limit);
+        assert!(fitted.leaves as u64 * item <= limit);
+        assert!(fitted.poly as u64 * 16 <= limit && fitted.indices as u64 * 4 <= limit);
+        let vertex = std::mem::size_of::<OutVertex>() as u64;
+        assert!(fitted.vertices as u64 * vertex <= limit);
+        assert!(fitted.hash_slots.is_power_of_two() && fitted.hash_slots as u64 * 12 <= limit);
+        assert!(fitted.leaves > 0 && fitted.leaves < big.leaves);
+        let small = CcCapacities::guess(600);
+        assert_eq!(small.within(limit), small);
     }
 }
