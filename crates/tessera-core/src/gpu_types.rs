@@ -195,7 +195,7 @@ impl MapAtlas {
 
 /// Patches per row of the control-net texture (a power of two, like
 /// [`MAP_ATLAS_TILES_PER_ROW`]).
-pub const NET_TEXTURE_PATCHES_PER_ROW: u32 = 256;
+pub const NET_TEXTURE_PATCHES_PER_ROW: u32 = 512;
 
 /// The control points as the GPU kernels read them: an `rgba32float` texture, one row of
 /// [`NET_TEXTURE_PATCHES_PER_ROW`] patches per texel row, each patch 12 texels holding

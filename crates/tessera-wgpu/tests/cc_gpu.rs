@@ -154,7 +154,7 @@ fn nets_past_the_texture_limit_are_an_error() {
         ..tessera_wgpu::bezier::required_limits(adapter)
     })
     .expect("device");
-    // The cube's 2160 nets (its quadtrees' pieces) take rows of 256 nets, 3072 texels.
+    // The cube's 2160 nets (its quadtrees' pieces) take rows of 512 nets, 6144 texels.
     let flat = CcGpuModel::new(&model("opensubdiv/catmark_cube.obj"));
     assert_eq!(flat.nets.len(), 2160);
     let err = CcModelBuffers::new(&gpu.device, &gpu.queue, &flat)
@@ -164,8 +164,8 @@ fn nets_past_the_texture_limit_are_an_error() {
         matches!(
             err,
             tessera_wgpu::Error::TextureTooLarge {
-                width: 3072,
-                height: 9,
+                width: 6144,
+                height: 5,
                 limit: 256,
                 ..
             }

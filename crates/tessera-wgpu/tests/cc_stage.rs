@@ -130,6 +130,26 @@ fn run(
 }
 
 #[test]
+fn spots_triangulation_tessellates_on_the_gpu_as_on_the_cpu() {
+    // Spot's published triangle mesh (5 856 faces): 17 568 patches, every one with two
+    // extraordinary corners, whose quadtrees the stencil step derives (three million
+    // nets) and the stage tessellates; the CPU reference's mesh, with midpoint splits.
+    let gpu = gpu();
+    let model = model("catmull_clark/spot_triangulated.obj");
+    assert_eq!(model.mesh.control_faces.len(), 5856);
+    let params = CcParams {
+        tolerance: Tolerance::Absolute(3e-3 * size(&model)),
+        max_depth: 6,
+        first_split: FirstSplit::Midpoint,
+        leaf_bound: Default::default(),
+    };
+    let (mesh, status) = run(&gpu, &model, &params, None);
+    assert_eq!(status.state.unmet, 0);
+    let cpu = tessellate_adaptive(&model, &params).expect("cpu");
+    same_mesh(&mesh, &cpu.mesh, size(&model)).expect("the CPU reference's mesh");
+}
+
+#[test]
 fn gpu_adaptive_matches_the_cpu_reference() {
     // Same leaves, triangles and vertices as the double-precision reference; the
     // comparison itself must catch a different mesh (the reference at 0.8× the
