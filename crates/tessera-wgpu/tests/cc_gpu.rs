@@ -401,10 +401,10 @@ fn the_stencil_kernels_derive_their_twins_quadtrees_from_the_control_points() {
     ] {
         let m = model(name);
         let stencils = CcStencils::new(&m.mesh, m.depth);
-        let loaded: Vec<Vec3> = m.mesh.control_points.iter().map(|p| p.as_vec3()).collect();
+        let loaded = m.mesh.control_points_f32();
         let buffers =
             CcModelBuffers::derived(&gpu.device, &gpu.queue, &stencils.structure).expect("fits");
-        let mut control: Vec<Vec3> = m.mesh.control_points.iter().map(|p| p.as_vec3()).collect();
+        let mut control = m.mesh.control_points_f32();
         let steps = CcStencilBuffers::new(&gpu.device, &stencils, &control).expect("fits");
         assert_eq!(steps.run(&gpu.device, &gpu.queue, &kernels, &buffers), 2);
         for (i, p) in control.iter_mut().enumerate() {

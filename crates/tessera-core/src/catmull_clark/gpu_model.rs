@@ -48,12 +48,7 @@ impl CcGpuModel {
     /// points ([`CcStencils`]: its tables, applied by the kernels' CPU twins); holes get
     /// [`CC_NO_ROOT`](crate::gpu_types::CC_NO_ROOT) and no nodes.
     pub fn new(model: &SurfaceModel) -> Self {
-        let control: Vec<Vec3> = model
-            .mesh
-            .control_points
-            .iter()
-            .map(|p| p.as_vec3())
-            .collect();
+        let control = model.mesh.control_points_f32();
         CcStencils::new(&model.mesh, model.depth).model(&control)
     }
 

@@ -813,7 +813,7 @@ mod tests {
         let m = model("opensubdiv/catmark_pyramid.obj");
         let mut stencils = CcStencils::new(&m.mesh, m.depth);
         stencils.weights[5] += 0.05;
-        let control: Vec<Vec3> = m.mesh.control_points.iter().map(|p| p.as_vec3()).collect();
+        let control = m.mesh.control_points_f32();
         let e = errors(
             &stencils.model(&control),
             &flatten(&m),

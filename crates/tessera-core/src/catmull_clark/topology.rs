@@ -75,6 +75,11 @@ pub struct PatchMesh {
 }
 
 impl PatchMesh {
+    /// The control points in single precision, as a GPU stage takes them.
+    pub fn control_points_f32(&self) -> Vec<glam::Vec3> {
+        self.control_points.iter().map(|p| p.as_vec3()).collect()
+    }
+
     /// Diagonal of the level-1 points' bounding box: the surface's size (the limit
     /// surface lies in their hull).
     pub fn bbox_diag(&self) -> f64 {

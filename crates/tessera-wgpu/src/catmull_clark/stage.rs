@@ -393,12 +393,7 @@ impl CcStage {
         // the control points through them.
         let stencils = CcStencils::new(&model.mesh, model.depth);
         let model_buffers = CcModelBuffers::derived(device, queue, &stencils.structure)?;
-        let control: Vec<Vec3> = model
-            .mesh
-            .control_points
-            .iter()
-            .map(|p| p.as_vec3())
-            .collect();
+        let control = model.mesh.control_points_f32();
         let stencil = CcStencilBuffers::new(device, &stencils, &control)?;
         let topo = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("tessera cc topology"),
