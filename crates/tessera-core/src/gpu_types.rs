@@ -592,13 +592,14 @@ mod tests {
 
     #[test]
     fn the_net_texture_holds_each_patch_in_twelve_texels() {
-        let patches: Vec<GpuPatch> = (0..300)
+        let row = NET_TEXTURE_PATCHES_PER_ROW;
+        let patches: Vec<GpuPatch> = (0..row + 44)
             .map(|p| GpuPatch {
-                cp: std::array::from_fn(|k| (p * 48 + k) as f32),
+                cp: std::array::from_fn(|k| (p as usize * 48 + k) as f32),
             })
             .collect();
         let nets = NetTexture::new(&patches);
-        assert_eq!((nets.width, nets.height), (256 * 12, 2));
+        assert_eq!((nets.width, nets.height), (row * 12, 2));
         assert_eq!(NetTexture::size(1), (12, 1));
         for (p, patch) in patches.iter().enumerate() {
             for k in 0..48 {
@@ -607,11 +608,11 @@ mod tests {
                 assert_eq!(texel[k % 4], patch.cp[k], "patch {p}, word {k}");
             }
         }
-        assert_eq!(NetTexture::texel_of(256, 0), (0, 1));
+        assert_eq!(NetTexture::texel_of(row, 0), (0, 1));
         // As many bytes as the nets themselves.
         assert_eq!(
-            NetTexture::bytes(256) as usize,
-            256 * std::mem::size_of::<GpuPatch>()
+            NetTexture::bytes(row as usize) as usize,
+            row as usize * std::mem::size_of::<GpuPatch>()
         );
     }
 
