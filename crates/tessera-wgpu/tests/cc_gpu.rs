@@ -331,13 +331,6 @@ fn read_model(
         usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
         mapped_at_creation: false,
     });
-    let corner_bytes = (corners.max(1) * std::mem::size_of::<CcCorner>()) as u64;
-    let corner_copy = device.create_buffer(&wgpu::BufferDescriptor {
-        label: None,
-        size: corner_bytes,
-        usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
-        mapped_at_creation: false,
-    });
     let mut encoder = device.create_command_encoder(&Default::default());
     encoder.copy_texture_to_buffer(
         buffers.nets.as_image_copy(),
@@ -351,24 +344,9 @@ fn read_model(
         },
         size,
     );
-    encoder.copy_buffer_to_buffer(&buffers.corners, 0, &corner_copy, 0, corner_bytes);
     gpu.queue.submit([encoder.finish()]);
-    let read = |buffer: &wgpu::Buffer| {
-        buffer
-            .slice(..)
-            .map_async(wgpu::MapMode::Read, |r| r.expect("map"));
-        device
-            .poll(wgpu::PollType::wait_indefinitely())
-            .expect("poll");
-        let bytes = buffer
-            .slice(..)
-            .get_mapped_range()
-            .expect("mapped")
-            .to_vec();
-        buffer.unmap();
-        bytes
-    };
-    let texels: Vec<[f32; 4]> = bytemuck::cast_slice(&read(&texels)).to_vec();
+    let texels: Vec<[f32; 4]> =
+        bytemuck::pod_collect_to_vec(&gpu.map_and_copy(&texels).expect("texels"));
     let out_nets = (0..nets as u32)
         .map(|k| {
             let mut cp = [0f32; 48];
@@ -380,8 +358,9 @@ fn read_model(
             GpuPatch { cp }
         })
         .collect();
-    let corner_bytes = read(&corner_copy);
-    let out_corners = bytemuck::cast_slice::<u8, CcCorner>(&corner_bytes)[..corners].to_vec();
+    let out_corners = gpu
+        .read_pod::<CcCorner>(&buffers.corners, corners)
+        .expect("corners");
     (out_nets, out_corners)
 }
 

@@ -156,10 +156,12 @@ impl PatchMesh {
         })
     }
 
-    /// The same topology with the control points moved to `positions` (one per control
-    /// vertex, in the input's order): only the first-level points are computed again.
-    /// [`control_diag`](Self::control_diag) stays as loaded.
-    pub fn with_control_points(&self, positions: &[DVec3]) -> Result<PatchMesh> {
+    /// Whether `positions` can replace the control points: one per control vertex, each
+    /// coordinate finite and within the loaders' range.
+    pub fn check_control_points(
+        &self,
+        positions: impl ExactSizeIterator<Item = DVec3>,
+    ) -> Result<()> {
         if positions.len() != self.control_vertices {
             return Err(Error::Param(format!(
                 "{} control points given, the mesh has {}",
@@ -167,16 +169,22 @@ impl PatchMesh {
                 self.control_vertices
             )));
         }
-        if let Some(i) = positions
-            .iter()
-            .position(|p| !p.is_finite() || p.abs().max_element() > crate::io::MAX_COORDINATE)
-        {
-            return Err(Error::Param(format!(
-                "control point {i} is {}: coordinates must be finite and within ±{:e}",
-                positions[i],
-                crate::io::MAX_COORDINATE
-            )));
+        for (i, p) in positions.enumerate() {
+            if !p.is_finite() || p.abs().max_element() > crate::io::MAX_COORDINATE {
+                return Err(Error::Param(format!(
+                    "control point {i} is {p}: coordinates must be finite and within ±{:e}",
+                    crate::io::MAX_COORDINATE
+                )));
+            }
         }
+        Ok(())
+    }
+
+    /// The same topology with the control points moved to `positions` (one per control
+    /// vertex, in the input's order): only the first-level points are computed again.
+    /// [`control_diag`](Self::control_diag) stays as loaded.
+    pub fn with_control_points(&self, positions: &[DVec3]) -> Result<PatchMesh> {
+        self.check_control_points(positions.iter().copied())?;
         let (level1, _) = refine_sharp(
             positions,
             &self.control_faces,

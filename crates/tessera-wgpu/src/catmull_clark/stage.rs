@@ -493,6 +493,8 @@ impl CcStage {
     /// makes the next [`prepare`](Self::prepare) derive the patches from them on the GPU
     /// (see [`update_bytes`](Self::update_bytes)). The CPU only checks them.
     pub fn update_points(&mut self, queue: &wgpu::Queue, points: &[Vec3]) -> Result<()> {
+        self.patches
+            .check_control_points(points.iter().map(|p| p.as_dvec3()))?;
         self.stencil.update(queue, points)
     }
 

@@ -101,23 +101,15 @@ impl CcStencilBuffers {
         })
     }
 
-    /// New positions of the control points (same count): written through `queue`, with
-    /// the word that makes the next run derive the quadtrees again. Nothing else moves.
+    /// New positions of the control points (same count; the stage checks them first):
+    /// written through `queue`, with the word that makes the next run derive the
+    /// quadtrees again. Nothing else moves.
     pub fn update(&self, queue: &wgpu::Queue, control: &[Vec3]) -> Result<()> {
         if control.len() != self.control_count {
             return Err(Error::Core(tessera_core::Error::Param(format!(
                 "{} control points given, the mesh has {}",
                 control.len(),
                 self.control_count
-            ))));
-        }
-        if let Some(i) = control.iter().position(|p| {
-            !p.is_finite() || p.abs().max_element() as f64 > tessera_core::io::MAX_COORDINATE
-        }) {
-            return Err(Error::Core(tessera_core::Error::Param(format!(
-                "control point {i} is {}: coordinates must be finite and within ±{:e}",
-                control[i],
-                tessera_core::io::MAX_COORDINATE
             ))));
         }
         queue.write_buffer(&self.control, 0, bytemuck::cast_slice(control));
