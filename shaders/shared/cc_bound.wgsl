@@ -24,6 +24,7 @@ var<private> bs_dev_side: f32;
 var<private> bs_has_vertex: bool;
 // Whether the box may reach a vertex, so that bs_dev is needed.
 var<private> bs_track_dev: bool;
+var<private> bs_dev_everywhere: bool;
 var<private> bs_slab: bool;
 var<private> bs_normal: vec3f;
 var<private> bs_e1: vec3f;
@@ -304,10 +305,13 @@ fn bound_vertex(limit: vec3f, radius: f32, rect: vec4f, sides: u32) {
 
 fn bound_finish() -> f32 {
     let c = bs_corners;
+    let twist = c[0] - c[1] + c[2] - c[3];
+    let deviation = bs_dev + bs_dev_side + 0.25 * length(twist);
     var bound = 0.25 * cc_hessian_bound(bs_second);
     if bs_has_vertex {
-        let twist = c[0] - c[1] + c[2] - c[3];
-        bound = bs_dev + bs_dev_side + 0.25 * length(twist);
+        bound = deviation;
+    } else if bs_dev_everywhere && bs_track_dev {
+        bound = min(deviation, bound);
     }
     if bs_slab {
         var width = 0.0;
@@ -559,6 +563,7 @@ fn cc_box_bound(p: u32, bx: vec4u, c: array<vec3f, 4>) -> f32 {
     // Patches alike share nodes: a node's net or corner counts from the patch's first.
     let root = cc_roots[p];
     bs_track_dev = (cc_nodes[root.node].kind & CC_NODE_KIND_MASK) != CC_NODE_BEZIER;
+    bs_dev_everywhere = (root.flags & CC_ROOT_CREASED) != 0u;
     var e = CcWalkEntry(root.node, 0u, 0u, 0u, CC_WALK_ONE, false, vec4f(0.0), 0u);
     // Bounded: every node is visited once, and trees are finite; the cap guards a
     // corrupt upload.

@@ -159,6 +159,7 @@ const CC_NODE_CORNER: u32 = 2u;
 const CC_NODE_KIND_MASK: u32 = 0xffu;
 const CC_NODE_BALL_SHIFT: u32 = 8u;
 const CC_NO_ROOT: u32 = 0xffffffffu;
+const CC_ROOT_CREASED: u32 = 1u;
 const CC_PARAM_ONE: u32 = 0x80000000u;
 
 struct CcNode {
@@ -177,7 +178,7 @@ struct CcRoot {
     node: u32,
     nets: u32,
     corners: u32,
-    pad: u32,
+    flags: u32,
 }
 
 struct CcWeight {

@@ -139,8 +139,7 @@ pub struct TessellateArgs {
     #[arg(long, conflicts_with = "threshold")]
     pub target_triangles: Option<usize>,
     /// Where the tessellation runs. Default: gpu when an adapter exists, else cpu, for
-    /// Bézier surfaces; cpu for Catmull-Clark meshes (the GPU stages take smooth ones
-    /// only: a mesh with creases or corners needs cpu, or --no-creases).
+    /// Bézier surfaces; cpu (the reference) for Catmull-Clark meshes, creased or not.
     #[arg(long, value_enum)]
     pub backend: Option<Backend>,
     /// Output mesh (.obj, .ply or .glb). Every vertex carries `face` and `u v`: for a
@@ -205,8 +204,7 @@ pub struct RenderArgs {
     /// `tessellate`).
     #[arg(long)]
     pub no_creases: bool,
-    /// Where a Catmull-Clark mesh is tessellated before it is drawn. Default: gpu, or cpu
-    /// for a mesh with creases or corners (the GPU stages take smooth ones only). Bézier
+    /// Where a Catmull-Clark mesh is tessellated before it is drawn. Default: gpu. Bézier
     /// surfaces are tessellated on the GPU.
     #[arg(long, value_enum)]
     pub backend: Option<Backend>,

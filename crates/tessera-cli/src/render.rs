@@ -1,5 +1,5 @@
-//! `tessera render`: tessellate on the GPU (Bézier or Catmull-Clark; a creased
-//! Catmull-Clark mesh with the CPU reference) and draw the result headless into a PNG.
+//! `tessera render`: tessellate on the GPU (Bézier or Catmull-Clark, or a Catmull-Clark
+//! mesh with the CPU reference) and draw the result headless into a PNG.
 
 use std::time::Instant;
 
@@ -114,10 +114,7 @@ pub fn render(args: RenderArgs) -> Result<(), Error> {
         for w in &control.warnings {
             eprintln!("warning: {w}");
         }
-        let on_cpu = match args.backend {
-            Some(b) => b == Backend::Cpu,
-            None => control.has_creases(),
-        };
+        let on_cpu = args.backend == Some(Backend::Cpu);
         let mesh = tessera_core::catmull_clark::patch_mesh(&mut control, args.split_non_manifold)?;
         let model = SurfaceModel::new(mesh, TREE_DEPTH);
         let (lo, hi) = control.positions.iter().fold(

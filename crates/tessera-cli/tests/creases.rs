@@ -1,5 +1,5 @@
-//! The tools on creased meshes: tessellated with their creases on the CPU, smooth with
-//! `--no-creases`, refused by the GPU backend with one line that names both ways out.
+//! The tools on creased meshes: tessellated with their creases on either backend, the
+//! same mesh on both, smooth with `--no-creases`.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -75,92 +75,56 @@ fn creases_are_tessellated_and_no_creases_smooths_them_with_a_warning() {
 }
 
 #[test]
-fn the_gpu_backend_refuses_a_creased_mesh_in_one_line_and_writes_nothing() {
-    let car = asset("opensubdiv/catmark_cube_creases1.obj");
-    let ply = tmp("refused.ply");
-    let out = tessera()
-        .args([
+fn the_gpu_backend_tessellates_a_creased_mesh_as_the_cpu_does() {
+    let cube = asset("opensubdiv/catmark_cube_creases1.obj");
+    let cube = cube.to_str().unwrap();
+    let on = |backend: &str, extra: &[&str]| {
+        let mut args = vec![
             "tessellate",
-            car.to_str().unwrap(),
+            cube,
             "--backend",
-            "gpu",
-            "-o",
-        ])
-        .arg(&ply)
-        .output()
-        .unwrap();
-    assert!(!out.status.success());
-    let stderr = String::from_utf8_lossy(&out.stderr);
-    let lines: Vec<&str> = stderr
-        .lines()
-        .filter(|l| !l.starts_with("warning:"))
-        .collect();
-    assert_eq!(lines.len(), 1, "{stderr}");
-    assert!(
-        lines[0].contains("--backend cpu") && lines[0].contains("--no-creases"),
-        "{stderr}"
-    );
-    assert!(!ply.exists());
-    // Smooth, the GPU takes it (where an adapter exists; lavapipe in the tests).
-    let out = tessera()
-        .args([
-            "tessellate",
-            car.to_str().unwrap(),
-            "--backend",
-            "gpu",
-            "--no-creases",
-            "-o",
-        ])
-        .arg(&ply)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    assert!(ply.exists());
+            backend,
+            "--tolerance-rel",
+            "1e-3",
+        ];
+        args.extend_from_slice(extra);
+        stats_of(&args, &tmp(&format!("{backend}{}.json", extra.len())))
+    };
+    let (gpu, cpu) = (on("gpu", &[]), on("cpu", &[]));
+    assert_eq!(gpu["backend"], "gpu", "{gpu}");
+    assert_eq!(gpu["triangles"], cpu["triangles"], "{gpu} {cpu}");
+    assert_eq!(gpu["vertices"], cpu["vertices"], "{gpu} {cpu}");
+    // The creases were kept: the smooth surface spends its triangles differently.
+    let smooth = on("gpu", &["--no-creases"]);
+    assert_ne!(gpu["triangles"], smooth["triangles"], "{gpu} {smooth}");
 }
 
 #[test]
-fn render_draws_a_creased_mesh_tessellated_on_the_cpu() {
-    let png = tmp("creased.png");
-    let out = tessera()
-        .args([
-            "render",
-            asset("opensubdiv/catmark_cube_creases1.obj")
-                .to_str()
-                .unwrap(),
-            "--size",
-            "64x48",
-            "-o",
-        ])
-        .arg(&png)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let stdout = String::from_utf8_lossy(&out.stdout);
-    assert!(stdout.contains("(cpu)"), "{stdout}");
-    assert!(png.exists());
-    let refused = tmp("refused.png");
-    let out = tessera()
-        .args([
-            "render",
-            asset("opensubdiv/catmark_cube_creases1.obj")
-                .to_str()
-                .unwrap(),
-            "--backend",
-            "gpu",
-            "-o",
-        ])
-        .arg(&refused)
-        .output()
-        .unwrap();
-    assert!(!out.status.success());
-    assert!(String::from_utf8_lossy(&out.stderr).contains("--no-creases"));
-    assert!(!refused.exists());
+fn render_draws_a_creased_mesh_on_either_backend() {
+    for backend in ["gpu", "cpu"] {
+        let png = tmp(&format!("creased-{backend}.png"));
+        let out = tessera()
+            .args([
+                "render",
+                asset("opensubdiv/catmark_cube_creases1.obj")
+                    .to_str()
+                    .unwrap(),
+                "--size",
+                "64x48",
+                "--backend",
+                backend,
+                "-o",
+            ])
+            .arg(&png)
+            .output()
+            .unwrap();
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let stdout = String::from_utf8_lossy(&out.stdout);
+        assert_eq!(stdout.contains("(cpu)"), backend == "cpu", "{stdout}");
+        assert!(png.exists());
+    }
 }

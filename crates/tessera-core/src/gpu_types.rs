@@ -638,6 +638,10 @@ pub const CC_NODE_KIND_MASK: u32 = 0xff;
 pub const CC_NODE_BALL_SHIFT: u32 = 8;
 /// A patch without a surface (a hole): its root is this.
 pub const CC_NO_ROOT: u32 = u32::MAX;
+/// [`CcRoot::flags`]: the patch's one-ring has sharp edges or vertices, so its pieces
+/// need not be one smooth spline and its flatness bound also takes the deviation from
+/// the bilinear quad (`PatchSurface::creased`).
+pub const CC_ROOT_CREASED: u32 = 1;
 /// Patch parameters are fixed point: `u = x / CC_PARAM_ONE`, so that the walk down the
 /// quadtree is exact integer arithmetic, the same on the GPU and in its CPU twin.
 pub const CC_PARAM_ONE: u32 = 1 << 31;
@@ -689,8 +693,8 @@ pub struct CcRoot {
     pub nets: u32,
     /// First corner (binding 24).
     pub corners: u32,
-    /// Padding.
-    pub pad: u32,
+    /// [`CC_ROOT_CREASED`] or 0.
+    pub flags: u32,
 }
 
 /// One term of a level-1 point's stencil: weight `weight` on control point `point`.

@@ -205,16 +205,11 @@ pub struct Model {
 
 impl Model {
     /// Loads `path` as the CLI does: a control mesh by its extension (`.obj`, `.gltf`,
-    /// `.glb`), else a Newell teaset file. The error is the CLI's line. A control mesh's
-    /// creases and corners are dropped, with a warning.
+    /// `.glb`), else a Newell teaset file. The error is the CLI's line. A control mesh
+    /// keeps its creases and corners.
     pub fn load(path: &Path, split_non_manifold: bool) -> Result<Model, tessera_core::Error> {
         if is_control_mesh(path) {
             let mut control = load_control_mesh(path)?;
-            // The demo draws what the GPU stages tessellate, which is the smooth surface:
-            // creases are dropped, and the warning says so.
-            control.drop_creases(
-                "the demo's GPU stages tessellate smooth surfaces; `tessera render` draws the creases",
-            );
             let mesh = patch_mesh(&mut control, split_non_manifold)?;
             let model = SurfaceModel::new(mesh, TREE_DEPTH);
             // All control points, as `tessera render` frames them.

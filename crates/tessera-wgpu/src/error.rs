@@ -10,10 +10,6 @@ pub enum Error {
     /// The adapter refused the device (limits or features).
     #[error("requesting a device failed: {0}")]
     RequestDevice(String),
-    /// A Catmull-Clark surface with creases or corners was given to a GPU stage, whose
-    /// kernels evaluate smooth patches only.
-    #[error("the surface has sharp creases or corners, which the GPU stages do not tessellate; tessellate it with --backend cpu, or smooth with --no-creases")]
-    Creased,
     /// A stage was given [`crate::Kernels`] made for another device.
     #[error("the kernels were made for another device; make a Kernels for this one")]
     ForeignKernels,

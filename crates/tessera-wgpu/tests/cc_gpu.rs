@@ -19,7 +19,7 @@ fn gpu() -> Gpu {
     Gpu::new().expect("a wgpu adapter (CI installs Mesa's lavapipe; see `cargo xtask test`)")
 }
 
-/// The smooth surface of a shipped mesh: the GPU stages take smooth surfaces.
+/// The smooth surface of a shipped mesh (its creases and corners dropped).
 fn model(name: &str) -> SurfaceModel {
     tessera_tests::smooth_cc_model(name)
 }

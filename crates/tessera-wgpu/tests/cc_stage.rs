@@ -11,9 +11,7 @@ use tessera_core::catmull_clark::gpu_model::{leaf_items, patch_topology, point_h
 use tessera_core::catmull_clark::keys::chart_key;
 use tessera_core::catmull_clark::polygon::PolygonKernel;
 use tessera_core::catmull_clark::vertex_hash::split_key;
-use tessera_core::catmull_clark::{
-    load_surface, tessellate_adaptive, CcParams, FirstSplit, SurfaceModel,
-};
+use tessera_core::catmull_clark::{tessellate_adaptive, CcParams, FirstSplit, SurfaceModel};
 use tessera_core::gpu_types::{cc_trial_split, CC_NO_KEY, CC_TRIALS};
 use tessera_core::{Mesh, Tolerance};
 use tessera_wgpu::catmull_clark::{CcCapacities, CcStage, UniformParams};
@@ -39,7 +37,7 @@ fn kernels(gpu: &Gpu) -> Kernels {
     Kernels::new(&gpu.device)
 }
 
-/// The smooth surface of a shipped mesh: the GPU stages take smooth surfaces.
+/// The smooth surface of a shipped mesh (its creases and corners dropped).
 fn model(name: &str) -> SurfaceModel {
     tessera_tests::smooth_cc_model(name)
 }
@@ -53,6 +51,91 @@ fn size(model: &SurfaceModel) -> f64 {
 /// `(u, v)` (within 1e-6: the copies of a seam point are told apart by these), and the
 /// same triangles (with orientation) through that matching.
 fn same_mesh(a: &Mesh, b: &Mesh, model_size: f64) -> Result<(), String> {
+    let (ta, tb) = matched_triangles(a, b, model_size)?;
+    let differ = ta.iter().zip(&tb).filter(|(x, y)| x != y).count();
+    if differ > 0 {
+        return Err(format!("{differ} triangles differ"));
+    }
+    Ok(())
+}
+
+/// As [`same_mesh`], except for quads cut along the other diagonal where the choice is a
+/// tie: the diagonals' lengths in `b` are within the triangulation's margin of each
+/// other once each end may move by the vertex tolerance (`1e-5 · model_size`), the
+/// slack every vertex already has. Returns the number of such quads.
+fn same_mesh_up_to_ties(a: &Mesh, b: &Mesh, model_size: f64) -> Result<usize, String> {
+    use tessera_core::catmull_clark::triangulate::DIAGONAL_MARGIN;
+    let (ta, tb) = matched_triangles(a, b, model_size)?;
+    let only = |x: &[[u32; 3]], y: &[[u32; 3]]| -> Vec<[u32; 3]> {
+        let y: std::collections::HashSet<_> = y.iter().collect();
+        x.iter().filter(|t| !y.contains(t)).copied().collect()
+    };
+    let (oa, ob) = (only(&ta, &tb), only(&tb, &ta));
+    if oa.len() != ob.len() {
+        return Err(format!(
+            "{} triangles against {} differ",
+            oa.len(),
+            ob.len()
+        ));
+    }
+    // Pairs of triangles sharing an edge: a quad (its corners) and its diagonal.
+    let quads = |tris: &[[u32; 3]]| -> Result<HashMap<[u32; 4], [u32; 2]>, String> {
+        let mut out = HashMap::new();
+        let mut used = vec![false; tris.len()];
+        for x in 0..tris.len() {
+            if used[x] {
+                continue;
+            }
+            let y = (x + 1..tris.len())
+                .find(|&y| !used[y] && tris[y].iter().filter(|v| tris[x].contains(v)).count() == 2)
+                .ok_or(format!(
+                    "triangle {:?} differs and is not half of a quad",
+                    tris[x]
+                ))?;
+            used[x] = true;
+            used[y] = true;
+            let mut diagonal: Vec<u32> = tris[x]
+                .iter()
+                .copied()
+                .filter(|v| tris[y].contains(v))
+                .collect();
+            diagonal.sort_unstable();
+            let mut corners: Vec<u32> = tris[x].iter().chain(&tris[y]).copied().collect();
+            corners.sort_unstable();
+            corners.dedup();
+            out.insert(
+                [corners[0], corners[1], corners[2], corners[3]],
+                [diagonal[0], diagonal[1]],
+            );
+        }
+        Ok(out)
+    };
+    let (qa, qb) = (quads(&oa)?, quads(&ob)?);
+    let tol = 1e-5 * model_size;
+    let at = |v: u32| glam::Vec3::from(b.vertices[v as usize].position).as_dvec3();
+    let length = |d: [u32; 2]| at(d[0]).distance(at(d[1]));
+    for (corners, kept) in &qb {
+        let other = qa
+            .get(corners)
+            .ok_or(format!("the quad {corners:?} differs beyond its diagonal"))?;
+        let (lk, lo) = (length(*kept), length(*other));
+        if (lk - lo).abs() > 0.5 * DIAGONAL_MARGIN * lk.max(lo) + 4.0 * tol {
+            return Err(format!(
+                "the quad {corners:?} is cut along the other diagonal, {lo} against {lk}: not a tie"
+            ));
+        }
+    }
+    Ok(qb.len())
+}
+
+/// The triangles of `a` (through the vertex matching) and of `b`, each rotated to start
+/// at its least vertex, sorted.
+#[allow(clippy::type_complexity)]
+fn matched_triangles(
+    a: &Mesh,
+    b: &Mesh,
+    model_size: f64,
+) -> Result<(Vec<[u32; 3]>, Vec<[u32; 3]>), String> {
     if a.triangle_count() != b.triangle_count() || a.vertices.len() != b.vertices.len() {
         return Err(format!(
             "{} triangles {} vertices against {} and {}",
@@ -103,11 +186,7 @@ fn same_mesh(a: &Mesh, b: &Mesh, model_size: f64) -> Result<(), String> {
     };
     let ta = canon(&mut a.indices.iter().map(|&i| map[i as usize]));
     let tb = canon(&mut b.indices.iter().copied());
-    let differ = ta.iter().zip(&tb).filter(|(x, y)| x != y).count();
-    if differ > 0 {
-        return Err(format!("{differ} triangles differ"));
-    }
-    Ok(())
+    Ok((ta, tb))
 }
 
 fn run(
@@ -1026,38 +1105,104 @@ fn gpu_vertices_lie_at_their_face_coordinates_and_seam_copies_agree() {
 }
 
 #[test]
-fn a_creased_surface_is_refused_by_both_stages() {
+fn creased_surfaces_tessellate_on_the_gpu_as_on_the_cpu() {
+    // Sharp and semi-sharp creases and corners (the shipped tags, Chaikin's rule on the
+    // car, bishop and rook): the adaptive stage gives the CPU reference's mesh, with its
+    // leaves, bound and guarantee, and the uniform stage the CPU uniform's; quads on
+    // surfaces of revolution whose diagonals are equal may be cut either way (counted).
+    use tessera_core::catmull_clark::tessellate_uniform;
+    use tessera_wgpu::catmull_clark::CcUniformStage;
     let gpu = gpu();
-    let kernels = kernels(&gpu);
-    let path = format!(
-        "{}/../../assets/opensubdiv/catmark_cube_creases1.obj",
-        env!("CARGO_MANIFEST_DIR")
-    );
-    let creased = load_surface(std::path::Path::new(&path)).expect("model loads");
-    assert!(creased.mesh.has_creases());
-    let params = CcParams {
-        tolerance: Tolerance::Relative(1e-2),
-        max_depth: 6,
-        first_split: Default::default(),
-        leaf_bound: Default::default(),
+    let mut ties = 0;
+    let mut triangles = 0;
+    for (name, first_split) in [
+        ("opensubdiv/catmark_cube_creases1.obj", FirstSplit::Midpoint),
+        ("opensubdiv/catmark_cube_corner3.obj", FirstSplit::Search),
+        ("opensubdiv/catmark_car.obj", FirstSplit::Search),
+        ("opensubdiv/catmark_bishop.obj", FirstSplit::Midpoint),
+        ("opensubdiv/catmark_rook.obj", FirstSplit::Search),
+    ] {
+        let model = tessera_tests::cc_model(name);
+        assert!(model.mesh.has_creases(), "{name}");
+        let s = size(&model);
+        let params = CcParams {
+            tolerance: Tolerance::Absolute(3e-3 * s),
+            max_depth: 6,
+            first_split,
+            leaf_bound: Default::default(),
+        };
+        let cpu = tessellate_adaptive(&model, &params).expect("cpu");
+        let (mesh, status) = run(&gpu, &model, &params, None);
+        assert_eq!(status.state.leaves as usize, cpu.leaves, "{name}: leaves");
+        assert_eq!((status.state.unmet, cpu.unmet), (0, 0), "{name}: unmet");
+        assert!(status.max_bound() as f64 <= params.epsilon(&model) * (1.0 + 1e-6));
+        // Within the rounding of single-precision positions (a millionth of the size).
+        let off = (status.max_bound() as f64 - cpu.max_bound).abs();
+        assert!(off <= 1e-6 * s, "{name}: max bound off by {off:e}");
+        ties += same_mesh_up_to_ties(&mesh, &cpu.mesh, s).unwrap_or_else(|e| panic!("{name}: {e}"));
+        triangles += mesh.triangle_count();
+        // The creases are kept: the smooth surface's mesh is another.
+        let smooth = tessera_tests::smooth_cc_model(name);
+        let (smooth_mesh, _) = run(&gpu, &smooth, &params, None);
+        assert!(
+            same_mesh_up_to_ties(&mesh, &smooth_mesh, s).is_err(),
+            "{name}: creases lost"
+        );
+
+        let n = 3;
+        let mut stage = CcUniformStage::new(
+            &gpu.device,
+            &gpu.queue,
+            &kernels(&gpu),
+            &model,
+            &UniformParams { segments: n },
+        )
+        .expect("uniform stage");
+        let mut encoder = gpu.device.create_command_encoder(&Default::default());
+        stage
+            .prepare(&gpu.device, &gpu.queue, &mut encoder)
+            .expect("prepare");
+        gpu.queue.submit([encoder.finish()]);
+        let uniform = stage.read_mesh(&gpu.device, &gpu.queue).expect("read");
+        gpu.check().expect("no wgpu errors");
+        let cpu = tessellate_uniform(&model, n).expect("cpu").mesh;
+        ties += same_mesh_up_to_ties(&uniform, &cpu, s).unwrap_or_else(|e| panic!("{name}: {e}"));
+        triangles += uniform.triangle_count();
+    }
+    eprintln!("{ties} tied quads in {triangles} triangles");
+    assert!(ties * 50 < triangles, "{ties} ties");
+}
+
+#[test]
+fn the_tie_count_catches_a_quad_cut_against_its_diagonals() {
+    // A square cut along its other diagonal is a tie. With one corner moved toward the
+    // opposite one it is not, and a triangle with a vertex swapped is no quad cut
+    // either way.
+    let model = model("opensubdiv/catmark_cube.obj");
+    let s = size(&model);
+    let mut mesh = tessera_core::catmull_clark::tessellate_uniform(&model, 1)
+        .expect("cpu")
+        .mesh;
+    // The first two triangles are the quad a b c d, cut along a–c: make it a square.
+    let [a, b, c, _, d, _] = std::array::from_fn(|k| mesh.indices[k]);
+    for (v, corner) in [
+        (a, [0.0, 0.0]),
+        (b, [1.0, 0.0]),
+        (c, [1.0, 1.0]),
+        (d, [0.0, 1.0]),
+    ] {
+        mesh.vertices[v as usize].position = [0.1 * corner[0], 0.1 * corner[1], 5.0];
+    }
+    let flip = |m: &Mesh| {
+        let mut f = m.clone();
+        f.indices[..6].copy_from_slice(&[d, a, b, b, c, d]);
+        f
     };
-    let e = CcStage::new(&gpu.device, &gpu.queue, &kernels, &creased, &params).err();
-    assert!(matches!(e, Some(tessera_wgpu::Error::Creased)), "{e:?}");
-    let line = e.unwrap().to_string();
-    assert!(
-        line.contains("--backend cpu") && line.contains("--no-creases"),
-        "{line}"
-    );
-    let e = tessera_wgpu::catmull_clark::CcUniformStage::new(
-        &gpu.device,
-        &gpu.queue,
-        &kernels,
-        &creased,
-        &UniformParams { segments: 2 },
-    )
-    .err();
-    assert!(matches!(e, Some(tessera_wgpu::Error::Creased)), "{e:?}");
-    // Its smooth surface is taken.
-    let smooth = model("opensubdiv/catmark_cube_creases1.obj");
-    assert!(CcStage::new(&gpu.device, &gpu.queue, &kernels, &smooth, &params).is_ok());
+    assert_eq!(same_mesh_up_to_ties(&flip(&mesh), &mesh, s), Ok(1));
+    let mut stretched = mesh.clone();
+    stretched.vertices[a as usize].position = [0.03, 0.03, 5.0];
+    assert!(same_mesh_up_to_ties(&flip(&stretched), &stretched, s).is_err());
+    let mut moved = mesh.clone();
+    moved.indices.swap(0, 3);
+    assert!(same_mesh_up_to_ties(&moved, &mesh, s).is_err());
 }

@@ -39,7 +39,7 @@ use super::topology::PatchMesh;
 use crate::gpu_types::{
     CcCorner, CcNode, CcPatchStencil, CcPieceRecord, CcRoot, CcStencilTable, CcWeight, GpuPatch,
     CC_NODE_BALL_SHIFT, CC_NODE_BEZIER, CC_NODE_CORNER, CC_NODE_SPLIT, CC_NO_ROOT, CC_RECORD_BALL,
-    CC_RECORD_CORNER, CC_RECORD_NET,
+    CC_RECORD_CORNER, CC_RECORD_NET, CC_ROOT_CREASED,
 };
 
 /// Steps of the rescaled one-ring a corner's normal is read from, past the corner node:
@@ -121,6 +121,11 @@ impl CcStencils {
                 &mesh.sharpness,
                 p,
             );
+            let flags = if ring.sharp.is_empty() {
+                0
+            } else {
+                CC_ROOT_CREASED
+            };
             let key = table_key(&ring);
             let t = *index.entry(key).or_insert_with(|| {
                 let table = Table::new(&ring, mesh.scheme, depth);
@@ -142,7 +147,7 @@ impl CcStencils {
                 node: roots[t as usize],
                 nets,
                 corners,
-                pad: 0,
+                flags,
             });
             for (kind, _, _) in &table.records {
                 if *kind & 0xff == CC_RECORD_NET {
@@ -659,7 +664,7 @@ mod tests {
                 node: base,
                 nets,
                 corners,
-                pad: 0,
+                flags: if surface.creased { CC_ROOT_CREASED } else { 0 },
             });
             let f = |v: DVec3| v.as_vec3().to_array();
             for (id, node) in surface.nodes.iter().enumerate() {
@@ -741,7 +746,8 @@ mod tests {
 
     #[test]
     fn the_tables_reproduce_every_patchs_quadtree() {
-        // Regular, valence 3 and 5, boundaries and holes, triangles: the same shape, and
+        // Regular, valence 3 and 5, boundaries and holes, triangles, creases and corners
+        // (which flag their patches' roots): the same shape, and
         // the same nets, balls and corners to single precision.
         for name in [
             "opensubdiv/catmark_cube.obj",
@@ -751,6 +757,8 @@ mod tests {
             "opensubdiv/catmark_hole_test1.obj",
             "opensubdiv/catmark_toroidal_tet.obj",
             "catmull_clark/spot_control_mesh.obj",
+            "opensubdiv/catmark_cube_creases1.obj",
+            "opensubdiv/catmark_cube_corner3.obj",
         ] {
             let m = model(name);
             let got = CcGpuModel::new(&m);
@@ -758,7 +766,7 @@ mod tests {
             let bases = |g: &CcGpuModel| {
                 g.roots
                     .iter()
-                    .map(|r| (r.nets, r.corners))
+                    .map(|r| (r.nets, r.corners, r.flags))
                     .collect::<Vec<_>>()
             };
             assert_eq!(bases(&got), bases(&want), "{name}: bases");

@@ -382,9 +382,6 @@ impl CcStage {
         caps: CcCapacities,
     ) -> Result<Self> {
         kernels.check_device(device)?;
-        if model.mesh.has_creases() {
-            return Err(Error::Creased);
-        }
         params.validate(model)?;
         gpu_leaf_bound(params)?;
         let kernels = kernels.cc();

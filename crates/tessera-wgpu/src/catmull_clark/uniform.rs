@@ -102,9 +102,6 @@ impl CcUniformStage {
         params: &UniformParams,
     ) -> Result<Self> {
         kernels.check_device(device)?;
-        if model.mesh.has_creases() {
-            return Err(Error::Creased);
-        }
         let layout = uniform_patches(&model.mesh);
         let params = layout.params(params.segments)?;
         let kernels = kernels.cc_uniform();
