@@ -173,6 +173,29 @@ fn copies_of(
     out
 }
 
+/// A creased surface (the shipped tags) on the GPU stage against the CPU reference.
+#[derive(Serialize)]
+struct Creased {
+    model: String,
+    tolerance_rel: f64,
+    first_split: FirstSplit,
+    triangles: usize,
+    /// The GPU's guaranteed bound and the measured error against the creased surface, as
+    /// fractions of the diagonal.
+    max_bound_rel: f64,
+    max_error_rel: f64,
+    unmet: u32,
+    gpu_ms: f64,
+    cpu_ms: f64,
+    gpu_over_cpu: f64,
+    /// What the stage uploads when made, with and without the creases, and the
+    /// difference per patch whose one-ring holds a sharp edge or vertex.
+    upload_bytes: usize,
+    smooth_upload_bytes: usize,
+    creased_patches: usize,
+    extra_bytes_per_creased_patch: f64,
+}
+
 #[derive(Serialize)]
 struct Results<'a> {
     rows: &'a [Row],
@@ -180,6 +203,7 @@ struct Results<'a> {
     overhead: &'a [Overhead],
     animation: &'a [Animation],
     copies: &'a [Copies],
+    creased: &'a [Creased],
 }
 
 /// The control points of `model` moved for frame `k`: each by a wave of 1% of `diag`.
@@ -593,6 +617,68 @@ pub fn run(assets: &Path, out_dir: &Path, quick: bool, model_filter: Option<&str
             });
         }
     }
+    let mut creased = Vec::new();
+    for name in ["catmark_car", "catmark_bishop", "catmark_rook"]
+        .into_iter()
+        .filter(|f| model_filter.is_none_or(|m| f.contains(m)))
+    {
+        let control = load_control_mesh(&assets.join(format!("opensubdiv/{name}.obj")))
+            .expect("shipped mesh");
+        let model = SurfaceModel::new(PatchMesh::new(&control).expect("valid"), TREE_DEPTH);
+        let mut smooth_control = control.clone();
+        smooth_control.drop_creases("--no-creases");
+        let smooth = SurfaceModel::new(PatchMesh::new(&smooth_control).expect("valid"), TREE_DEPTH);
+        let diag = control.bbox_diag();
+        let samples = surface_samples(&model, 32);
+        let creased_patches = model.patches.iter().filter(|s| s.creased).count();
+        let tolerances: &[f64] = if quick { &[3e-3] } else { &[3e-3, 5e-4] };
+        for &rel in tolerances {
+            let params = CcParams {
+                tolerance: Tolerance::Relative(rel),
+                max_depth: MAX_DEPTH,
+                first_split: FirstSplit::default(),
+                leaf_bound: Default::default(),
+            };
+            let (stage, status, gpu_ms) = timed_stage(&gpu, &kernels, &model, &params, repeats);
+            let mesh = stage
+                .read_mesh(&gpu.device, &gpu.queue, &status)
+                .expect("mesh");
+            let (smooth_stage, _, _) = timed_stage(&gpu, &kernels, &smooth, &params, 1);
+            let cpu_ms = median(
+                (0..repeats)
+                    .map(|_| {
+                        let t = Instant::now();
+                        tessellate_adaptive(&model, &params).expect("cpu");
+                        t.elapsed().as_secs_f64() * 1e3
+                    })
+                    .collect(),
+            );
+            let e = measure_error(&samples, &mesh, model.mesh.control_diag);
+            let (upload, smooth_upload) = (stage.upload_bytes(), smooth_stage.upload_bytes());
+            let row = Creased {
+                model: name.into(),
+                tolerance_rel: rel,
+                first_split: params.first_split,
+                triangles: mesh.triangle_count(),
+                max_bound_rel: status.max_bound() as f64 / diag,
+                max_error_rel: e.max_error / diag,
+                unmet: status.state.unmet,
+                gpu_ms,
+                cpu_ms,
+                gpu_over_cpu: gpu_ms / cpu_ms,
+                upload_bytes: upload,
+                smooth_upload_bytes: smooth_upload,
+                creased_patches,
+                extra_bytes_per_creased_patch: (upload as f64 - smooth_upload as f64)
+                    / creased_patches.max(1) as f64,
+            };
+            eprintln!(
+                "cc gpu creased {name} {rel:e}: {} tris, bound {:.3e}, error {:.3e}, gpu {gpu_ms:.1} ms, cpu {cpu_ms:.1} ms",
+                row.triangles, row.max_bound_rel, row.max_error_rel
+            );
+            creased.push(row);
+        }
+    }
     // A run on some models only must not replace the table of all of them.
     let name = if model_filter.is_some() {
         "catmull_clark_gpu_subset"
@@ -605,8 +691,11 @@ pub fn run(assets: &Path, out_dir: &Path, quick: bool, model_filter: Option<&str
         overhead: &overhead,
         animation: &animated,
         copies: &copies,
+        creased: &creased,
     };
-    let text = table(&rows, &scaling, &overhead, &animated) + &copies_table(&copies);
+    let text = table(&rows, &scaling, &overhead, &animated)
+        + &copies_table(&copies)
+        + &creased_table(&creased);
     crate::write_results(out_dir, name, &results, text);
 }
 
@@ -736,6 +825,32 @@ fn copies_table(copies: &[Copies]) -> String {
             c.copies_ms,
             c.patches_ratio,
             c.time_ratio
+        );
+    }
+    s
+}
+
+fn creased_table(rows: &[Creased]) -> String {
+    if rows.is_empty() {
+        return String::new();
+    }
+    let mut s = String::from("\nWith creases (the shipped tags, Chaikin's rule), GPU stage against its CPU reference in turns; bound and measured error as fractions of the diagonal; upload when the stage is made, with and without the creases, and the difference per patch whose one-ring is sharp:\n\n| model | ε (rel) | triangles | bound | measured | GPU ms | CPU ms | **GPU / CPU** | upload | smooth upload | sharp patches | bytes per sharp patch |\n|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+    for r in rows {
+        s += &format!(
+            "| {} | {:e} | {} | {:.2e}{} | {:.2e} | {:.1} | {:.1} | **{:.2}×** | {:.2} MB | {:.2} MB | {} | {:.0} |\n",
+            r.model,
+            r.tolerance_rel,
+            r.triangles,
+            r.max_bound_rel,
+            if r.unmet > 0 { " (unmet)" } else { "" },
+            r.max_error_rel,
+            r.gpu_ms,
+            r.cpu_ms,
+            r.gpu_over_cpu,
+            r.upload_bytes as f64 / 1e6,
+            r.smooth_upload_bytes as f64 / 1e6,
+            r.creased_patches,
+            r.extra_bytes_per_creased_patch
         );
     }
     s
