@@ -208,6 +208,26 @@ fn run(
     (mesh, status)
 }
 
+/// One run of the uniform stage at `n` segments, read back.
+fn run_uniform(gpu: &Gpu, model: &SurfaceModel, n: u32) -> Mesh {
+    let mut stage = tessera_wgpu::catmull_clark::CcUniformStage::new(
+        &gpu.device,
+        &gpu.queue,
+        &kernels(gpu),
+        model,
+        &UniformParams { segments: n },
+    )
+    .expect("uniform stage");
+    let mut encoder = gpu.device.create_command_encoder(&Default::default());
+    stage
+        .prepare(&gpu.device, &gpu.queue, &mut encoder)
+        .expect("prepare");
+    gpu.queue.submit([encoder.finish()]);
+    let mesh = stage.read_mesh(&gpu.device, &gpu.queue).expect("read");
+    gpu.check().expect("no wgpu errors");
+    mesh
+}
+
 #[test]
 fn spots_triangulation_tessellates_on_the_gpu_as_on_the_cpu() {
     // Spot's published triangle mesh (5 856 faces): 17 568 patches, every one with two
@@ -1058,7 +1078,6 @@ fn gpu_vertices_lie_at_their_face_coordinates_and_seam_copies_agree() {
     // copies of a seam point (between faces, and between the sub-faces of triangles and
     // pentagons) have the same position and normal bits.
     use tessera_core::catmull_clark::faces::check_faces;
-    use tessera_wgpu::catmull_clark::CcUniformStage;
     let gpu = gpu();
     for (name, rel, n) in [
         ("opensubdiv/catmark_nonquads.obj", 3e-3, 5),
@@ -1075,21 +1094,7 @@ fn gpu_vertices_lie_at_their_face_coordinates_and_seam_copies_agree() {
             leaf_bound: Default::default(),
         };
         let (adaptive, _) = run(&gpu, &model, &params, None);
-        let mut stage = CcUniformStage::new(
-            &gpu.device,
-            &gpu.queue,
-            &kernels(&gpu),
-            &model,
-            &UniformParams { segments: n },
-        )
-        .expect("stage");
-        let mut encoder = gpu.device.create_command_encoder(&Default::default());
-        stage
-            .prepare(&gpu.device, &gpu.queue, &mut encoder)
-            .expect("prepare");
-        gpu.queue.submit([encoder.finish()]);
-        let uniform = stage.read_mesh(&gpu.device, &gpu.queue).expect("read");
-        gpu.check().expect("no wgpu errors");
+        let uniform = run_uniform(&gpu, &model, n);
         let not_quads = model.mesh.control_faces.iter().any(|f| f.len() != 4);
         for (what, mesh, grid) in [
             ("adaptive", &adaptive, params.grid()),
@@ -1111,7 +1116,6 @@ fn creased_surfaces_tessellate_on_the_gpu_as_on_the_cpu() {
     // leaves, bound and guarantee, and the uniform stage the CPU uniform's; quads on
     // surfaces of revolution whose diagonals are equal may be cut either way (counted).
     use tessera_core::catmull_clark::tessellate_uniform;
-    use tessera_wgpu::catmull_clark::CcUniformStage;
     let gpu = gpu();
     let mut ties = 0;
     let mut triangles = 0;
@@ -1150,21 +1154,7 @@ fn creased_surfaces_tessellate_on_the_gpu_as_on_the_cpu() {
         );
 
         let n = 3;
-        let mut stage = CcUniformStage::new(
-            &gpu.device,
-            &gpu.queue,
-            &kernels(&gpu),
-            &model,
-            &UniformParams { segments: n },
-        )
-        .expect("uniform stage");
-        let mut encoder = gpu.device.create_command_encoder(&Default::default());
-        stage
-            .prepare(&gpu.device, &gpu.queue, &mut encoder)
-            .expect("prepare");
-        gpu.queue.submit([encoder.finish()]);
-        let uniform = stage.read_mesh(&gpu.device, &gpu.queue).expect("read");
-        gpu.check().expect("no wgpu errors");
+        let uniform = run_uniform(&gpu, &model, n);
         let cpu = tessellate_uniform(&model, n).expect("cpu").mesh;
         ties += same_mesh_up_to_ties(&uniform, &cpu, s).unwrap_or_else(|e| panic!("{name}: {e}"));
         triangles += uniform.triangle_count();
