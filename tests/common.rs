@@ -147,3 +147,38 @@ pub fn fan(quads: usize, closed: bool) -> tessera_core::catmull_clark::ControlMe
         .collect();
     tessera_core::catmull_clark::ControlMesh::new(positions, faces)
 }
+
+/// A torus of `around × across` grid quads, each cut into two triangles (every vertex of
+/// valence 6), with a ripple so that nothing is a surface of revolution: a triangle mesh
+/// of any size, `2 · around · across` faces.
+pub fn triangle_torus(around: usize, across: usize) -> tessera_core::catmull_clark::ControlMesh {
+    use std::f64::consts::TAU;
+    let at = |i: usize, j: usize| {
+        let (a, b) = (
+            TAU * i as f64 / around as f64,
+            TAU * j as f64 / across as f64,
+        );
+        let r = 0.4 + 0.03 * (5.0 * a + 2.0 * b).sin();
+        glam::DVec3::new(
+            (1.0 + r * b.cos()) * a.cos(),
+            (1.0 + r * b.cos()) * a.sin(),
+            r * b.sin(),
+        )
+    };
+    let mut positions = Vec::with_capacity(around * across);
+    for i in 0..around {
+        for j in 0..across {
+            positions.push(at(i, j));
+        }
+    }
+    let id = |i: usize, j: usize| ((i % around) * across + j % across) as u32;
+    let mut faces = Vec::with_capacity(2 * around * across);
+    for i in 0..around {
+        for j in 0..across {
+            let (a, b, c, d) = (id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1));
+            faces.push(vec![a, b, c]);
+            faces.push(vec![a, c, d]);
+        }
+    }
+    tessera_core::catmull_clark::ControlMesh::new(positions, faces)
+}

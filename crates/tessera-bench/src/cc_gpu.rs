@@ -196,6 +196,24 @@ struct Creased {
     extra_bytes_per_creased_patch: f64,
 }
 
+/// A triangle mesh (every patch with two extraordinary corners) on the GPU stage against
+/// the CPU reference: Spot's published triangulation and a generated torus of 10 000
+/// triangles, whose derived nets need more than WebGPU's default 8192 texture rows.
+#[derive(Serialize)]
+struct TriangleMesh {
+    model: String,
+    faces: usize,
+    patches: usize,
+    tolerance_rel: f64,
+    first_split: FirstSplit,
+    triangles: usize,
+    unmet: u32,
+    gpu_ms: f64,
+    cpu_ms: f64,
+    gpu_over_cpu: f64,
+    upload_bytes: usize,
+}
+
 #[derive(Serialize)]
 struct Results<'a> {
     rows: &'a [Row],
@@ -204,6 +222,7 @@ struct Results<'a> {
     animation: &'a [Animation],
     copies: &'a [Copies],
     creased: &'a [Creased],
+    triangle_meshes: &'a [TriangleMesh],
 }
 
 /// The control points of `model` moved for frame `k`: each by a wave of 1% of `diag`.
@@ -679,6 +698,59 @@ pub fn run(assets: &Path, out_dir: &Path, quick: bool, model_filter: Option<&str
             creased.push(row);
         }
     }
+    let mut triangle_meshes = Vec::new();
+    let spot = load_control_mesh(&assets.join("catmull_clark/spot_triangulated.obj"))
+        .expect("shipped mesh");
+    for (name, mut control, rel) in [
+        ("spot_triangulated", spot, 3e-3),
+        (
+            "triangle_torus_10k",
+            tessera_tests::triangle_torus(100, 50),
+            1.5e-4,
+        ),
+    ] {
+        if model_filter.is_some_and(|m| !name.contains(m)) || (quick && name != "spot_triangulated")
+        {
+            continue;
+        }
+        control.drop_creases("--no-creases");
+        let model = SurfaceModel::new(PatchMesh::new(&control).expect("valid"), TREE_DEPTH);
+        let params = CcParams {
+            tolerance: Tolerance::Relative(rel),
+            max_depth: 6,
+            first_split: FirstSplit::Midpoint,
+            leaf_bound: Default::default(),
+        };
+        let runs = repeats.min(3);
+        let (stage, status, gpu_ms) = timed_stage(&gpu, &kernels, &model, &params, runs);
+        let cpu_ms = median(
+            (0..runs)
+                .map(|_| {
+                    let t = Instant::now();
+                    tessellate_adaptive(&model, &params).expect("cpu");
+                    t.elapsed().as_secs_f64() * 1e3
+                })
+                .collect(),
+        );
+        let row = TriangleMesh {
+            model: name.into(),
+            faces: control.faces.len(),
+            patches: model.mesh.surface_patches().count(),
+            tolerance_rel: rel,
+            first_split: params.first_split,
+            triangles: status.indices as usize / 3,
+            unmet: status.state.unmet,
+            gpu_ms,
+            cpu_ms,
+            gpu_over_cpu: gpu_ms / cpu_ms,
+            upload_bytes: stage.upload_bytes(),
+        };
+        eprintln!(
+            "cc gpu triangle mesh {name}: {} faces, {} tris, gpu {gpu_ms:.1} ms, cpu {cpu_ms:.1} ms",
+            row.faces, row.triangles
+        );
+        triangle_meshes.push(row);
+    }
     // A run on some models only must not replace the table of all of them.
     let name = if model_filter.is_some() {
         "catmull_clark_gpu_subset"
@@ -692,10 +764,12 @@ pub fn run(assets: &Path, out_dir: &Path, quick: bool, model_filter: Option<&str
         animation: &animated,
         copies: &copies,
         creased: &creased,
+        triangle_meshes: &triangle_meshes,
     };
     let text = table(&rows, &scaling, &overhead, &animated)
         + &copies_table(&copies)
-        + &creased_table(&creased);
+        + &creased_table(&creased)
+        + &triangle_table(&triangle_meshes);
     crate::write_results(out_dir, name, &results, text);
 }
 
@@ -851,6 +925,29 @@ fn creased_table(rows: &[Creased]) -> String {
             r.smooth_upload_bytes as f64 / 1e6,
             r.creased_patches,
             r.extra_bytes_per_creased_patch
+        );
+    }
+    s
+}
+
+fn triangle_table(rows: &[TriangleMesh]) -> String {
+    if rows.is_empty() {
+        return String::new();
+    }
+    let mut s = String::from("\nTriangle meshes (every patch with two extraordinary corners), midpoint splits, GPU stage against its CPU reference in turns; upload when the stage is made:\n\n| model | faces | patches | ε (rel) | triangles | GPU ms | CPU ms | **GPU / CPU** | upload |\n|---|---|---|---|---|---|---|---|---|\n");
+    for r in rows {
+        s += &format!(
+            "| {} | {} | {} | {:e} | {}{} | {:.1} | {:.1} | **{:.2}×** | {:.2} MB |\n",
+            r.model,
+            r.faces,
+            r.patches,
+            r.tolerance_rel,
+            r.triangles,
+            if r.unmet > 0 { " (unmet)" } else { "" },
+            r.gpu_ms,
+            r.cpu_ms,
+            r.gpu_over_cpu,
+            r.upload_bytes as f64 / 1e6
         );
     }
     s

@@ -63,13 +63,15 @@ use crate::scan::{PrefixSum, ScanKernels};
 use crate::stage::{GrowingStage, Passes, RunTimestamps, StatusReadback};
 use crate::Kernels;
 
-/// Limits the stage needs, within what `adapter` offers: large storage buffers for big
-/// models; no more than 8 storage buffers and 4 storage textures per kernel, so WebGPU's
-/// defaults suffice there.
+/// Limits the stages need, within what `adapter` offers: large storage buffers and 2D
+/// textures for big models (the Catmull-Clark nets texture holds 512 nets per row, so
+/// its rows bound the nets a model may derive); no more than 8 storage buffers and 4
+/// storage textures per kernel, so WebGPU's defaults suffice there.
 pub fn required_limits(adapter: &wgpu::Limits) -> wgpu::Limits {
     wgpu::Limits {
         max_storage_buffer_binding_size: adapter.max_storage_buffer_binding_size,
         max_buffer_size: adapter.max_buffer_size,
+        max_texture_dimension_2d: adapter.max_texture_dimension_2d,
         ..wgpu::Limits::default()
     }
 }
