@@ -212,6 +212,8 @@ struct TriangleMesh {
     cpu_ms: f64,
     gpu_over_cpu: f64,
     upload_bytes: usize,
+    /// Nets the stencil step derives into the nets texture (12 texels of 16 bytes each).
+    derived_nets: usize,
 }
 
 #[derive(Serialize)]
@@ -744,6 +746,11 @@ pub fn run(assets: &Path, out_dir: &Path, quick: bool, model_filter: Option<&str
             cpu_ms,
             gpu_over_cpu: gpu_ms / cpu_ms,
             upload_bytes: stage.upload_bytes(),
+            derived_nets: tessera_core::catmull_clark::stencil::CcStencils::new(
+                &model.mesh,
+                model.depth,
+            )
+            .derived_nets(),
         };
         eprintln!(
             "cc gpu triangle mesh {name}: {} faces, {} tris, gpu {gpu_ms:.1} ms, cpu {cpu_ms:.1} ms",
@@ -934,10 +941,10 @@ fn triangle_table(rows: &[TriangleMesh]) -> String {
     if rows.is_empty() {
         return String::new();
     }
-    let mut s = String::from("\nTriangle meshes (every patch with two extraordinary corners), midpoint splits, GPU stage against its CPU reference in turns; upload when the stage is made:\n\n| model | faces | patches | ε (rel) | triangles | GPU ms | CPU ms | **GPU / CPU** | upload |\n|---|---|---|---|---|---|---|---|---|\n");
+    let mut s = String::from("\nTriangle meshes (every patch with two extraordinary corners), midpoint splits, GPU stage against its CPU reference in turns; upload when the stage is made:\n\n| model | faces | patches | ε (rel) | triangles | GPU ms | CPU ms | **GPU / CPU** | upload | derived nets |\n|---|---|---|---|---|---|---|---|---|---|\n");
     for r in rows {
         s += &format!(
-            "| {} | {} | {} | {:e} | {}{} | {:.1} | {:.1} | **{:.2}×** | {:.2} MB |\n",
+            "| {} | {} | {} | {:e} | {}{} | {:.1} | {:.1} | **{:.2}×** | {:.2} MB | {:.2} M ({:.0} MB) |\n",
             r.model,
             r.faces,
             r.patches,
@@ -947,7 +954,9 @@ fn triangle_table(rows: &[TriangleMesh]) -> String {
             r.gpu_ms,
             r.cpu_ms,
             r.gpu_over_cpu,
-            r.upload_bytes as f64 / 1e6
+            r.upload_bytes as f64 / 1e6,
+            r.derived_nets as f64 / 1e6,
+            r.derived_nets as f64 * 192.0 / 1e6
         );
     }
     s

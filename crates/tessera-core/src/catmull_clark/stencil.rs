@@ -237,6 +237,28 @@ impl CcStencils {
             + size_of_val(s.splits.as_slice())
     }
 
+    /// Nets the pieces step derives: every patch's Bézier pieces (device memory, not
+    /// upload).
+    pub fn derived_nets(&self) -> usize {
+        let per_table: Vec<usize> = self
+            .tables
+            .iter()
+            .map(|t| {
+                let records = &self.records[t.records as usize..][..t.record_count as usize];
+                records
+                    .iter()
+                    .filter(|r| r.kind & 0xff == CC_RECORD_NET)
+                    .count()
+            })
+            .collect();
+        self.patches
+            .iter()
+            .zip(&self.structure.roots)
+            .filter(|(_, root)| root.node != CC_NO_ROOT)
+            .map(|(p, _)| per_table[p.table as usize])
+            .sum()
+    }
+
     /// Bytes the tables shared between patches take (records, weights, nodes).
     pub fn shared_bytes(&self) -> usize {
         use std::mem::size_of_val;
@@ -794,6 +816,12 @@ mod tests {
                 }
             }
             assert_eq!(got.nets.len(), want.nets.len(), "{name}: nets");
+            let stencils = CcStencils::new(&m.mesh, m.depth);
+            assert_eq!(
+                stencils.derived_nets(),
+                want.nets.len(),
+                "{name}: derived nets"
+            );
             assert_eq!(got.corners.len(), want.corners.len(), "{name}: corners");
             let corners_match = got
                 .corners
