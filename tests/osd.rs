@@ -43,6 +43,16 @@ pub enum NoPoint {
     NotAVertex,
 }
 
+/// Whether the helper can run here: `TESSERA_OSD_EVAL` names it, or OpenSubdiv's headers
+/// are installed to build it. The tests never ask (they must not pass without it); the
+/// bench does, on a machine without OpenSubdiv (a device without network).
+pub fn available() -> bool {
+    match std::env::var_os("TESSERA_OSD_EVAL") {
+        Some(p) => Path::new(&p).is_file(),
+        None => Path::new(OSD_HEADER).exists(),
+    }
+}
+
 /// The helper's path, built on first use when `TESSERA_OSD_EVAL` is unset.
 pub fn helper() -> &'static Path {
     static HELPER: OnceLock<PathBuf> = OnceLock::new();
@@ -182,6 +192,58 @@ pub fn run_helper(input: &str, args: &[&str]) -> (bool, String, String) {
         String::from_utf8_lossy(&out.stdout).into_owned(),
         String::from_utf8_lossy(&out.stderr).into_owned(),
     )
+}
+
+/// OpenSubdiv's Bfr uniform tessellation of `mesh` (`-tess`): every face at `rate`
+/// segments per edge, `repeats` times. The median time of one tessellation in ms, as the
+/// helper measured it (the topology built once beforehand, no I/O), and the last mesh
+/// (each face with its own points; no normals, no face coordinates).
+pub fn bfr_uniform(mesh: &ControlMesh, rate: u32, repeats: u32) -> (f64, tessera_core::Mesh) {
+    let (ok, out, err) = run_helper(
+        &input(mesh, &[]),
+        &["-tess", &rate.to_string(), &repeats.to_string()],
+    );
+    assert!(ok, "osd_eval -tess: {err}");
+    let mut lines = out.lines();
+    let mut header = |key: &str| -> String {
+        let line = lines
+            .next()
+            .unwrap_or_else(|| panic!("osd_eval -tess: no '{key}' line"));
+        line.strip_prefix(key)
+            .unwrap_or_else(|| panic!("osd_eval -tess: expected '{key} ...', got '{line}'"))
+            .trim()
+            .to_owned()
+    };
+    let ms: f64 = header("ms").parse().expect("a time");
+    let count: usize = header("vertices").parse().expect("a count");
+    let numbers = |line: Option<&str>| -> Vec<f64> {
+        line.expect("a line")
+            .split_whitespace()
+            .map(|w| w.parse().expect("a number"))
+            .collect()
+    };
+    let mut mesh = tessera_core::Mesh::default();
+    for _ in 0..count {
+        let p = numbers(lines.next());
+        mesh.vertices.push(tessera_core::gpu_types::OutVertex {
+            position: [p[0] as f32, p[1] as f32, p[2] as f32],
+            normal: [0.0; 3],
+            uv: [0.0; 2],
+            face: 0,
+        });
+    }
+    let triangles: usize = lines
+        .next()
+        .and_then(|l| l.strip_prefix("triangles"))
+        .expect("a 'triangles' line")
+        .trim()
+        .parse()
+        .expect("a count");
+    for _ in 0..triangles {
+        mesh.indices
+            .extend(numbers(lines.next()).into_iter().map(|i| i as u32));
+    }
+    (ms, mesh)
 }
 
 /// OpenSubdiv's limit points of `mesh` at `points` (`(face, u, v)` in Bfr's face

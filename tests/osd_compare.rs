@@ -536,3 +536,34 @@ fn bad_input_is_one_line_and_an_exit_status() {
     let (ok, stdout, _) = osd::run_helper(&good, &[]);
     assert!(ok && stdout.lines().count() == 1, "{stdout}");
 }
+
+#[test]
+fn bfr_uniform_tessellation_lies_on_the_same_surface_as_ours() {
+    // The bench's OpenSubdiv peer: Bfr's uniform tessellation of the torus (quads only)
+    // at 2n segments per face edge has the triangles and the points of tessera's uniform
+    // grid of n per patch (a quad face is 2 × 2 patches), within single precision.
+    use tessera_core::catmull_clark::tessellate_uniform;
+    let mesh = control_mesh("opensubdiv/catmark_torus.obj");
+    let model = model_of(&mesh);
+    let diag = model.mesh.bbox_diag();
+    let n = 3;
+    let ours = tessellate_uniform(&model, n).expect("uniform").mesh;
+    let (ms, bfr) = osd::bfr_uniform(&mesh, 2 * n, 2);
+    assert!(ms > 0.0);
+    assert_eq!(bfr.triangle_count(), ours.triangle_count());
+    let key = |p: [f32; 3]| p.map(|x| (x as f64 / (1e-6 * diag)).round() as i64);
+    let points: std::collections::HashSet<_> =
+        ours.vertices.iter().map(|v| key(v.position)).collect();
+    let near = |p: [f32; 3]| {
+        let k = key(p);
+        (0..27).any(|d| {
+            let o = [d % 3, d / 3 % 3, d / 9].map(|x| x as i64 - 1);
+            points.contains(&[k[0] + o[0], k[1] + o[1], k[2] + o[2]])
+        })
+    };
+    let missing = bfr.vertices.iter().filter(|v| !near(v.position)).count();
+    assert_eq!(missing, 0, "Bfr points off tessera's grid");
+    // And the check sees a different grid.
+    let (_, coarser) = osd::bfr_uniform(&mesh, 2 * n - 1, 1);
+    assert!(coarser.vertices.iter().any(|v| !near(v.position)));
+}

@@ -27,6 +27,14 @@
 //
 // Options:
 //   -l LEVEL   Bfr's approximation levels, smooth and sharp (default: the most, 10).
+//   -tess RATE REPEATS
+//              instead of points, Bfr's uniform tessellation (Bfr::Tessellation): every
+//              face at RATE segments per edge, its points evaluated and its triangles
+//              listed, REPEATS times from the control points (the topology is built
+//              once, as a renderer would). Prints "ms T" (the median time of one
+//              tessellation), "vertices V" and V lines "x y z", "triangles N" and N
+//              lines "a b c" (0-based; a face's points are its own). The points section
+//              is then "points 0".
 //   -far LEVEL instead of Bfr, Far: the mesh refined uniformly LEVEL times and the limit
 //              masks applied there (PrimvarRefiner::Limit), exact once every semi-sharp
 //              feature has decayed, i.e. for LEVEL >= the largest finite sharpness, except
@@ -39,12 +47,15 @@
 #include <opensubdiv/bfr/limits.h>
 #include <opensubdiv/bfr/refinerSurfaceFactory.h>
 #include <opensubdiv/bfr/surface.h>
+#include <opensubdiv/bfr/tessellation.h>
 #include <opensubdiv/far/error.h>
 #include <opensubdiv/far/primvarRefiner.h>
 #include <opensubdiv/far/topologyDescriptor.h>
 #include <opensubdiv/far/topologyRefinerFactory.h>
 
+#include <algorithm>
 #include <cerrno>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -315,18 +326,73 @@ void eval_far(Far::TopologyRefiner& refiner, int level, const std::vector<double
 
 }  // namespace
 
+// Bfr's uniform tessellation (-tess): the peer OpenSubdiv offers for a uniform grid.
+void tess_bfr(const Far::TopologyRefiner& refiner, int level, const std::vector<double>& positions,
+              int rate, int repeats) {
+    Bfr::SurfaceFactory::Options options;
+    options.SetApproxLevelSmooth(level);
+    options.SetApproxLevelSharp(level);
+    Bfr::RefinerSurfaceFactory<> factory(refiner, options);
+    typedef Bfr::Surface<double> Surface;
+    Surface::PointDescriptor xyz(3);
+    Bfr::Tessellation::Options tess_options;
+    tess_options.SetFacetSize(3);
+    int faces = refiner.GetLevel(0).GetNumFaces();
+    std::vector<double> points, patch_points, coords;
+    std::vector<int> triangles, facets;
+    std::vector<double> times;
+    for (int r = 0; r < repeats; ++r) {
+        points.clear();
+        triangles.clear();
+        auto start = std::chrono::steady_clock::now();
+        Surface surface;
+        for (int f = 0; f < faces; ++f) {
+            if (!factory.InitVertexSurface<double>(f, &surface)) continue;  // a hole
+            patch_points.resize(3 * (size_t)surface.GetNumPatchPoints());
+            surface.PreparePatchPoints(positions.data(), xyz, patch_points.data(), xyz);
+            Bfr::Tessellation tess(surface.GetParameterization(), rate, tess_options);
+            int n = tess.GetNumCoords();
+            coords.resize(2 * (size_t)n);
+            tess.GetCoords(coords.data());
+            int base = (int)(points.size() / 3);
+            for (int k = 0; k < n; ++k) {
+                double p[3];
+                surface.Evaluate(&coords[2 * k], patch_points.data(), xyz, p);
+                points.insert(points.end(), p, p + 3);
+            }
+            facets.resize(3 * (size_t)tess.GetNumFacets());
+            tess.GetFacets(facets.data());
+            for (int i : facets) triangles.push_back(base + i);
+        }
+        std::chrono::duration<double, std::milli> ms = std::chrono::steady_clock::now() - start;
+        times.push_back(ms.count());
+    }
+    std::sort(times.begin(), times.end());
+    std::printf("ms %.6f\n", times[times.size() / 2]);
+    std::printf("vertices %zu\n", points.size() / 3);
+    for (size_t i = 0; i < points.size(); i += 3) print_point(&points[i]);
+    std::printf("triangles %zu\n", triangles.size() / 3);
+    for (size_t i = 0; i < triangles.size(); i += 3) {
+        std::printf("%d %d %d\n", triangles[i], triangles[i + 1], triangles[i + 2]);
+    }
+}
+
 int main(int argc, char** argv) {
     int level = kMaxApproxLevel;
     int far_level = 0;
+    int tess_rate = 0, tess_repeats = 0;
     for (int i = 1; i < argc; ++i) {
         if (std::strcmp(argv[i], "-l") == 0 && i + 1 < argc) {
             level = (int)parse_int(argv[++i], 0, kMaxApproxLevel, "-l");
+        } else if (std::strcmp(argv[i], "-tess") == 0 && i + 2 < argc) {
+            tess_rate = (int)parse_int(argv[++i], 1, 4096, "-tess rate");
+            tess_repeats = (int)parse_int(argv[++i], 1, 1000, "-tess repeats");
         } else if (std::strcmp(argv[i], "-far") == 0 && i + 1 < argc) {
             // UniformOptions keeps 4 bits of the level.
             far_level = (int)parse_int(argv[++i], 1, 15, "-far");
         } else {
             fail(std::string("unknown argument '") + argv[i] +
-                 "' (usage: osd_eval [-l LEVEL | -far LEVEL] < input)");
+                 "' (usage: osd_eval [-l LEVEL | -far LEVEL | -tess RATE REPEATS] < input)");
         }
     }
 
@@ -423,7 +489,9 @@ int main(int argc, char** argv) {
     if (!g_far_warning.empty()) fail("Far: " + g_far_warning);
     if (!refiner) fail("Far could not build the topology");
 
-    if (far_level > 0) {
+    if (tess_rate > 0) {
+        tess_bfr(*refiner, level, positions, tess_rate, tess_repeats);
+    } else if (far_level > 0) {
         eval_far(*refiner, far_level, positions, queries);
     } else {
         eval_bfr(*refiner, level, positions, queries);

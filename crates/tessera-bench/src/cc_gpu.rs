@@ -1,11 +1,13 @@
 //! Catmull-Clark on the GPU: the adaptive stage against the CPU reference (time,
 //! triangles per second), the time to reach a max error of 5e-4 of the diagonal against
-//! uniform tessellation (at the smallest grid that reaches it: the CPU's, and the GPU
-//! uniform stage's on the same device), and how the GPU time grows with the output (from
+//! uniform tessellation (at the smallest grid that reaches it: the CPU's, the GPU
+//! uniform stage's on the same device, and OpenSubdiv's Bfr uniform tessellation where
+//! OpenSubdiv is installed), and how the GPU time grows with the output (from
 //! 3e-3 of the diagonal to the first of [`SCALING_FINE`] with 10× the triangles, as the
 //! target reads: 10× the triangles in at most 11× the time); with the first-split
 //! search (the default) and with midpoint splits alone (the paper's); and a frame of
-//! animation (moved control points) on the car and Spot against building the stage anew.
+//! animation (moved control points) on the car and Spot against building the stage anew;
+//! the creased car, bishop and rook; triangle meshes of 5 856 and 10 000 faces.
 //! Writes `OUT/catmull_clark_gpu.{json,md}`.
 
 use std::path::Path;
@@ -50,6 +52,16 @@ struct Row {
     /// The same uniform grid on the GPU uniform stage (same device as `gpu_ms`).
     uniform_gpu_ms: f64,
     gpu_over_uniform_gpu: f64,
+    /// OpenSubdiv's Bfr uniform tessellation (CPU) at the smallest rate per face edge
+    /// whose measured max error is at or under the GPU output's: its rate, triangles
+    /// and time (median, measured by the helper: the surfaces built from the control
+    /// points and evaluated, the topology built once). Absent without OpenSubdiv.
+    osd_rate: Option<u32>,
+    osd_triangles: Option<usize>,
+    osd_ms: Option<f64>,
+    gpu_over_osd: Option<f64>,
+    /// Against the fastest of the uniform peers (CPU, GPU, OpenSubdiv).
+    gpu_over_fastest_uniform: f64,
     /// Where the GPU time goes (timestamps after each phase, one run), if the adapter
     /// has timestamp queries: (phase, ms).
     phases: Vec<(String, f64)>,
@@ -558,6 +570,24 @@ pub fn run(assets: &Path, out_dir: &Path, quick: bool, model_filter: Option<&str
             let (uniform_gpu_ms, uniform_gpu_triangles) =
                 gpu_uniform_time(&gpu, &kernels, &model, n, repeats);
             assert_eq!(uniform_gpu_triangles, uniform_triangles, "GPU uniform grid");
+            // OpenSubdiv's rate is per face edge: a quad face is 2 × 2 of our patches.
+            let osd = tessera_tests::osd::available().then(|| {
+                let mut rate = (2 * n).saturating_sub(3).max(1);
+                loop {
+                    let (_, m) = tessera_tests::osd::bfr_uniform(&control, rate, 1);
+                    let err = measure_error(&samples, &m, model.mesh.control_diag).max_error;
+                    if err <= e.max_error || rate >= 128 {
+                        let (ms, _) =
+                            tessera_tests::osd::bfr_uniform(&control, rate, repeats as u32);
+                        break (rate, m.triangle_count(), ms);
+                    }
+                    rate += 1;
+                }
+            });
+            let fastest = osd
+                .map_or(f64::INFINITY, |o| o.2)
+                .min(uniform_ms)
+                .min(uniform_gpu_ms);
             let tris = mesh.triangle_count();
             let row = Row {
                 model: name.clone(),
@@ -578,6 +608,11 @@ pub fn run(assets: &Path, out_dir: &Path, quick: bool, model_filter: Option<&str
                 gpu_over_uniform: gpu_ms / uniform_ms,
                 uniform_gpu_ms,
                 gpu_over_uniform_gpu: gpu_ms / uniform_gpu_ms,
+                osd_rate: osd.map(|o| o.0),
+                osd_triangles: osd.map(|o| o.1),
+                osd_ms: osd.map(|o| o.2),
+                gpu_over_osd: osd.map(|o| gpu_ms / o.2),
+                gpu_over_fastest_uniform: gpu_ms / fastest,
                 phases,
                 gpu_bounds_per_leaf,
                 cpu_bounds_per_leaf,
@@ -787,11 +822,11 @@ fn table(
     animation: &[Animation],
 ) -> String {
     let mut s = String::from(
-        "| model | device | patches | ε (of diagonal) | first split | triangles | measured max (of diag.) | GPU ms | CPU ms | GPU/CPU | GPU Mtri/s | uniform n (same error) | uniform tris | uniform CPU ms | **GPU/uniform** | uniform GPU ms | **GPU/uniform GPU** |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
+        "| model | device | patches | ε (of diagonal) | first split | triangles | measured max (of diag.) | GPU ms | CPU ms | GPU/CPU | GPU Mtri/s | uniform n (same error) | uniform tris | uniform CPU ms | **GPU/uniform** | uniform GPU ms | **GPU/uniform GPU** | OpenSubdiv Bfr rate | Bfr tris | Bfr ms | **GPU/Bfr** | **GPU/fastest uniform** |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
     );
     for r in rows {
         s += &format!(
-            "| {} | {} | {} | {:.0e} | {} | {} | {:.2e} | {:.1} | {:.1} | {:.2} | {:.3} | {} | {} | {:.1} | **{:.2}** | {:.1} | **{:.2}** |\n",
+            "| {} | {} | {} | {:.0e} | {} | {} | {:.2e} | {:.1} | {:.1} | {:.2} | {:.3} | {} | {} | {:.1} | **{:.2}** | {:.1} | **{:.2}** | {} | {} | {} | **{}** | **{:.2}** |\n",
             r.model,
             r.device,
             r.patches,
@@ -808,7 +843,12 @@ fn table(
             r.uniform_ms,
             r.gpu_over_uniform,
             r.uniform_gpu_ms,
-            r.gpu_over_uniform_gpu
+            r.gpu_over_uniform_gpu,
+            r.osd_rate.map_or("—".into(), |x| x.to_string()),
+            r.osd_triangles.map_or("—".into(), |x| x.to_string()),
+            r.osd_ms.map_or("—".into(), |x| format!("{x:.1}")),
+            r.gpu_over_osd.map_or("—".into(), |x| format!("{x:.2}")),
+            r.gpu_over_fastest_uniform
         );
     }
     if rows.iter().any(|r| !r.phases.is_empty()) {
