@@ -3,7 +3,7 @@
 use std::sync::{Arc, OnceLock};
 
 use crate::bezier::BezierKernels;
-use crate::catmull_clark::{CcKernels, CcUniformKernels};
+use crate::catmull_clark::{CcKernels, CcStencilKernels, CcUniformKernels};
 
 /// The compute pipelines of one device. Compiling them is the slow part of creating a
 /// stage (seconds on a CPU driver), so they are compiled once, each family the first
@@ -23,6 +23,7 @@ struct Inner {
     bezier: OnceLock<BezierKernels>,
     cc: OnceLock<Arc<CcKernels>>,
     cc_uniform: OnceLock<Arc<CcUniformKernels>>,
+    cc_stencil: OnceLock<Arc<CcStencilKernels>>,
 }
 
 impl Kernels {
@@ -33,6 +34,7 @@ impl Kernels {
             bezier: OnceLock::new(),
             cc: OnceLock::new(),
             cc_uniform: OnceLock::new(),
+            cc_stencil: OnceLock::new(),
         }))
     }
 
@@ -56,7 +58,15 @@ impl Kernels {
     pub(crate) fn cc(&self) -> Arc<CcKernels> {
         self.0
             .cc
-            .get_or_init(|| Arc::new(CcKernels::new(&self.0.device)))
+            .get_or_init(|| Arc::new(CcKernels::new(&self.0.device, self.cc_stencil())))
+            .clone()
+    }
+
+    /// The stencil step both Catmull-Clark stages run first.
+    pub(crate) fn cc_stencil(&self) -> Arc<CcStencilKernels> {
+        self.0
+            .cc_stencil
+            .get_or_init(|| Arc::new(CcStencilKernels::new(&self.0.device)))
             .clone()
     }
 

@@ -769,7 +769,8 @@ fn tiny_capacities_grow_to_the_same_mesh_and_runs_are_byte_identical() {
 #[test]
 fn moved_control_points_retessellate_in_place() {
     // Animated meshes: new positions, same topology: `update_points` re-uploads and the
-    // next run tessellates the moved surface (as the CPU does on the moved model).
+    // next run tessellates the moved surface (as the CPU does on the moved model), on
+    // both stages.
     let gpu = gpu();
     let path = format!(
         "{}/../../assets/opensubdiv/catmark_cube.obj",
@@ -806,6 +807,39 @@ fn moved_control_points_retessellate_in_place() {
     let cpu = tessellate_adaptive(&moved, &params).expect("cpu");
     same_mesh(&mesh, &cpu.mesh, size(&moved)).expect("moved surface");
     gpu.check().expect("no wgpu errors");
+
+    let n = 3;
+    let mut uniform = tessera_wgpu::catmull_clark::CcUniformStage::new(
+        &gpu.device,
+        &gpu.queue,
+        &kernels(&gpu),
+        &model,
+        &UniformParams { segments: n },
+    )
+    .expect("uniform stage");
+    let run_uniform = |stage: &mut tessera_wgpu::catmull_clark::CcUniformStage| {
+        let mut encoder = gpu.device.create_command_encoder(&Default::default());
+        stage
+            .prepare(&gpu.device, &gpu.queue, &mut encoder)
+            .expect("prepare");
+        gpu.queue.submit([encoder.finish()]);
+        stage.read_mesh(&gpu.device, &gpu.queue).expect("read")
+    };
+    let before = run_uniform(&mut uniform);
+    uniform
+        .update_points(&gpu.queue, &points)
+        .expect("same topology");
+    let after = run_uniform(&mut uniform);
+    gpu.check().expect("no wgpu errors");
+    let uniform_cpu = |m: &SurfaceModel| {
+        tessera_core::catmull_clark::tessellate_uniform(m, n)
+            .expect("cpu")
+            .mesh
+    };
+    same_mesh(&before, &uniform_cpu(&model), size(&model)).expect("loaded surface");
+    same_mesh(&after, &uniform_cpu(&moved), size(&moved)).expect("moved surface");
+    assert!(same_mesh(&after, &uniform_cpu(&model), size(&model)).is_err());
+    assert!(uniform.update_points(&gpu.queue, &points[1..]).is_err());
 }
 
 #[test]

@@ -18,6 +18,7 @@ pub use stage::{CcCapacities, CcPolygons};
 pub use stage::{CcStage, CcStatus};
 #[doc(hidden)]
 pub use stencil::CcStencilBuffers;
+pub(crate) use stencil::CcStencilKernels;
 pub(crate) use uniform::CcUniformKernels;
 pub use uniform::{CcUniformStage, UniformParams};
 

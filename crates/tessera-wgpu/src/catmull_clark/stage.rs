@@ -132,11 +132,12 @@ pub(crate) struct CcKernels {
     hash: CcHashKernels,
     eval: CcVertexEval,
     scan: ScanKernels,
-    stencil: CcStencilKernels,
+    /// Shared with the uniform stage (compiled once per device).
+    stencil: std::sync::Arc<CcStencilKernels>,
 }
 
 impl CcKernels {
-    pub fn new(device: &wgpu::Device) -> Self {
+    pub fn new(device: &wgpu::Device, stencil: std::sync::Arc<CcStencilKernels>) -> Self {
         let k = |file, entry| Kernel::new(device, file, entry);
         CcKernels {
             traverse: k("cc_traverse.wgsl", "main"),
@@ -148,14 +149,8 @@ impl CcKernels {
             hash: CcHashKernels::new(device),
             eval: CcVertexEval::new(device),
             scan: ScanKernels::new(device),
-            stencil: CcStencilKernels::new(device),
+            stencil,
         }
-    }
-}
-
-impl CcKernels {
-    pub(crate) fn stencil(&self) -> &CcStencilKernels {
-        &self.stencil
     }
 }
 

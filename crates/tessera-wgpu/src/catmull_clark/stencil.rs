@@ -177,12 +177,12 @@ impl CcStencilBuffers {
         kernels: &crate::Kernels,
         model: &CcModelBuffers,
     ) -> u32 {
-        let cc = kernels.cc();
-        let binds = self.bind(device, cc.stencil(), model);
+        let stencil = kernels.cc_stencil();
+        let binds = self.bind(device, &stencil, model);
         let mut encoder = device.create_command_encoder(&Default::default());
         let dispatches = {
             let mut pass = encoder.begin_compute_pass(&Default::default());
-            self.record(&mut pass, cc.stencil(), &binds)
+            self.record(&mut pass, &stencil, &binds)
         };
         self.settle(&mut encoder);
         queue.submit([encoder.finish()]);

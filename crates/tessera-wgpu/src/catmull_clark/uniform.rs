@@ -1,8 +1,9 @@
 //! Uniform Catmull-Clark tessellation on the GPU: every surface patch on an `n × n`
-//! grid. Three dispatches, no readback: `cc_uniform_points` (each vertex, a point in a
-//! chart, written once, by the patch that owns it), `cc_vertex_eval` (exact evaluation at
-//! the point's home, the adaptive stage's kernel), `cc_uniform_cells` (two triangles per
-//! cell and the draw arguments).
+//! grid. Five dispatches, no readback: the adaptive stage's two stencil steps (the
+//! quadtrees from the control points, only after they moved), `cc_uniform_points` (each
+//! vertex, a point in a chart, written once, by the patch that owns it), `cc_vertex_eval`
+//! (exact evaluation at the point's home, the adaptive stage's kernel),
+//! `cc_uniform_cells` (two triangles per cell and the draw arguments).
 //! The output sizes follow from the topology and `n`, so the buffers are allocated
 //! exactly and never grow. CPU twin: [`tessera_core::catmull_clark::gpu_uniform`].
 //!
@@ -20,14 +21,14 @@
 //! ```
 
 use glam::Vec3;
-use tessera_core::catmull_clark::gpu_model::CcGpuModel;
 use tessera_core::catmull_clark::gpu_uniform::{uniform_patches, UniformLayout};
+use tessera_core::catmull_clark::stencil::CcStencils;
 use tessera_core::catmull_clark::{PatchMesh, SurfaceModel};
 use tessera_core::gpu_types::{CcUniformParams, CcVertexPoint, OutVertex};
 use tessera_core::Mesh;
 use wgpu::util::DeviceExt;
 
-use super::{CcModelBuffers, CcVertexEval};
+use super::{CcModelBuffers, CcStencilBuffers, CcStencilKernels, CcVertexEval};
 use crate::error::{Error, Result};
 use crate::kernel::{check_size, storage, Kernel};
 use crate::output::MeshBuffers;
@@ -73,10 +74,13 @@ pub struct UniformParams {
 /// buffers ready to draw after each [`prepare`](Self::prepare).
 pub struct CcUniformStage {
     kernels: std::sync::Arc<CcUniformKernels>,
+    stencil_kernels: std::sync::Arc<CcStencilKernels>,
     model: CcModelBuffers,
-    /// The patches as built, kept to move the control points.
+    /// The control points and the tables the quadtrees are derived through on the GPU.
+    stencil: CcStencilBuffers,
+    stencil_binds: [wgpu::BindGroup; 2],
+    /// The patches as built, to check moved control points against.
     patches_cpu: PatchMesh,
-    depth: u32,
     layout: UniformLayout,
     patches: wgpu::Buffer,
     params: CcUniformParams,
@@ -104,8 +108,14 @@ impl CcUniformStage {
         kernels.check_device(device)?;
         let layout = uniform_patches(&model.mesh);
         let params = layout.params(params.segments)?;
+        let stencil_kernels = kernels.cc_stencil();
         let kernels = kernels.cc_uniform();
-        let model_buffers = CcModelBuffers::new(device, queue, &CcGpuModel::new(model))?;
+        // As the adaptive stage: the tables once per topology, the quadtrees derived from
+        // the control points by the first dispatches of a run after they move.
+        let stencils = CcStencils::new(&model.mesh, model.depth);
+        let model_buffers = CcModelBuffers::derived(device, queue, &stencils.structure)?;
+        let stencil = CcStencilBuffers::new(device, &stencils, &model.mesh.control_points_f32())?;
+        let stencil_binds = stencil.bind(device, &stencil_kernels, &model_buffers);
         // Never empty: a model of holes only binds one zeroed patch it never reads.
         let zero = [tessera_core::gpu_types::CcUniformPatch::default()];
         let patches = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
@@ -132,9 +142,11 @@ impl CcUniformStage {
         )?;
         Ok(CcUniformStage {
             kernels,
+            stencil_kernels,
             model: model_buffers,
+            stencil,
+            stencil_binds,
             patches_cpu: model.mesh.clone(),
-            depth: model.depth,
             layout,
             patches,
             params,
@@ -175,15 +187,14 @@ impl CcUniformStage {
         }
     }
 
-    /// New positions of the control vertices (same topology and order): the patches are
-    /// rebuilt on the CPU and written through `queue` in place.
+    /// New positions of the control vertices (same topology and order): written through
+    /// `queue` as they are, 12 bytes a point and a word; the next
+    /// [`prepare`](Self::prepare) derives the patches from them on the GPU. The CPU only
+    /// checks them.
     pub fn update_points(&mut self, queue: &wgpu::Queue, points: &[Vec3]) -> Result<()> {
-        let points: Vec<_> = points.iter().map(|p| p.as_dvec3()).collect();
-        let patches = self.patches_cpu.with_control_points(&points)?;
-        let model = SurfaceModel::new(patches, self.depth);
-        self.model.update(queue, &CcGpuModel::new(&model))?;
-        self.patches_cpu = model.mesh;
-        Ok(())
+        self.patches_cpu
+            .check_control_points(points.iter().map(|p| p.as_dvec3()))?;
+        self.stencil.update(queue, points)
     }
 
     /// Vertices and indices every run writes.
@@ -201,12 +212,15 @@ impl CcUniformStage {
         &self.sized.output
     }
 
-    /// Bytes uploaded: the model's quadtrees and the patches' numbering.
+    /// Bytes uploaded when the stage is made: the stencil tables, the quadtrees' shape,
+    /// the control points and the patches' numbering.
     pub fn upload_bytes(&self) -> usize {
-        self.model.byte_size() + std::mem::size_of_val(self.layout.patches.as_slice())
+        self.stencil.table_bytes()
+            + self.stencil.update_bytes()
+            + std::mem::size_of_val(self.layout.patches.as_slice())
     }
 
-    /// Records the three dispatches into `encoder`. Submits nothing; the sizes follow
+    /// Records the five dispatches into `encoder`. Submits nothing; the sizes follow
     /// from the parameters, so there is nothing to grow and no error.
     pub fn prepare(
         &mut self,
@@ -240,6 +254,13 @@ impl CcUniformStage {
         let p = &self.params;
         let side = p.segments + 1;
         let [points, eval, cells] = &self.sized.binds;
+        {
+            // The quadtrees from the control points (nothing to do unless they moved).
+            let mut pass = passes.begin(encoder, "tessera cc stencils", false);
+            self.stencil
+                .record(&mut pass, &self.stencil_kernels, &self.stencil_binds);
+        }
+        self.stencil.settle(encoder);
         {
             let mut pass = passes.begin(encoder, "tessera cc_uniform_points", false);
             // At least one invocation: it writes the vertex count.
