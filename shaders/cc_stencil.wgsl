@@ -5,8 +5,9 @@
 // - `pieces`, one invocation per record (a Bézier net, ball or corner of some patch): its
 //   rows over the patch's one-ring of level-1 points, summed over the ring's offsets
 //   from its first point, so that tiny pieces keep their shape in single precision.
-// Both do nothing unless the points moved since the last run (word 0 of binding 82, set
-// through the queue by `CcStage::update_points` and cleared after this step).
+// Both run only after the points moved: their dispatches are indirect, with arguments
+// written through the queue with the points (`update_points`) and cleared to no
+// workgroups after this step, so a run whose points did not move costs no invocation.
 // Seven storage buffers at most per entry: the default limit is eight.
 
 #include "shared/types.wgsl"
@@ -22,7 +23,7 @@
 @group(0) @binding(79) var<storage, read> weights: array<f32>;
 @group(0) @binding(80) var nets_out: texture_storage_2d<rgba32float, write>;
 @group(0) @binding(81) var<storage, read_write> corners_out: array<CcCorner>;
-// [whether the points moved, records of all patches, level-1 points, 0].
+// [0, records of all patches, level-1 points, 0].
 @group(0) @binding(82) var<uniform> step: vec4u;
 
 fn stencil_invocation(gid: vec3u, groups: vec3u) -> u32 {
@@ -36,7 +37,7 @@ fn control_point(i: u32) -> vec3f {
 @compute @workgroup_size(64)
 fn level1(@builtin(global_invocation_id) gid: vec3u, @builtin(num_workgroups) groups: vec3u) {
     let q = stencil_invocation(gid, groups);
-    if step.x == 0u || q >= step.z || q + 1u >= arrayLength(&level1_offsets)
+    if q >= step.z || q + 1u >= arrayLength(&level1_offsets)
         || q >= arrayLength(&level1_points) {
         return;
     }
@@ -136,7 +137,7 @@ fn stencil_normalize(n: vec3f) -> vec3f {
 @compute @workgroup_size(64)
 fn pieces(@builtin(global_invocation_id) gid: vec3u, @builtin(num_workgroups) groups: vec3u) {
     let r = stencil_invocation(gid, groups);
-    if step.x == 0u || r >= step.y {
+    if r >= step.y {
         return;
     }
     let p = record_patch(r);

@@ -481,17 +481,18 @@ impl CcStage {
     }
 
     /// New positions of the control vertices, same topology and order as the mesh the
-    /// stage was made from: written through `queue` as they are, with one word that
-    /// makes the next [`prepare`](Self::prepare) derive the patches from them on the GPU
-    /// (see [`update_bytes`](Self::update_bytes)). The CPU only checks them.
+    /// stage was made from: written through `queue` as they are, with the dispatch
+    /// arguments that make the next [`prepare`](Self::prepare) derive the patches from
+    /// them on the GPU (see [`update_bytes`](Self::update_bytes)). The CPU only checks
+    /// them.
     pub fn update_points(&mut self, queue: &wgpu::Queue, points: &[Vec3]) -> Result<()> {
         self.patches
             .check_control_points(points.iter().map(|p| p.as_dvec3()))?;
         self.stencil.update(queue, points)
     }
 
-    /// Bytes [`update_points`](Self::update_points) writes: 12 per control point and a
-    /// word.
+    /// Bytes [`update_points`](Self::update_points) writes: 12 per control point and 24
+    /// of dispatch arguments.
     pub fn update_bytes(&self) -> usize {
         self.stencil.update_bytes()
     }

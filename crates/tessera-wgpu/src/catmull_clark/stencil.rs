@@ -2,7 +2,9 @@
 //! nets, balls and corners) derived on the GPU from the control points, through the
 //! stencil tables uploaded once per topology (`shaders/cc_stencil.wgsl`, twin
 //! [`tessera_core::catmull_clark::stencil`]). Moving the points uploads the points and
-//! one word; a run whose points did not move skips the step's work.
+//! the step's indirect dispatch arguments (six words); after the step they are cleared
+//! to no workgroups, so a run whose points did not move costs the step nothing but two
+//! empty dispatches.
 
 use glam::Vec3;
 use tessera_core::catmull_clark::stencil::CcStencils;
@@ -10,7 +12,7 @@ use wgpu::util::DeviceExt;
 
 use super::CcModelBuffers;
 use crate::error::{Error, Result};
-use crate::kernel::{check_upload, storage, Kernel};
+use crate::kernel::{check_upload, groups_2d, storage, Kernel};
 
 /// The step's two kernels, compiled once per device.
 pub(crate) struct CcStencilKernels {
@@ -27,17 +29,19 @@ impl CcStencilKernels {
     }
 }
 
-/// The tables on the GPU, the control points, and the flag that says they moved.
+/// The tables on the GPU, the control points, and the dispatch arguments that say they
+/// moved.
 #[doc(hidden)]
 pub struct CcStencilBuffers {
     control: wgpu::Buffer,
-    /// A uniform: whether the points moved since the last run (word 0, cleared after
-    /// the step), the records, the level-1 points.
+    /// A uniform: 0, the records, the level-1 points.
     step: wgpu::Buffer,
+    /// Both kernels' workgroups (x, y, z each): `dispatch_args` after the points moved,
+    /// x cleared to 0 after the step.
+    args: wgpu::Buffer,
+    dispatch_args: [u32; 6],
     tables: Vec<wgpu::Buffer>,
     level1_points: wgpu::Buffer,
-    level1_count: u32,
-    record_count: u32,
     control_count: usize,
     table_bytes: usize,
 }
@@ -86,16 +90,25 @@ impl CcStencilBuffers {
         let level1_count = stencils.level1_count() as u32;
         let step = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("tessera cc stencil step"),
-            contents: cast_slice(&[1u32, stencils.record_count, level1_count, 0]),
-            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            contents: cast_slice(&[0u32, stencils.record_count, level1_count, 0]),
+            usage: wgpu::BufferUsages::UNIFORM,
+        });
+        let (l1x, l1y) = groups_2d(level1_count.max(1), 64);
+        let (px, py) = groups_2d(stencils.record_count.max(1), 64);
+        let dispatch_args = [l1x, l1y, 1, px, py, 1];
+        // The first run derives the quadtrees.
+        let args = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("tessera cc stencil dispatch args"),
+            contents: cast_slice(&dispatch_args),
+            usage: wgpu::BufferUsages::INDIRECT | wgpu::BufferUsages::COPY_DST,
         });
         Ok(CcStencilBuffers {
             control: control_buffer,
             step,
+            args,
+            dispatch_args,
             tables,
             level1_points: storage(device, "tessera cc level-1 points", level1_bytes),
-            level1_count,
-            record_count: stencils.record_count,
             control_count: control.len(),
             table_bytes: stencils.upload_bytes(),
         })
@@ -113,13 +126,13 @@ impl CcStencilBuffers {
             ))));
         }
         queue.write_buffer(&self.control, 0, bytemuck::cast_slice(control));
-        queue.write_buffer(&self.step, 0, bytemuck::cast_slice(&[1u32]));
+        queue.write_buffer(&self.args, 0, bytemuck::cast_slice(&self.dispatch_args));
         Ok(())
     }
 
     /// Bytes [`update`](Self::update) writes per frame.
     pub fn update_bytes(&self) -> usize {
-        12 * self.control_count + 4
+        12 * self.control_count + std::mem::size_of_val(&self.dispatch_args)
     }
 
     /// Bytes uploaded once: the tables and the quadtrees' shape.
@@ -161,10 +174,10 @@ impl CcStencilBuffers {
     ) -> u32 {
         kernels
             .level1
-            .dispatch(pass, &binds[0], self.level1_count.max(1), 64)
+            .dispatch_indirect(pass, &binds[0], &self.args, 0)
             + kernels
                 .pieces
-                .dispatch(pass, &binds[1], self.record_count.max(1), 64)
+                .dispatch_indirect(pass, &binds[1], &self.args, 12)
     }
 
     /// The step alone on its own submission, writing into `model` (made by
@@ -191,6 +204,8 @@ impl CcStencilBuffers {
 
     /// After the step, in the same encoder: the next run skips it unless the points move.
     pub(crate) fn settle(&self, encoder: &mut wgpu::CommandEncoder) {
-        encoder.clear_buffer(&self.step, 0, Some(4));
+        // Both steps' x counts to zero: no workgroups until the points move again.
+        encoder.clear_buffer(&self.args, 0, Some(4));
+        encoder.clear_buffer(&self.args, 12, Some(4));
     }
 }
