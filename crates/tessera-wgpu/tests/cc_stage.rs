@@ -218,6 +218,11 @@ fn run_uniform(gpu: &Gpu, model: &SurfaceModel, n: u32) -> Mesh {
         &UniformParams { segments: n },
     )
     .expect("uniform stage");
+    read_uniform_run(gpu, &mut stage)
+}
+
+/// One run of a uniform stage, read back.
+fn read_uniform_run(gpu: &Gpu, stage: &mut tessera_wgpu::catmull_clark::CcUniformStage) -> Mesh {
     let mut encoder = gpu.device.create_command_encoder(&Default::default());
     stage
         .prepare(&gpu.device, &gpu.queue, &mut encoder)
@@ -817,20 +822,11 @@ fn moved_control_points_retessellate_in_place() {
         &UniformParams { segments: n },
     )
     .expect("uniform stage");
-    let run_uniform = |stage: &mut tessera_wgpu::catmull_clark::CcUniformStage| {
-        let mut encoder = gpu.device.create_command_encoder(&Default::default());
-        stage
-            .prepare(&gpu.device, &gpu.queue, &mut encoder)
-            .expect("prepare");
-        gpu.queue.submit([encoder.finish()]);
-        stage.read_mesh(&gpu.device, &gpu.queue).expect("read")
-    };
-    let before = run_uniform(&mut uniform);
+    let before = read_uniform_run(&gpu, &mut uniform);
     uniform
         .update_points(&gpu.queue, &points)
         .expect("same topology");
-    let after = run_uniform(&mut uniform);
-    gpu.check().expect("no wgpu errors");
+    let after = read_uniform_run(&gpu, &mut uniform);
     let uniform_cpu = |m: &SurfaceModel| {
         tessera_core::catmull_clark::tessellate_uniform(m, n)
             .expect("cpu")
@@ -873,13 +869,7 @@ fn gpu_uniform_matches_its_twin_and_the_cpu_uniform() {
             stage
                 .set_params(&gpu.device, &gpu.queue, &UniformParams { segments: n })
                 .expect("segments");
-            let mut encoder = gpu.device.create_command_encoder(&Default::default());
-            stage
-                .prepare(&gpu.device, &gpu.queue, &mut encoder)
-                .expect("prepare");
-            gpu.queue.submit([encoder.finish()]);
-            let mesh = stage.read_mesh(&gpu.device, &gpu.queue).expect("read");
-            gpu.check().expect("no wgpu errors");
+            let mesh = read_uniform_run(&gpu, &mut stage);
             let args: DrawIndexedIndirectArgs = bytemuck::pod_read_unaligned(
                 &gpu.read_buffer(stage.output().indirect(), 0, 20)
                     .expect("draw args"),
