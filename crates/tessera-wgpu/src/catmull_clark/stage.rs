@@ -519,6 +519,12 @@ impl CcStage {
         self.stencil.table_bytes() + self.stencil.update_bytes()
     }
 
+    /// Nets the stencil step derives on the device (the bench's memory figure).
+    #[doc(hidden)]
+    pub fn derived_nets(&self) -> usize {
+        self.stencil.derived_nets()
+    }
+
     /// Dispatches the last recorded run held ([`DISPATCHES`](Self::DISPATCHES)), counted
     /// as they were recorded; 0 before the first.
     pub fn dispatches(&self) -> u32 {

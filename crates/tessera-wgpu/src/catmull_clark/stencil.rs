@@ -44,6 +44,7 @@ pub struct CcStencilBuffers {
     level1_points: wgpu::Buffer,
     control_count: usize,
     table_bytes: usize,
+    derived_nets: usize,
 }
 
 /// Binding numbers of the tables, in the order [`CcStencilBuffers::tables`] holds them.
@@ -111,6 +112,7 @@ impl CcStencilBuffers {
             level1_points: storage(device, "tessera cc level-1 points", level1_bytes),
             control_count: control.len(),
             table_bytes: stencils.upload_bytes(),
+            derived_nets: stencils.derived_nets(),
         })
     }
 
@@ -138,6 +140,11 @@ impl CcStencilBuffers {
     /// Bytes uploaded once: the tables and the quadtrees' shape.
     pub fn table_bytes(&self) -> usize {
         self.table_bytes
+    }
+
+    /// Nets the step derives into the nets texture (device memory, not upload).
+    pub fn derived_nets(&self) -> usize {
+        self.derived_nets
     }
 
     /// The bind groups of both kernels, writing into `model`.
