@@ -1,6 +1,7 @@
 // Exclusive prefix sum of u32, in place, in two dispatches whatever the length (a
 // fixed script: the number of dispatches never depends on the data). The values are cut
-// into GROUPS chunks of whole blocks; `reduce` sums each chunk, `scan_chunks` adds up the
+// into as many chunks of whole blocks as there are workgroups (at most 256, fewer for a
+// short list: `tessera_core::scan::scan_groups`); `reduce` sums each chunk, `scan_chunks` adds up the
 // sums of the chunks before its own and scans its chunk block by block. Two lists can be
 // scanned by the same two dispatches, each in half the chunks. No workgroup
 // waits on another: WGSL promises no forward progress between workgroups, which rules
@@ -13,8 +14,6 @@
 const WORKGROUP: u32 = 64u;
 const PER_LANE: u32 = 8u;
 const BLOCK: u32 = WORKGROUP * PER_LANE;
-// `tessera_core::scan::SCAN_GROUPS`.
-const GROUPS: u32 = 256u;
 
 struct ScanParams {
     n: u32,
@@ -41,9 +40,13 @@ struct ScanParams {
 @group(0) @binding(5) var<storage, read> live_b: array<u32>;
 
 
+// The workgroups of the dispatch, a multiple of the lists (set in `reduce` and
+// `scan_chunks` from their `num_workgroups`).
+var<private> groups: u32;
+
 // The chunks of each list, and the list of workgroup g.
 fn list_groups() -> u32 {
-    return GROUPS / scan.lists;
+    return groups / scan.lists;
 }
 
 fn list_of(g: u32) -> u32 {
@@ -88,7 +91,12 @@ var<workgroup> lane_totals: array<u32, WORKGROUP>;
 var<workgroup> carry: u32;
 
 @compute @workgroup_size(64)
-fn reduce(@builtin(workgroup_id) wg: vec3u, @builtin(local_invocation_index) lid: u32) {
+fn reduce(
+    @builtin(workgroup_id) wg: vec3u,
+    @builtin(num_workgroups) count: vec3u,
+    @builtin(local_invocation_index) lid: u32,
+) {
+    groups = count.x;
     let list = list_of(wg.x);
     let g = wg.x % list_groups();
     let n = scan_len(list);
@@ -111,7 +119,12 @@ fn reduce(@builtin(workgroup_id) wg: vec3u, @builtin(local_invocation_index) lid
 }
 
 @compute @workgroup_size(64)
-fn scan_chunks(@builtin(workgroup_id) wg: vec3u, @builtin(local_invocation_index) lid: u32) {
+fn scan_chunks(
+    @builtin(workgroup_id) wg: vec3u,
+    @builtin(num_workgroups) count: vec3u,
+    @builtin(local_invocation_index) lid: u32,
+) {
+    groups = count.x;
     let list = list_of(wg.x);
     let g = wg.x % list_groups();
     let n = scan_len(list);

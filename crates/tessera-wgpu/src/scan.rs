@@ -2,7 +2,7 @@
 //! [`PrefixSum::DISPATCHES`] dispatches: chunk sums, then each chunk scanned after the
 //! chunks before it (`shaders/scan.wgsl`). CPU twin: [`tessera_core::scan`].
 
-use tessera_core::scan::SCAN_GROUPS;
+use tessera_core::scan::{scan_groups, SCAN_GROUPS};
 use wgpu::util::DeviceExt;
 
 use crate::kernel::{storage, Kernel};
@@ -26,6 +26,8 @@ impl ScanKernels {
 pub struct PrefixSum {
     reduce: wgpu::BindGroup,
     scan_chunks: wgpu::BindGroup,
+    /// Workgroups of each dispatch, from the lists' capacities.
+    groups: u32,
     // Kept alive for the bind groups.
     _uniform: wgpu::Buffer,
     _sums: wgpu::Buffer,
@@ -127,19 +129,19 @@ impl PrefixSum {
         PrefixSum {
             reduce: kernels.reduce.bind(device, &entries),
             scan_chunks: kernels.scan_chunks.bind(device, &entries),
+            groups: scan_groups(n.max(n_b) as usize, lists as usize) as u32,
             _uniform: uniform,
             _sums: sums,
         }
     }
 
     /// Records the scan into `pass`: [`DISPATCHES`](Self::DISPATCHES) dispatches of
-    /// `SCAN_GROUPS` workgroups each, whatever the length or live count. Returns the
-    /// dispatches recorded.
+    /// [`scan_groups`] workgroups each for the lists' capacities, whatever the live
+    /// count. Returns the dispatches recorded.
     pub fn record(&self, pass: &mut wgpu::ComputePass, kernels: &ScanKernels) -> u32 {
-        let groups = SCAN_GROUPS as u32;
-        kernels.reduce.dispatch(pass, &self.reduce, groups, 1)
+        kernels.reduce.dispatch(pass, &self.reduce, self.groups, 1)
             + kernels
                 .scan_chunks
-                .dispatch(pass, &self.scan_chunks, groups, 1)
+                .dispatch(pass, &self.scan_chunks, self.groups, 1)
     }
 }
