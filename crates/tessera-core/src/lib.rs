@@ -26,9 +26,11 @@ pub mod measure;
 pub mod mesh;
 pub mod scan;
 pub mod tolerance;
+pub mod view;
 pub mod watertight;
 pub mod weld;
 
 pub use error::{Error, Result};
 pub use mesh::Mesh;
 pub use tolerance::Tolerance;
+pub use view::View;

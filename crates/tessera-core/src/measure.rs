@@ -131,6 +131,57 @@ pub fn measure_error(samples: &[DVec3], mesh: &Mesh, bbox_diag: f64) -> ErrorSta
     }
 }
 
+/// The largest distance in pixels between the projection of a sample inside the view's
+/// frustum and the projection of its nearest 3D point on `mesh`; `None` when no sample is
+/// inside (infinite when some are and the mesh is empty). Runs on all cores.
+pub fn max_error_px(samples: &[DVec3], mesh: &Mesh, view: &crate::View) -> Option<f64> {
+    let inside: Vec<DVec3> = samples.iter().copied().filter(|&p| view.contains(p)).collect();
+    if inside.is_empty() {
+        return None;
+    }
+    let tris: Vec<[DVec3; 3]> = mesh
+        .triangles()
+        .map(|t| t.map(|i| DVec3::from(mesh.vertices[i as usize].position.map(f64::from))))
+        .collect();
+    if tris.is_empty() {
+        return Some(f64::INFINITY);
+    }
+    let bvh = TriangleBvh::new(tris);
+    let threads = std::thread::available_parallelism()
+        .map_or(1, |n| n.get())
+        .min(16);
+    let chunk = inside.len().div_ceil(threads);
+    let worst = std::thread::scope(|s| {
+        let jobs: Vec<_> = inside
+            .chunks(chunk)
+            .map(|pts| {
+                let bvh = &bvh;
+                s.spawn(move || {
+                    let mut hint = 0;
+                    let mut worst: f64 = 0.0;
+                    for &p in pts {
+                        let (_, t) = bvh.nearest(p, hint);
+                        hint = t;
+                        let [a, b, c] = bvh.tris[t];
+                        let q = closest_point_on_triangle(p, a, b, c);
+                        // A nearest point behind the eye cannot be drawn near `p`.
+                        let px = match (view.pixel(p), view.pixel(q)) {
+                            (Some(sp), Some(sq)) => (sp - sq).length(),
+                            _ => f64::INFINITY,
+                        };
+                        worst = worst.max(px);
+                    }
+                    worst
+                })
+            })
+            .collect();
+        jobs.into_iter()
+            .map(|j| j.join().expect("a measuring thread"))
+            .fold(0.0, f64::max)
+    });
+    Some(worst)
+}
+
 /// Closest point to `p` on triangle `abc` (Ericson, Real-Time Collision Detection §5.1.5).
 pub fn closest_point_on_triangle(p: DVec3, a: DVec3, b: DVec3, c: DVec3) -> DVec3 {
     let (ab, ac, ap) = (b - a, c - a, p - a);

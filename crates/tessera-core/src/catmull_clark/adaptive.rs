@@ -66,6 +66,7 @@ use crate::gpu_types::{CcCell, OutVertex};
 use crate::measure::closest_point_on_triangle;
 use crate::mesh::Mesh;
 use crate::tolerance::Tolerance;
+use crate::view::View;
 
 /// The largest first split of a patch along each side (`ku × kv` cells).
 pub const MAX_BASE_SPLIT: u32 = 8;
@@ -212,6 +213,19 @@ impl CcParams {
     }
 }
 
+/// What a view changes in a tessellation ([`tessellate_adaptive_in_view`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ViewTolerance {
+    /// The camera, with the model's placement ([`View::with_model`]).
+    pub view: View,
+    /// Every surface point inside the frustum projects within this many pixels of the
+    /// projection of its nearest point on the output (the world tolerance of the
+    /// parameters still caps each cell's). `None`: the world tolerance alone.
+    pub pixels: Option<f64>,
+    /// Cells whose bounds lie wholly outside the frustum emit nothing.
+    pub cull: bool,
+}
+
 /// A tessellation with what it cost.
 #[derive(Clone, Debug, Default)]
 pub struct CcTessellation {
@@ -227,6 +241,10 @@ pub struct CcTessellation {
     pub unmet: usize,
     /// The largest flatness bound of any leaf: the guaranteed error of the output.
     pub max_bound: f64,
+    /// Leaves outside the view's frustum, which emit nothing.
+    pub culled_leaves: usize,
+    /// Patches all of whose leaves lie outside the view's frustum.
+    pub culled_patches: usize,
     /// Flatness bounds computed, every trial of the first-split search included: the
     /// method's cost, most of its time.
     pub bounds: u64,
@@ -251,6 +269,8 @@ struct Evaluator<'a> {
     points: HashMap<u64, SurfacePoint>,
     /// ε in model units.
     eps: f64,
+    /// The view that sets each cell's ε and culls, if any.
+    view: Option<ViewTolerance>,
 }
 
 impl<'a> Evaluator<'a> {
@@ -264,7 +284,42 @@ impl<'a> Evaluator<'a> {
             proven: 0,
             triangle_bounds: 0,
             points: HashMap::default(),
+            view: None,
         }
+    }
+
+    /// ε for a cell with these corners: the world ε, and within the view's pixels where
+    /// it sets them ([`View::cell_tolerance`]).
+    fn eps_at(&self, corners: &[DVec3; 4]) -> f64 {
+        match self.view {
+            Some(ViewTolerance {
+                view,
+                pixels: Some(px),
+                ..
+            }) => {
+                let (lo, hi) = corner_box(corners);
+                self.eps.min(view.cell_tolerance(lo, hi, px))
+            }
+            _ => self.eps,
+        }
+    }
+
+    /// Whether a cell with these corners and this bound lies wholly outside the frustum
+    /// of a culling view: its surface is within `bound` of its corners' hull.
+    fn outside(&self, corners: &[DVec3; 4], bound: f64) -> bool {
+        match self.view {
+            Some(ViewTolerance {
+                view, cull: true, ..
+            }) if bound.is_finite() => {
+                let (lo, hi) = corner_box(corners);
+                view.box_outside(lo - DVec3::splat(bound), hi + DVec3::splat(bound))
+            }
+            _ => false,
+        }
+    }
+
+    fn corners(&mut self, p: usize, cell: Cell) -> [DVec3; 4] {
+        cell.corners().map(|(a, c)| self.get(p, a, c).position)
     }
 
     fn get(&mut self, p: usize, i: u32, j: u32) -> SurfacePoint {
@@ -275,6 +330,13 @@ impl<'a> Evaluator<'a> {
             .entry(key)
             .or_insert_with(|| model.eval(p, i as f64 / n, j as f64 / n))
     }
+}
+
+/// The box of a cell's corners.
+fn corner_box(corners: &[DVec3; 4]) -> (DVec3, DVec3) {
+    let lo = corners.iter().fold(DVec3::INFINITY, |a, &c| a.min(c));
+    let hi = corners.iter().fold(DVec3::NEG_INFINITY, |a, &c| a.max(c));
+    (lo, hi)
 }
 
 /// The flatness bound of the box `[u0, u1] × [v0, v1]` of patch `p`: a guaranteed upper
@@ -329,6 +391,8 @@ fn decide_cell(
     let scale = WALK_ONE / eval.n;
     let bx = [cell.i, cell.i + cell.w, cell.j, cell.j + cell.h].map(|t| t * scale);
     let corners = cell.corners().map(|(a, c)| eval.get(p, a, c).position);
+    // The world ε, or the cell's share of the view's pixels.
+    let tolerance = tolerance.min(eval.eps_at(&corners));
     // A cell whose children's corners already prove it too far from flat is split
     // without its bound. Only at a vertex: a regular patch's bound is one Bézier piece,
     // about as costly as the proof's five evaluations.
@@ -346,7 +410,8 @@ fn decide_cell(
         eval.bounds += 1;
         box_bound(&eval.model.patches[p], bx, corners)
     };
-    if bound <= tolerance {
+    // Nothing of it can be seen: a leaf that emits nothing.
+    if bound <= tolerance || eval.outside(&corners, bound) {
         return Some((bound, None));
     }
     if exact {
@@ -418,7 +483,27 @@ fn own_triangles_bound(
 
 /// Adaptive tessellation of every (non-hole) patch to within `params.tolerance`.
 pub fn tessellate_adaptive(model: &SurfaceModel, params: &CcParams) -> Result<CcTessellation> {
-    tessellate_with_splits(model, params, &params.first_split.splits())
+    tessellate_with_splits(model, params, &params.first_split.splits(), None)
+}
+
+/// [`tessellate_adaptive`] for a view: each cell's ε the smaller of the world tolerance
+/// and the one that keeps its points inside the frustum within `view.pixels` pixels of
+/// the mesh ([`View::cell_tolerance`], where the bound is proven); with `view.cull`,
+/// cells wholly outside the frustum emit nothing. Leaves whose bound the depth limit
+/// leaves above their ε (next to the near plane, where ε shrinks) count as `unmet`.
+pub fn tessellate_adaptive_in_view(
+    model: &SurfaceModel,
+    params: &CcParams,
+    view: &ViewTolerance,
+) -> Result<CcTessellation> {
+    if let Some(px) = view.pixels {
+        if !(px.is_finite() && px > 0.0) {
+            return Err(Error::Param(format!(
+                "pixel tolerance must be a positive number, got {px}"
+            )));
+        }
+    }
+    tessellate_with_splits(model, params, &params.first_split.splits(), Some(*view))
 }
 
 /// What `cc_traverse` writes for `params` (flatness bound): every leaf in the GPU's
@@ -450,9 +535,11 @@ fn tessellate_with_splits(
     model: &SurfaceModel,
     params: &CcParams,
     splits: &[(u32, u32)],
+    view: Option<ViewTolerance>,
 ) -> Result<CcTessellation> {
     params.validate(model)?;
     let mut eval = Evaluator::new(model, params);
+    eval.view = view;
     let n = eval.n;
     let mesh = &model.mesh;
     let mut out = CcTessellation::default();
@@ -464,6 +551,8 @@ fn tessellate_with_splits(
     out.proven = eval.proven;
     out.triangle_bounds = eval.triangle_bounds;
     out.max_bound = marking.max_bound;
+    out.culled_leaves = marking.culled_leaves;
+    out.culled_patches = marking.culled_patches;
     let leaves = marking.leaves;
     out.leaves = leaves.len();
 
@@ -525,6 +614,8 @@ struct Marking {
     first_split: Vec<u32>,
     unmet: usize,
     max_bound: f64,
+    culled_leaves: usize,
+    culled_patches: usize,
 }
 
 /// Step 1, adaptive marking: the first split ku×kv of each patch is the one with the
@@ -540,6 +631,8 @@ fn mark_patches(eval: &mut Evaluator, params: &CcParams, splits: &[(u32, u32)]) 
         first_split: vec![u32::MAX; mesh.patch_count()],
         unmet: 0,
         max_bound: 0.0,
+        culled_leaves: 0,
+        culled_patches: 0,
     };
     for p in mesh.surface_patches() {
         // In the GPU's order (`traverse`): the same leaves as marking each cell
@@ -548,16 +641,37 @@ fn mark_patches(eval: &mut Evaluator, params: &CcParams, splits: &[(u32, u32)]) 
         let mut decide = |c: Cell| decide_cell(eval, p, c, max_depth - c.depth, eps, exact);
         let (trial, walk) = traverse::search(n, splits, &mut decide);
         out.first_split[p] = trial;
+        let mut seen = false;
         for (c, (bound, e)) in walk.leaves {
-            if bound > eps {
-                out.unmet += 1;
+            if !out.keep_leaf(eval, p, c, bound) {
+                continue;
             }
-            out.max_bound = out.max_bound.max(bound);
+            seen = true;
             out.leaves.push((p, c));
             out.bounds.push((bound, e));
         }
+        if !seen {
+            out.culled_patches += 1;
+        }
     }
     out
+}
+
+impl Marking {
+    /// Counts a leaf of patch `p` with its bound: false for one outside the view (it
+    /// emits nothing), else whether the bound meets the cell's ε, and the largest bound.
+    fn keep_leaf(&mut self, eval: &mut Evaluator, p: usize, c: Cell, bound: f64) -> bool {
+        let corners = eval.corners(p, c);
+        if eval.outside(&corners, bound) {
+            self.culled_leaves += 1;
+            return false;
+        }
+        if bound > eval.eps_at(&corners) {
+            self.unmet += 1;
+        }
+        self.max_bound = self.max_bound.max(bound);
+        true
+    }
 }
 
 /// Checks every leaf accepted by the triangle-distance bound of its plain quad against
@@ -601,6 +715,7 @@ fn settle_exact_leaves(eval: &mut Evaluator, marking: &mut Marking) -> Vec<Polyg
             let scale = WALK_ONE / n;
             let bx = [cell.i, cell.i + cell.w, cell.j, cell.j + cell.h].map(|t| t * scale);
             let quad = cell.corners().map(|(a, c)| eval.get(p, a, c).position);
+            let eps = eval.eps_at(&quad);
             eval.triangle_bounds += 1;
             let b = triangles_bound(&eval.model.patches[p], bx, quad, &triangles, eps);
             if b <= eps {
@@ -621,13 +736,14 @@ fn settle_exact_leaves(eval: &mut Evaluator, marking: &mut Marking) -> Vec<Polyg
                 next.next();
                 let (p, cell) = marking.leaves[k];
                 let splits_left = marking.bounds[k].1.expect("an exact leaf");
-                mark(eval, p, cell, splits_left, eps, &mut |c, b| {
-                    if b > eps {
-                        marking.unmet += 1;
+                let mut marked = Vec::new();
+                mark(eval, p, cell, splits_left, eps, &mut |c, b| marked.push((c, b)));
+                for (c, b) in marked {
+                    if marking.keep_leaf(eval, p, c, b) {
+                        leaves.push((p, c));
+                        bounds.push((b, None));
                     }
-                    leaves.push((p, c));
-                    bounds.push((b, None));
-                });
+                }
             } else {
                 leaves.push(marking.leaves[k]);
                 bounds.push(marking.bounds[k]);
@@ -829,10 +945,10 @@ mod tests {
                     leaf_bound: Default::default(),
                 };
                 let ours = tessellate_adaptive(&model, &params).expect("ours");
-                let all = tessellate_with_splits(&model, &params, &with_even).expect("all");
+                let all = tessellate_with_splits(&model, &params, &with_even, None).expect("all");
                 most = most.max(ours.leaves / model.mesh.patch_count());
                 // The search matters here: midpoint splits alone give another mesh.
-                let midpoints = tessellate_with_splits(&model, &params, &[(1, 1)]).expect("1x1");
+                let midpoints = tessellate_with_splits(&model, &params, &[(1, 1)], None).expect("1x1");
                 searched |= midpoints.leaves != ours.leaves;
                 assert_eq!(ours.leaves, all.leaves, "{rel}");
                 assert_eq!(ours.mesh.indices, all.mesh.indices, "{rel}");

@@ -50,7 +50,8 @@ pub mod vertex_hash;
 use std::path::Path;
 
 pub use adaptive::{
-    first_splits, tessellate_adaptive, CcParams, CcTessellation, FirstSplit, LeafBound,
+    first_splits, tessellate_adaptive, tessellate_adaptive_in_view, CcParams, CcTessellation,
+    FirstSplit, LeafBound, ViewTolerance,
 };
 pub use control_mesh::{BoundaryRule, ControlMesh, CreaseMethod, SHARPNESS_INFINITE};
 pub use patch::{PatchSurface, SurfaceModel, SurfacePoint};

@@ -1,0 +1,441 @@
+//! A view: what a camera sees, and how many pixels a distance in model space can become.
+//!
+//! A [`View`] is the matrix from model space to wgpu's clip space (projection · view ·
+//! model) and the viewport in pixels. The frustum is `−w ≤ x ≤ w`, `−w ≤ y ≤ w`,
+//! `0 ≤ z ≤ w` in clip coordinates `c = (x, y, z, w)`, whatever the depth convention
+//! (reverse-Z and an infinite far plane included), and a point `X` projects to the pixel
+//! offset `s(X) = (W/2 · x/w, H/2 · y/w)` from the viewport's centre.
+//!
+//! # From a distance in model space to pixels
+//!
+//! Let `c = M·(X, 1)`, with rows `r_x`, `r_y`, `r_w` and their linear parts `a_x`, `a_y`,
+//! `a_w` (three-vectors). For a displacement `d` of `X`,
+//!
+//! ```text
+//! ds_x = W/2 · (a_x·d / w − x · a_w·d / w²),   so   |ds_x| ≤ W/2 · (|a_x| / w + |x| |a_w| / w²) · |d|,
+//! ```
+//!
+//! and the same for `y`. On a segment from `P` to `Q` whose points all have `w ≥ w_lo > 0`
+//! and `|x| ≤ x_hi`, `|y| ≤ y_hi`, the mean value theorem in integral form gives
+//! `|s(P) − s(Q)| ≤ K · |P − Q|` with
+//!
+//! ```text
+//! K² = λ_max [[K_x², G], [G, K_y²]],   K_x = W/2 · (|a_x| / w_lo + x_hi |a_w| / w_lo²)   (K_y alike),
+//! ```
+//!
+//! with `G` the matching bound on `|ρ_x · ρ_y|` for the rows `ρ_x`, `ρ_y` of the
+//! Jacobian of `s` ([`View::gain`]): the largest eigenvalue of the rows' Gram matrix is
+//! the Jacobian's squared norm, and it grows with each entry. On the axis of a usual
+//! perspective, the rows are orthogonal and `K` is the exact focal length over depth. Over a box, `w` is affine
+//! and `|x|` convex, so `w_lo` is the least `w` of its eight corners and `x_hi` the largest
+//! `|x|`: off-axis points are covered by `x_hi`, and an orthographic projection
+//! (`a_w = 0`, `w = 1`) gets its constant gain. A point `P` inside the frustum has
+//! `w ≥ w_near`, the least `w` of the frustum (the near plane's, [`View::near_w`]), so every
+//! point within `δ` of it has `w ≥ w_near − |a_w| δ`: a box that crosses the near plane, or
+//! reaches behind the eye, is bounded by the larger of the two lower bounds, and its
+//! tolerance shrinks as `δ` nears `w_near / |a_w|`.
+//!
+//! # A cell's tolerance in model units
+//!
+//! Let a cell's surface lie within `b` of the convex hull of its corners, whose box is
+//! `A`, and let its output triangles lie there too. A surface point `P` of the cell then
+//! lies in `A ⊕ b`, its nearest point `Q` on the mesh is within `b` of it, and the segment
+//! `PQ` lies in `A ⊕ 2b`. With `g(δ) = p / K(A ⊕ 2δ, δ)`, any `δ ≤ g(δ)` guarantees
+//! `p` pixels for `b ≤ δ`. `K` grows with `δ`, so `g` falls, and `δ₁ = g(g(0))` is such a
+//! `δ`: `δ₀ = g(0) ≥ g(δ₀) = δ₁`, so `g(δ₁) ≥ g(δ₀) = δ₁` ([`View::cell_tolerance`]). A cell whose box `A ⊕ b` lies wholly
+//! outside one plane of the frustum has no point inside it ([`View::box_outside`]).
+
+use glam::{DMat4, DVec2, DVec3, DVec4};
+
+use crate::error::{Error, Result};
+
+/// A camera and its viewport: model space to clip space, and the pixels of the viewport.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct View {
+    /// Model to clip space (projection · view · model).
+    clip: DMat4,
+    /// The viewport's width and height in pixels.
+    viewport: DVec2,
+    /// The least clip `w` of a point in the frustum.
+    near_w: f64,
+}
+
+impl View {
+    /// A perspective camera at `eye` looking at `target`, right-handed as glam's
+    /// `look_at_rh` and `perspective_rh` (`fovy` vertical, in radians), with `viewport`
+    /// in pixels and the near plane at `near`; the far plane is at infinity.
+    pub fn look_at(
+        eye: DVec3,
+        target: DVec3,
+        up: DVec3,
+        fovy: f64,
+        viewport: (u32, u32),
+        near: f64,
+    ) -> Result<View> {
+        let bad = |what: &str| Err(Error::Param(format!("view: {what}")));
+        if !(eye - target).is_finite() || (eye - target).length() == 0.0 {
+            return bad("the eye and the target must be distinct points");
+        }
+        if (target - eye).cross(up).length() <= 1e-12 * (target - eye).length() * up.length() {
+            return bad("the up direction must not be parallel to the line of sight");
+        }
+        if !(fovy > 0.0 && fovy < std::f64::consts::PI) {
+            return bad("the vertical field of view must be between 0 and 180 degrees");
+        }
+        if !(near.is_finite() && near > 0.0) {
+            return bad("the near plane must be a positive distance");
+        }
+        let aspect = viewport.0.max(1) as f64 / viewport.1.max(1) as f64;
+        let view = DMat4::look_at_rh(eye, target, up);
+        let projection = DMat4::perspective_infinite_rh(fovy, aspect, near);
+        View::from_matrices(view, projection, viewport)
+    }
+
+    /// A view from a renderer's own matrices (world to view, view to wgpu's clip space:
+    /// perspective or orthographic, reverse-Z and an infinite far plane included).
+    pub fn from_matrices(view: DMat4, projection: DMat4, viewport: (u32, u32)) -> Result<View> {
+        let clip = projection * view;
+        if viewport.0 == 0 || viewport.1 == 0 {
+            return Err(Error::Param("view: the viewport must have pixels".into()));
+        }
+        if !clip.is_finite() || clip.determinant().abs() < 1e-300 {
+            return Err(Error::Param(
+                "view: the view and projection matrices must be finite and invertible".into(),
+            ));
+        }
+        let near_w = frustum_least_w(clip).ok_or_else(|| {
+            Error::Param("view: the frustum must lie in front of the eye (w > 0 inside)".into())
+        })?;
+        Ok(View {
+            clip,
+            viewport: DVec2::new(viewport.0 as f64, viewport.1 as f64),
+            near_w,
+        })
+    }
+
+    /// The same camera seeing a model placed by `model` (model to world space): boxes and
+    /// distances are then in model space.
+    pub fn with_model(&self, model: DMat4) -> View {
+        View {
+            clip: self.clip * model,
+            ..*self
+        }
+    }
+
+    /// Model to clip space.
+    pub fn clip_matrix(&self) -> DMat4 {
+        self.clip
+    }
+
+    /// The viewport in pixels.
+    pub fn viewport(&self) -> DVec2 {
+        self.viewport
+    }
+
+    /// The least clip `w` of any point inside the frustum.
+    pub fn near_w(&self) -> f64 {
+        self.near_w
+    }
+
+    /// Clip coordinates of a point in model space.
+    pub fn clip_of(&self, x: DVec3) -> DVec4 {
+        self.clip * x.extend(1.0)
+    }
+
+    /// Whether a point lies inside the frustum.
+    pub fn contains(&self, x: DVec3) -> bool {
+        let c = self.clip_of(x);
+        c.w > 0.0 && c.x.abs() <= c.w && c.y.abs() <= c.w && c.z >= 0.0 && c.z <= c.w
+    }
+
+    /// The pixel offset of a point from the viewport's centre (`x` right, `y` up), where it
+    /// lies in front of the eye (`w > 0`).
+    pub fn pixel(&self, x: DVec3) -> Option<DVec2> {
+        let c = self.clip_of(x);
+        (c.w > 0.0).then(|| DVec2::new(c.x, c.y) / c.w * self.viewport * 0.5)
+    }
+
+    /// Whether the box `[lo, hi]` lies wholly outside one plane of the frustum: no point of
+    /// it can be seen.
+    pub fn box_outside(&self, lo: DVec3, hi: DVec3) -> bool {
+        let c = box_corners(lo, hi).map(|x| self.clip_of(x));
+        let outside = |f: &dyn Fn(DVec4) -> f64| c.iter().all(|&c| f(c) < 0.0);
+        outside(&|c| c.w - c.x)
+            || outside(&|c| c.w + c.x)
+            || outside(&|c| c.w - c.y)
+            || outside(&|c| c.w + c.y)
+            || outside(&|c| c.z)
+            || outside(&|c| c.w - c.z)
+    }
+
+    /// `K`, the pixels that a model-space distance can become on a segment inside the box
+    /// `[lo, hi]` one of whose ends lies in the frustum and which is at most `reach` long
+    /// (see the module docs); infinite where no positive `w` bounds it.
+    pub fn gain(&self, lo: DVec3, hi: DVec3, reach: f64) -> f64 {
+        let [a_x, a_y, a_w] = [0, 1, 3].map(|r| self.clip.row(r).truncate());
+        let c = box_corners(lo, hi).map(|x| self.clip_of(x));
+        let w_box = c.iter().map(|c| c.w).fold(f64::INFINITY, f64::min);
+        let w_lo = w_box.max(self.near_w - a_w.length() * reach);
+        if w_lo.is_nan() || w_lo <= 0.0 {
+            return f64::INFINITY;
+        }
+        let x_hi = c.iter().map(|c| c.x.abs()).fold(0.0, f64::max);
+        let y_hi = c.iter().map(|c| c.y.abs()).fold(0.0, f64::max);
+        // ds = (ρ_x·d, ρ_y·d), ρ_x = α_x a_x − β_x a_w with |α_x| ≤ W/2 / w_lo and
+        // |β_x| ≤ W/2 · x_hi / w_lo² (ρ_y alike).
+        let (half_w, half_h) = (0.5 * self.viewport.x, 0.5 * self.viewport.y);
+        let (alpha_x, beta_x) = (half_w / w_lo, half_w * x_hi / (w_lo * w_lo));
+        let (alpha_y, beta_y) = (half_h / w_lo, half_h * y_hi / (w_lo * w_lo));
+        let kx = alpha_x * a_x.length() + beta_x * a_w.length();
+        let ky = alpha_y * a_y.length() + beta_y * a_w.length();
+        let g12 = alpha_x * alpha_y * a_x.dot(a_y).abs()
+            + alpha_x * beta_y * a_x.dot(a_w).abs()
+            + beta_x * alpha_y * a_y.dot(a_w).abs()
+            + beta_x * beta_y * a_w.length_squared();
+        // The largest eigenvalue of the Gram matrix of (ρ_x, ρ_y), which grows with each
+        // entry's bound: the squared norm of the Jacobian.
+        let (mean, half_gap) = (0.5 * (kx * kx + ky * ky), 0.5 * (kx * kx - ky * ky));
+        (mean + half_gap.hypot(g12)).sqrt()
+    }
+
+    /// The largest bound in model units a cell may keep for `pixels` pixels, where the
+    /// box of its corners is `[lo, hi]` (see the module docs): `g(g(0))`.
+    pub fn cell_tolerance(&self, lo: DVec3, hi: DVec3, pixels: f64) -> f64 {
+        let g = |delta: f64| {
+            let grow = DVec3::splat(2.0 * delta);
+            pixels / self.gain(lo - grow, hi + grow, delta)
+        };
+        g(g(0.0))
+    }
+}
+
+/// The eight corners of a box.
+pub fn box_corners(lo: DVec3, hi: DVec3) -> [DVec3; 8] {
+    std::array::from_fn(|k| {
+        DVec3::new(
+            if k & 1 == 0 { lo.x } else { hi.x },
+            if k & 2 == 0 { lo.y } else { hi.y },
+            if k & 4 == 0 { lo.z } else { hi.z },
+        )
+    })
+}
+
+/// The least clip `w` over the frustum, `None` unless positive. `w` is affine, so its
+/// least value is at a corner; a corner at infinity (an infinite far plane) has `w`
+/// growing without end and is passed over.
+fn frustum_least_w(clip: DMat4) -> Option<f64> {
+    let inverse = clip.inverse();
+    let mut least = f64::INFINITY;
+    for k in 0..8 {
+        let ndc = DVec4::new(
+            if k & 1 == 0 { -1.0 } else { 1.0 },
+            if k & 2 == 0 { -1.0 } else { 1.0 },
+            if k & 4 == 0 { 0.0 } else { 1.0 },
+            1.0,
+        );
+        // The homogeneous point h with clip * h = ndc; the world point h / h.w has
+        // clip w = 1 / h.w.
+        let h = inverse * ndc;
+        if h.w.abs() > 1e-12 * h.truncate().length().max(1.0) {
+            least = least.min(1.0 / h.w);
+        }
+    }
+    (least.is_finite() && least > 0.0).then_some(least)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn car_view() -> View {
+        View::look_at(
+            DVec3::new(3.0, -4.0, 1.5),
+            DVec3::ZERO,
+            DVec3::Z,
+            40f64.to_radians(),
+            (800, 600),
+            0.1,
+        )
+        .expect("a view")
+    }
+
+    /// A tiny deterministic generator, so that failures reproduce.
+    struct Lcg(u64);
+    impl Lcg {
+        fn next(&mut self) -> f64 {
+            self.0 = self.0.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            (self.0 >> 11) as f64 / (1u64 << 53) as f64
+        }
+        fn vec(&mut self, lo: f64, hi: f64) -> DVec3 {
+            DVec3::new(self.next(), self.next(), self.next()) * (hi - lo) + DVec3::splat(lo)
+        }
+    }
+
+    /// The direction in which a small step from `x` moves its projection the most, and
+    /// how many pixels per unit (power iteration on the Jacobian, by central differences).
+    fn stretch(view: &View, x: DVec3) -> (DVec3, f64) {
+        let h = 1e-6 * (1.0 + x.length());
+        let column = |e: DVec3| (view.pixel(x + e * h).unwrap() - view.pixel(x - e * h).unwrap()) / (2.0 * h);
+        let j = [DVec3::X, DVec3::Y, DVec3::Z].map(column);
+        let apply = |d: DVec3| j[0] * d.x + j[1] * d.y + j[2] * d.z;
+        let mut d = DVec3::ONE.normalize();
+        for _ in 0..50 {
+            let s = apply(d);
+            d = DVec3::new(j[0].dot(s), j[1].dot(s), j[2].dot(s)).normalize();
+        }
+        (d, apply(d).length())
+    }
+
+    /// Over random boxes, some crossing the near plane or off screen, and pairs of points
+    /// in them, half of them a point and a short step in its most stretched direction: the
+    /// largest pixel distance over model distance seen, as a fraction of the gain.
+    fn worst_ratio(view: &View, gain: impl Fn(DVec3, DVec3, f64) -> f64) -> f64 {
+        let mut rng = Lcg(7);
+        let mut worst: f64 = 0.0;
+        for k in 0..8000 {
+            let centre = rng.vec(-3.0, 3.0);
+            let half = if k % 2 == 0 { rng.vec(0.0, 0.5) } else { DVec3::splat(1e-4) };
+            let (lo, hi) = (centre - half, centre + half);
+            let p = lo + (hi - lo) * DVec3::new(rng.next(), rng.next(), rng.next());
+            if !view.contains(p) {
+                continue;
+            }
+            let q = if k % 2 == 0 {
+                lo + (hi - lo) * DVec3::new(rng.next(), rng.next(), rng.next())
+            } else {
+                p + stretch(view, p).0 * 1e-5
+            };
+            let (lo, hi) = (lo.min(q), hi.max(q));
+            let reach = (p - q).length();
+            let (Some(sp), Some(sq)) = (view.pixel(p), view.pixel(q)) else {
+                continue;
+            };
+            let k = gain(lo, hi, reach);
+            if k.is_finite() && reach > 0.0 {
+                worst = worst.max((sp - sq).length() / reach / k);
+            }
+        }
+        worst
+    }
+
+    #[test]
+    fn no_pair_of_points_in_a_box_moves_more_pixels_than_the_gain_allows() {
+        let view = car_view();
+        let worst = worst_ratio(&view, |lo, hi, reach| view.gain(lo, hi, reach));
+        assert!(worst <= 1.0, "a pair moved {worst}× the gain");
+        // Not vacuous: some pairs come close to it.
+        assert!(worst > 0.95, "the gain is far from tight: {worst}");
+        // A gain that forgets how off-axis points stretch is caught.
+        let on_axis_only = |lo: DVec3, hi: DVec3, _reach: f64| {
+            let w = box_corners(lo, hi).map(|x| view.clip_of(x).w).into_iter().fold(f64::INFINITY, f64::min);
+            let [a_x, a_y] = [0, 1].map(|r| view.clip.row(r).truncate().length());
+            (0.5 * view.viewport.x * a_x).max(0.5 * view.viewport.y * a_y) / w
+        };
+        assert!(worst_ratio(&view, on_axis_only) > 1.0, "the planted gain went unnoticed");
+    }
+
+    #[test]
+    fn a_cell_within_its_tolerance_stays_within_the_pixels() {
+        // Surface points P in the frustum, with a mesh point Q within the tolerance of the
+        // corners' box grown by it: P and Q never project farther apart than p.
+        let view = car_view();
+        let mut rng = Lcg(11);
+        let mut seen = 0;
+        for _ in 0..4000 {
+            let centre = rng.vec(-2.0, 2.0);
+            let half = rng.vec(0.0, 0.3);
+            let (lo, hi) = (centre - half, centre + half);
+            let pixels = 0.5 + 2.0 * rng.next();
+            let eps = view.cell_tolerance(lo, hi, pixels);
+            if eps.is_nan() || eps <= 0.0 {
+                continue;
+            }
+            let p = lo - DVec3::splat(eps)
+                + (hi - lo + DVec3::splat(2.0 * eps)) * DVec3::new(rng.next(), rng.next(), rng.next());
+            if !view.contains(p) {
+                continue;
+            }
+            let dir = (rng.vec(-1.0, 1.0)).normalize_or_zero();
+            let q = p + dir * eps;
+            let (sp, sq) = (view.pixel(p).unwrap(), view.pixel(q));
+            let Some(sq) = sq else { panic!("a point within the tolerance went behind the eye") };
+            assert!((sp - sq).length() <= pixels * (1.0 + 1e-9));
+            seen += 1;
+        }
+        assert!(seen > 500, "too few cases: {seen}");
+    }
+
+    #[test]
+    fn the_cell_tolerance_falls_toward_the_near_plane_and_grows_far_away() {
+        let view = car_view();
+        let at = |d: f64| {
+            let eye = DVec3::new(3.0, -4.0, 1.5);
+            let c = eye + (DVec3::ZERO - eye).normalize() * d;
+            view.cell_tolerance(c - DVec3::splat(1e-3), c + DVec3::splat(1e-3), 1.0)
+        };
+        let (near, mid, far) = (at(0.2), at(5.0), at(50.0));
+        assert!(near < mid && mid < far, "{near} {mid} {far}");
+        // At the axis, far from the near plane, one pixel is about depth / focal length.
+        let focal = 300.0 / (20f64.to_radians()).tan();
+        let ratio = mid / (5.0 / focal);
+        assert!(ratio <= 1.0 && ratio > 0.99, "{mid} against {}", 5.0 / focal);
+    }
+
+    #[test]
+    fn boxes_behind_the_eye_or_beside_the_frustum_are_outside_and_visible_ones_are_not() {
+        let view = car_view();
+        let s = DVec3::splat(0.1);
+        assert!(!view.box_outside(-s, s));
+        let behind = DVec3::new(6.0, -8.0, 3.0);
+        assert!(view.box_outside(behind - s, behind + s));
+        let beside = DVec3::new(40.0, 20.0, 0.0);
+        assert!(view.box_outside(beside - s, beside + s));
+        // A box around the eye crosses the near plane: partly visible.
+        let eye = DVec3::new(3.0, -4.0, 1.5);
+        assert!(!view.box_outside(eye - s, eye + s));
+        // Every point of a box called outside is outside.
+        let mut rng = Lcg(3);
+        for _ in 0..2000 {
+            let c = rng.vec(-10.0, 10.0);
+            let h = rng.vec(0.0, 1.0);
+            if view.box_outside(c - h, c + h) {
+                for _ in 0..8 {
+                    let x = c - h + 2.0 * h * DVec3::new(rng.next(), rng.next(), rng.next());
+                    assert!(!view.contains(x));
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn a_renderers_own_matrices_give_the_same_view() {
+        let (eye, target) = (DVec3::new(3.0, -4.0, 1.5), DVec3::ZERO);
+        let view = DMat4::look_at_rh(eye, target, DVec3::Z);
+        let fovy = 40f64.to_radians();
+        let ours = car_view();
+        let finite = View::from_matrices(view, DMat4::perspective_rh(fovy, 800.0 / 600.0, 0.1, 100.0), (800, 600)).unwrap();
+        // Reverse-Z with an infinite far plane: near at z = w.
+        let reverse = View::from_matrices(
+            view,
+            DMat4::perspective_infinite_reverse_rh(fovy, 800.0 / 600.0, 0.1),
+            (800, 600),
+        )
+        .unwrap();
+        for v in [finite, reverse] {
+            assert!((v.near_w() - 0.1).abs() < 1e-9, "{}", v.near_w());
+            let (lo, hi) = (DVec3::splat(-0.2), DVec3::splat(0.3));
+            let (a, b) = (ours.cell_tolerance(lo, hi, 1.0), v.cell_tolerance(lo, hi, 1.0));
+            assert!((a / b - 1.0).abs() < 1e-9, "{a} against {b}");
+        }
+        // Orthographic: the same tolerance everywhere, one pixel of the view's height.
+        let ortho = View::from_matrices(view, DMat4::orthographic_rh(-4.0, 4.0, -3.0, 3.0, 0.1, 100.0), (800, 600)).unwrap();
+        let t = |c: DVec3| ortho.cell_tolerance(c, c + DVec3::splat(0.01), 1.0);
+        let (a, b) = (t(DVec3::ZERO), t(DVec3::new(1.0, 2.0, -1.0)));
+        assert!((a / b - 1.0).abs() < 1e-12);
+        assert!(a <= 6.0 / 600.0 && a > 0.5 * 6.0 / 600.0, "{a}");
+        // A bad camera is an error, not a panic.
+        assert!(View::look_at(eye, eye, DVec3::Z, fovy, (800, 600), 0.1).is_err());
+        assert!(View::look_at(eye, target, eye - target, fovy, (800, 600), 0.1).is_err());
+        assert!(View::look_at(eye, target, DVec3::Z, fovy, (800, 600), 0.0).is_err());
+    }
+}

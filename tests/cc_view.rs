@@ -1,0 +1,205 @@
+//! The Catmull-Clark reference in a view: a tolerance in pixels that holds when measured
+//! (every sampled surface point inside the frustum projects within p pixels of its
+//! nearest mesh point), culling, and no T-junction whatever the level of detail.
+
+use glam::{DVec3, Vec3};
+use tessera_core::catmull_clark::{
+    surface_samples, tessellate_adaptive_in_view, CcParams, CcTessellation, SurfaceModel,
+    ViewTolerance,
+};
+use tessera_core::measure::max_error_px;
+use tessera_core::watertight::check_watertight;
+use tessera_core::{Tolerance, View};
+use tessera_tests::{cc_model, open_boundary};
+
+/// Where a view stands relative to a model.
+#[derive(Clone, Copy, Debug)]
+enum Stand {
+    /// The whole model on screen.
+    Far,
+    /// Close, looking past the centre: part of the model off screen.
+    Close,
+    /// Among the model, looking out: part of it behind the eye.
+    Beside,
+    /// Looking away from the model.
+    Away,
+}
+
+fn model_box(model: &SurfaceModel) -> (DVec3, f64) {
+    let samples = surface_samples(model, 2);
+    let lo = samples.iter().fold(DVec3::INFINITY, |a, &p| a.min(p));
+    let hi = samples.iter().fold(DVec3::NEG_INFINITY, |a, &p| a.max(p));
+    ((lo + hi) / 2.0, (hi - lo).length())
+}
+
+fn view(model: &SurfaceModel, stand: Stand) -> View {
+    let (c, d) = model_box(model);
+    let dir = DVec3::new(0.5, -1.0, 0.45).normalize();
+    let side = dir.cross(DVec3::Z).normalize();
+    let (eye, target) = match stand {
+        Stand::Far => (c + dir * 2.5 * d, c),
+        Stand::Close => (c + dir * 0.9 * d, c + side * 0.3 * d),
+        Stand::Beside => {
+            // Inside the model's box, looking out: the surface around and behind the eye.
+            let eye = c + side * 0.05 * d;
+            let nearest = surface_samples(model, 2)
+                .into_iter()
+                .min_by(|a, b| (*a - eye).length().total_cmp(&(*b - eye).length()))
+                .unwrap();
+            (eye, nearest)
+        }
+        Stand::Away => (c + dir * 2.0 * d, c + dir * 3.0 * d),
+    };
+    View::look_at(
+        eye,
+        target,
+        DVec3::Z,
+        40f64.to_radians(),
+        (320, 240),
+        0.02 * d,
+    )
+    .unwrap()
+}
+
+fn params() -> CcParams {
+    CcParams {
+        // The world tolerance only caps: the pixels decide.
+        tolerance: Tolerance::Relative(1.0),
+        max_depth: 10,
+        first_split: Default::default(),
+        leaf_bound: Default::default(),
+    }
+}
+
+fn run(model: &SurfaceModel, view: View, pixels: Option<f64>, cull: bool) -> CcTessellation {
+    let vt = ViewTolerance { view, pixels, cull };
+    tessellate_adaptive_in_view(model, &params(), &vt).unwrap()
+}
+
+fn positions(t: &CcTessellation) -> Vec<Vec3> {
+    t.mesh
+        .vertices
+        .iter()
+        .map(|v| Vec3::from(v.position))
+        .collect()
+}
+
+#[test]
+fn the_pixel_tolerance_holds_near_far_off_screen_and_behind_the_eye() {
+    let names = [
+        "opensubdiv/catmark_cube.obj",
+        "opensubdiv/catmark_torus.obj",
+        "opensubdiv/catmark_cube_creases1.obj",
+        "opensubdiv/catmark_car.obj",
+        "catmull_clark/spot_control_mesh.obj",
+    ];
+    // The models side by side: one thread each.
+    std::thread::scope(|s| {
+        for name in names {
+            s.spawn(move || pixel_tolerance_holds(name));
+        }
+    });
+}
+
+fn pixel_tolerance_holds(name: &str) {
+    let model = cc_model(name);
+    let samples = surface_samples(&model, 8);
+    let small = model.mesh.surface_patches().count() < 200;
+    let finer = small.then_some((Stand::Far, 0.5));
+    let views = [(Stand::Far, 1.0), (Stand::Close, 1.0), (Stand::Beside, 2.0)];
+    for (stand, px) in views.into_iter().chain(finer) {
+        let v = view(&model, stand);
+        if matches!(stand, Stand::Beside) {
+            assert!(
+                samples.iter().any(|&p| v.pixel(p).is_none()),
+                "{name}: nothing behind the eye"
+            );
+        }
+        let out = run(&model, v, Some(px), true);
+        assert_eq!(out.unmet, 0, "{name} {stand:?}");
+        let err = max_error_px(&samples, &out.mesh, &v)
+            .unwrap_or_else(|| panic!("{name} {stand:?}: no sample in view"));
+        assert!(err <= px, "{name} {stand:?}: {err} px > {px}");
+        // The tolerance is used, not met by refining everything (where the whole
+        // model, curved somewhere, is in view).
+        if matches!(stand, Stand::Far) {
+            assert!(err >= 0.05 * px, "{name} {stand:?}: {err} px ≪ {px}");
+        }
+        let report = check_watertight(
+            &positions(&out).to_vec(),
+            &out.mesh.indices,
+            &open_boundary(&model),
+            1e-5 * model.mesh.control_diag,
+        );
+        assert_eq!(
+            (
+                report.t_junctions,
+                report.degenerate_triangles,
+                report.non_manifold_edges
+            ),
+            (0, 0, 0),
+            "{name} {stand:?}: {report:?}"
+        );
+        if matches!(stand, Stand::Close) {
+            // Culling removes what is out of view, and the kept part still holds.
+            let all = run(&model, v, Some(px), false);
+            assert!(
+                out.mesh.triangle_count() < all.mesh.triangle_count(),
+                "{name} {stand:?}"
+            );
+            assert!(out.culled_leaves > 0, "{name} {stand:?}");
+        }
+    }
+}
+
+#[test]
+fn detail_follows_the_distance_and_reruns_give_the_same_mesh() {
+    let model = cc_model("opensubdiv/catmark_car.obj");
+    let far = run(&model, view(&model, Stand::Far), Some(1.0), true);
+    let close = run(&model, view(&model, Stand::Close), Some(1.0), false);
+    assert!(close.mesh.triangle_count() > far.mesh.triangle_count());
+    let again = run(&model, view(&model, Stand::Far), Some(1.0), true);
+    assert_eq!(far.mesh.indices, again.mesh.indices);
+    assert_eq!(positions(&far), positions(&again));
+    // The whole model in view and none culled: watertight, with its levels of detail.
+    let report = check_watertight(
+        &positions(&far),
+        &far.mesh.indices,
+        &open_boundary(&model),
+        1e-5 * model.mesh.control_diag,
+    );
+    assert!(report.is_watertight(), "{report:?}");
+    assert_eq!(far.culled_leaves, 0);
+}
+
+#[test]
+fn a_view_looking_away_gives_an_empty_mesh() {
+    let model = cc_model("opensubdiv/catmark_torus.obj");
+    let out = run(&model, view(&model, Stand::Away), Some(1.0), true);
+    assert_eq!(out.mesh.triangle_count(), 0);
+    assert_eq!(out.culled_patches, model.mesh.surface_patches().count());
+    // With a world tolerance, culling applies as well.
+    let world = run(&model, view(&model, Stand::Away), None, true);
+    assert_eq!(world.mesh.triangle_count(), 0);
+}
+
+#[test]
+fn the_t_junction_check_catches_a_planted_one() {
+    let model = cc_model("opensubdiv/catmark_torus.obj");
+    let out = run(&model, view(&model, Stand::Far), Some(1.0), true);
+    let mut pos = positions(&out);
+    let mut idx = out.mesh.indices.clone();
+    // Split one triangle at the midpoint of its first edge, and not its neighbour.
+    let (a, b, c) = (idx[0], idx[1], idx[2]);
+    pos.push((pos[a as usize] + pos[b as usize]) / 2.0);
+    let m = pos.len() as u32 - 1;
+    idx[..3].copy_from_slice(&[a, m, c]);
+    idx.extend_from_slice(&[m, b, c]);
+    let report = check_watertight(
+        &pos,
+        &idx,
+        &open_boundary(&model),
+        1e-5 * model.mesh.control_diag,
+    );
+    assert!(report.t_junctions > 0, "{report:?}");
+}
