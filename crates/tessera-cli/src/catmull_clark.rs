@@ -6,19 +6,19 @@ use std::time::Instant;
 
 use serde::Serialize;
 use tessera_core::catmull_clark::{
-    surface_samples, tessellate_adaptive, tessellate_uniform, CcParams, CcTessellation,
-    SurfaceModel, MAX_DEPTH, TREE_DEPTH,
+    surface_samples, tessellate_adaptive, tessellate_adaptive_in_view, tessellate_uniform,
+    CcParams, CcTessellation, ControlMesh, SurfaceModel, ViewTolerance, MAX_DEPTH, TREE_DEPTH,
 };
 use tessera_core::io::export::MeshFormat;
 use tessera_core::io::load_control_mesh;
-use tessera_core::measure::ErrorStats;
+use tessera_core::measure::{max_error_px, ErrorStats};
 use tessera_core::Error as CoreError;
-use tessera_core::Tolerance;
+use tessera_core::{Tolerance, View};
 use tessera_wgpu::catmull_clark::{CcStage, CcUniformStage, UniformParams};
 use tessera_wgpu::Error;
 use tessera_wgpu::Kernels;
 
-use crate::cli::{Backend, Method, TessellateArgs};
+use crate::cli::{Axis, Backend, Method, TessellateArgs, ViewArgs};
 use crate::gpu::GpuTimings;
 use crate::tessellate::{check_measure_args, finish_outputs, measure_and_write, ms, Timings};
 
@@ -81,6 +81,16 @@ struct Stats {
     /// Adaptive on the GPU: dispatches recorded per run, the same for every model and
     /// tolerance.
     dispatches: Option<u32>,
+    /// With a view: the pixel tolerance asked for (`--tolerance-px`).
+    tolerance_px: Option<f64>,
+    /// With a view: patches all of whose cells lie outside the frustum (nothing emitted).
+    culled_patches: Option<usize>,
+    /// With a view: leaf cells outside the frustum.
+    culled_leaves: Option<usize>,
+    /// With a view and --measure: over the surface samples inside the frustum, the
+    /// largest distance in pixels between a sample's projection and its nearest mesh
+    /// point's.
+    max_error_px: Option<f64>,
     warnings: Vec<String>,
     timings_ms: Timings,
     #[serde(flatten)]
@@ -158,6 +168,23 @@ pub fn tessellate(args: TessellateArgs) -> Result<(), Error> {
     timings.prepare = ms(t);
     let measure_samples = args.measure_samples.unwrap_or(DEFAULT_MEASURE_SAMPLES);
     check_measure_args(&args, measure_samples, model.mesh.surface_patches().count())?;
+    let view = if args.view.given() {
+        if method != Method::Adaptive {
+            return Err(CoreError::Param(
+                "a view (--eye, --tolerance-px, ...) is for --method adaptive".into(),
+            )
+            .into());
+        }
+        if on_gpu {
+            return Err(CoreError::Param(
+                "a view (--eye, --tolerance-px, ...) runs on the CPU reference only so far (--backend cpu)".into(),
+            )
+            .into());
+        }
+        Some(view_tolerance(&args.view, &control)?)
+    } else {
+        None
+    };
 
     let t = Instant::now();
     let mut dispatches = None;
@@ -186,6 +213,8 @@ pub fn tessellate(args: TessellateArgs) -> Result<(), Error> {
             let params = CcParams {
                 tolerance: match (args.tolerance, args.tolerance_rel) {
                     (Some(t), _) => Tolerance::Absolute(t),
+                    // Pixels alone: no world cap beyond the whole model.
+                    (None, None) if args.view.tolerance_px.is_some() => Tolerance::Relative(1.0),
                     (None, r) => Tolerance::Relative(r.unwrap_or(DEFAULT_TOLERANCE_REL)),
                 },
                 max_depth,
@@ -201,6 +230,12 @@ pub fn tessellate(args: TessellateArgs) -> Result<(), Error> {
                 dispatches = Some(recorded);
                 upload_bytes = Some(uploaded);
                 (out, Some(tolerance), None)
+            } else if let Some(view) = &view {
+                (
+                    tessellate_adaptive_in_view(&model, &params, view)?,
+                    Some(tolerance),
+                    None,
+                )
             } else {
                 (tessellate_adaptive(&model, &params)?, Some(tolerance), None)
             }
@@ -229,6 +264,19 @@ pub fn tessellate(args: TessellateArgs) -> Result<(), Error> {
         args.output.as_deref(),
         &mut timings,
     )?;
+    let max_error_px = match &view {
+        Some(v) if args.measure => {
+            let t = Instant::now();
+            let px = max_error_px(
+                &surface_samples(&model, measure_samples),
+                &out.mesh,
+                &v.view,
+            );
+            timings.measure += ms(t);
+            px
+        }
+        _ => None,
+    };
     timings.total = ms(t_total);
 
     let stats = Stats {
@@ -264,6 +312,10 @@ pub fn tessellate(args: TessellateArgs) -> Result<(), Error> {
         split_proofs: tolerance.map(|_| out.proven),
         triangle_bounds: tolerance.map(|_| out.triangle_bounds),
         dispatches,
+        tolerance_px: view.and_then(|v| v.pixels),
+        culled_patches: view.map(|_| out.culled_patches),
+        culled_leaves: view.map(|_| out.culled_leaves),
+        max_error_px,
         warnings,
         timings_ms: timings,
         error,
@@ -282,11 +334,23 @@ pub fn tessellate(args: TessellateArgs) -> Result<(), Error> {
         stats.evaluations,
         stats.timings_ms.tessellate
     );
-    if let Some(t) = tolerance {
+    let pixels_only = args.view.tolerance_px.is_some()
+        && args.tolerance.is_none()
+        && args.tolerance_rel.is_none();
+    if let Some(t) = tolerance.filter(|_| !pixels_only) {
         line += &format!(", tolerance {t:.6} (guaranteed bound {:.6})", out.max_bound);
     }
     if let Some(n) = segments {
         line += &format!(", segments {n}");
+    }
+    if let Some(v) = &view {
+        if let Some(px) = v.pixels {
+            line += &format!(", {px} px");
+        }
+        line += &format!(", {} patches culled", out.culled_patches);
+    }
+    if let Some(px) = max_error_px {
+        line += &format!(", measured {px:.3} px");
     }
     println!("{line}");
     if let Some(e) = &stats.error {
@@ -296,6 +360,41 @@ pub fn tessellate(args: TessellateArgs) -> Result<(), Error> {
         );
     }
     Ok(())
+}
+
+/// The view of `args`: its camera (or `render`'s default framing of the control points),
+/// the pixel tolerance and culling.
+fn view_tolerance(args: &ViewArgs, control: &ControlMesh) -> Result<ViewTolerance, Error> {
+    let (w, h) = args.size.unwrap_or((800, 600));
+    let up_axis = args.up.unwrap_or(Axis::Z);
+    let (lo, hi) = control.positions.iter().fold(
+        (
+            tessera_wgpu::glam::Vec3::INFINITY,
+            tessera_wgpu::glam::Vec3::NEG_INFINITY,
+        ),
+        |(lo, hi), p| (lo.min(p.as_vec3()), hi.max(p.as_vec3())),
+    );
+    let framing = crate::render::default_framing(lo, hi, w as f32 / h as f32, up_axis);
+    let (eye, target) = match (args.eye, args.target) {
+        (Some(e), Some(t)) => (
+            tessera_wgpu::glam::DVec3::from(e),
+            tessera_wgpu::glam::DVec3::from(t),
+        ),
+        _ => (framing.eye.as_dvec3(), framing.target.as_dvec3()),
+    };
+    let up = match up_axis {
+        Axis::X => tessera_wgpu::glam::DVec3::X,
+        Axis::Y => tessera_wgpu::glam::DVec3::Y,
+        Axis::Z => tessera_wgpu::glam::DVec3::Z,
+    };
+    let fovy = args.fov.map_or(framing.fovy as f64, f64::to_radians);
+    let near = args.near.unwrap_or(framing.near as f64);
+    let view = View::look_at(eye, target, up, fovy, (w, h), near)?;
+    Ok(ViewTolerance {
+        view,
+        pixels: args.tolerance_px,
+        cull: !args.no_cull,
+    })
 }
 
 pub fn info(input: &Path) -> Result<(), Error> {
@@ -367,6 +466,8 @@ pub fn run_gpu(
         bounds: status.state.bounds as u64,
         proven: status.state.proven as u64,
         triangle_bounds: 0,
+        culled_leaves: 0,
+        culled_patches: 0,
     };
     Ok((tessellation, stage.dispatches(), stage.upload_bytes()))
 }
@@ -401,6 +502,8 @@ pub fn run_gpu_uniform(
         bounds: 0,
         proven: 0,
         triangle_bounds: 0,
+        culled_leaves: 0,
+        culled_patches: 0,
     };
     Ok((tessellation, stage.upload_bytes()))
 }

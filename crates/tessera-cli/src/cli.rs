@@ -163,6 +163,61 @@ pub struct TessellateArgs {
     /// for Catmull-Clark patches; at least 32).
     #[arg(long)]
     pub measure_samples: Option<usize>,
+    #[command(flatten)]
+    pub view: ViewArgs,
+}
+
+/// A camera for the Catmull-Clark adaptive tessellation: a tolerance in pixels, and
+/// culling. Without `--eye` and `--target`, the view is `render`'s default framing.
+#[derive(Args, Debug, Default)]
+pub struct ViewArgs {
+    /// Where the eye is, X,Y,Z (with --target).
+    #[arg(long, value_parser = parse_point, requires = "target")]
+    pub eye: Option<[f64; 3]>,
+    /// The point looked at, X,Y,Z (with --eye).
+    #[arg(long, value_parser = parse_point, requires = "eye")]
+    pub target: Option<[f64; 3]>,
+    /// Vertical field of view in degrees (default: the framing's, 30).
+    #[arg(long)]
+    pub fov: Option<f64>,
+    /// Distance of the near plane (default: the framing's, in front of the model).
+    #[arg(long)]
+    pub near: Option<f64>,
+    /// The viewport in pixels, WIDTHxHEIGHT (default 800x600).
+    #[arg(long = "size", value_parser = tessera_wgpu::image_out::parse_size)]
+    pub size: Option<(u32, u32)>,
+    /// The model's up axis, which is up on the screen (default z).
+    #[arg(long, value_enum)]
+    pub up: Option<Axis>,
+    /// Every point of the limit surface inside the view frustum projects within this many
+    /// pixels of the projection of its nearest point on the output (guaranteed). With
+    /// --tolerance or --tolerance-rel as well, each cell keeps the smaller of the two.
+    #[arg(long)]
+    pub tolerance_px: Option<f64>,
+    /// Keep the patches outside the view frustum (culled by default with a view).
+    #[arg(long)]
+    pub no_cull: bool,
+}
+
+impl ViewArgs {
+    /// Whether any option asks for a view.
+    pub fn given(&self) -> bool {
+        self.eye.is_some()
+            || self.tolerance_px.is_some()
+            || self.fov.is_some()
+            || self.near.is_some()
+            || self.no_cull
+    }
+}
+
+/// `X,Y,Z`: three finite numbers.
+fn parse_point(s: &str) -> Result<[f64; 3], String> {
+    let v: Vec<f64> = s
+        .split(',')
+        .map(|x| x.trim().parse::<f64>().ok().filter(|x| x.is_finite()))
+        .collect::<Option<Vec<f64>>>()
+        .ok_or_else(|| format!("{s:?} is not X,Y,Z (three numbers)"))?;
+    <[f64; 3]>::try_from(v).map_err(|_| format!("{s:?} is not X,Y,Z (three numbers)"))
 }
 
 #[derive(Args, Debug)]

@@ -213,14 +213,7 @@ pub fn render(args: RenderArgs) -> Result<(), Error> {
     let t = Instant::now();
     let (w, h) = args.size;
     let aspect = w as f32 / h as f32;
-    // The default view (front-right, above) expressed for the chosen up axis.
-    let d = Camera::FRAMING_DIRECTION;
-    let (direction, up) = match args.up {
-        Axis::Z => (d, Vec3::Z),
-        Axis::Y => (Vec3::new(d.x, d.z, -d.y), Vec3::Y),
-        Axis::X => (Vec3::new(d.z, d.x, d.y), Vec3::X),
-    };
-    let camera = Camera::framing_along(lo, hi, aspect, direction, up);
+    let camera = default_framing(lo, hi, aspect, args.up);
     let image = render_camera_to_rgba(&gpu, output.mesh(), &camera, w, h, &options)?;
     let render_ms = t.elapsed().as_secs_f64() * 1e3;
     save_png(&image, &args.output)?;
@@ -237,4 +230,16 @@ pub fn render(args: RenderArgs) -> Result<(), Error> {
         args.output.display()
     );
     Ok(())
+}
+
+/// The default view (front-right, above) of the box `lo..hi`, for the model's up axis:
+/// `render`'s camera, and the view `tessellate` takes without `--eye`.
+pub(crate) fn default_framing(lo: Vec3, hi: Vec3, aspect: f32, up: Axis) -> Camera {
+    let d = Camera::FRAMING_DIRECTION;
+    let (direction, up) = match up {
+        Axis::Z => (d, Vec3::Z),
+        Axis::Y => (Vec3::new(d.x, d.z, -d.y), Vec3::Y),
+        Axis::X => (Vec3::new(d.z, d.x, d.y), Vec3::X),
+    };
+    Camera::framing_along(lo, hi, aspect, direction, up)
 }

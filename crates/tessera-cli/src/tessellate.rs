@@ -186,6 +186,12 @@ fn tessellate(args: TessellateArgs) -> Result<(), Error> {
     if tessera_core::io::is_control_mesh(&args.input) {
         return crate::catmull_clark::tessellate(args);
     }
+    if args.view.given() || args.view.size.is_some() || args.view.up.is_some() {
+        return Err(CoreError::Param(
+            "--eye, --target, --fov, --near, --size, --up, --tolerance-px and --no-cull set a view for Catmull-Clark meshes; Bézier inputs do not take one yet".into(),
+        )
+        .into());
+    }
     if args.tolerance.is_some()
         || args.tolerance_rel.is_some()
         || args.level.is_some()

@@ -635,6 +635,23 @@ fn mark_patches(eval: &mut Evaluator, params: &CcParams, splits: &[(u32, u32)]) 
         culled_patches: 0,
     };
     for p in mesh.surface_patches() {
+        // A patch wholly outside a culling view costs one bound and no search.
+        if eval.view.is_some_and(|v| v.cull) {
+            let root = Cell {
+                i: 0,
+                j: 0,
+                w: n,
+                h: n,
+                depth: 0,
+            };
+            let corners = eval.corners(p, root);
+            let bx = [0, WALK_ONE, 0, WALK_ONE];
+            eval.bounds += 1;
+            if eval.outside(&corners, box_bound(&model.patches[p], bx, corners)) {
+                out.culled_patches += 1;
+                continue;
+            }
+        }
         // In the GPU's order (`traverse`): the same leaves as marking each cell
         // recursively, in the order the kernel writes them.
         let max_depth = params.max_depth;
@@ -737,7 +754,9 @@ fn settle_exact_leaves(eval: &mut Evaluator, marking: &mut Marking) -> Vec<Polyg
                 let (p, cell) = marking.leaves[k];
                 let splits_left = marking.bounds[k].1.expect("an exact leaf");
                 let mut marked = Vec::new();
-                mark(eval, p, cell, splits_left, eps, &mut |c, b| marked.push((c, b)));
+                mark(eval, p, cell, splits_left, eps, &mut |c, b| {
+                    marked.push((c, b))
+                });
                 for (c, b) in marked {
                     if marking.keep_leaf(eval, p, c, b) {
                         leaves.push((p, c));
@@ -948,7 +967,8 @@ mod tests {
                 let all = tessellate_with_splits(&model, &params, &with_even, None).expect("all");
                 most = most.max(ours.leaves / model.mesh.patch_count());
                 // The search matters here: midpoint splits alone give another mesh.
-                let midpoints = tessellate_with_splits(&model, &params, &[(1, 1)], None).expect("1x1");
+                let midpoints =
+                    tessellate_with_splits(&model, &params, &[(1, 1)], None).expect("1x1");
                 searched |= midpoints.leaves != ours.leaves;
                 assert_eq!(ours.leaves, all.leaves, "{rel}");
                 assert_eq!(ours.mesh.indices, all.mesh.indices, "{rel}");

@@ -1,0 +1,168 @@
+//! `tessellate` with a view: a tolerance in pixels that `--measure` confirms, culling,
+//! an empty file for a view that sees nothing, and clear errors for what views do not
+//! take yet.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn tessera() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_tessera"))
+}
+
+fn asset(rel: &str) -> String {
+    let p: PathBuf = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../assets")
+        .join(rel);
+    p.to_str().unwrap().to_string()
+}
+
+fn tmp(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("tessera-cli-view-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir.join(name)
+}
+
+fn stats_of(args: &[&str], name: &str) -> serde_json::Value {
+    let stats = tmp(name);
+    let out = tessera()
+        .args(args)
+        .arg("--stats")
+        .arg(&stats)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{args:?}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    serde_json::from_str(&std::fs::read_to_string(stats).unwrap()).unwrap()
+}
+
+#[test]
+fn a_pixel_tolerance_holds_when_measured_and_culling_drops_what_is_out_of_view() {
+    let torus = asset("opensubdiv/catmark_torus.obj");
+    let framed = stats_of(
+        &[
+            "tessellate",
+            &torus,
+            "--tolerance-px",
+            "1",
+            "--size",
+            "320x240",
+            "--measure",
+            "--measure-samples",
+            "32",
+        ],
+        "framed.json",
+    );
+    let px = framed["max_error_px"].as_f64().unwrap();
+    assert!(px <= 1.0 && px > 0.05, "{px}");
+    assert_eq!(framed["tolerance_px"], 1.0);
+    assert_eq!(framed["unmet"], 0);
+    assert_eq!(framed["culled_patches"], 0);
+    // Twice the pixels: fewer triangles.
+    let coarse = stats_of(
+        &[
+            "tessellate",
+            &torus,
+            "--tolerance-px",
+            "2",
+            "--size",
+            "320x240",
+        ],
+        "coarse.json",
+    );
+    assert!(coarse["triangles"].as_u64() < framed["triangles"].as_u64());
+    // Close to one side and looking past it: part of the torus is culled, and kept with
+    // --no-cull.
+    let close = [
+        "tessellate",
+        &torus,
+        "--eye",
+        "2.2,0,0.6",
+        "--target",
+        "1.5,1.5,0",
+        "--tolerance-px",
+        "1",
+        "--size",
+        "320x240",
+    ];
+    let culled = stats_of(&close, "close.json");
+    let mut kept_args = close.to_vec();
+    kept_args.push("--no-cull");
+    let kept = stats_of(&kept_args, "kept.json");
+    assert!(culled["culled_patches"].as_u64().unwrap() > 0, "{culled}");
+    assert!(culled["triangles"].as_u64() < kept["triangles"].as_u64());
+    assert_eq!(kept["culled_patches"], 0);
+}
+
+#[test]
+fn a_view_that_sees_nothing_writes_an_empty_mesh() {
+    let torus = asset("opensubdiv/catmark_torus.obj");
+    let obj = tmp("nothing.obj");
+    let stats = stats_of(
+        &[
+            "tessellate",
+            &torus,
+            "--eye",
+            "10,0,0",
+            "--target",
+            "20,0,0",
+            "--tolerance-px",
+            "1",
+            "-o",
+            obj.to_str().unwrap(),
+        ],
+        "nothing.json",
+    );
+    assert_eq!(stats["triangles"], 0);
+    assert_eq!(stats["culled_patches"], stats["patches"]);
+    let text = std::fs::read_to_string(&obj).unwrap();
+    assert!(!text.lines().any(|l| l.starts_with("f ")), "{text}");
+}
+
+#[test]
+fn views_refuse_what_they_do_not_take_yet_with_one_line() {
+    let torus = asset("opensubdiv/catmark_torus.obj");
+    let teapot = asset("teaset/teapot");
+    for (args, says) in [
+        (
+            vec![
+                "tessellate",
+                &torus,
+                "--tolerance-px",
+                "1",
+                "--backend",
+                "gpu",
+            ],
+            "--backend cpu",
+        ),
+        (
+            vec![
+                "tessellate",
+                &torus,
+                "--tolerance-px",
+                "1",
+                "--method",
+                "uniform",
+            ],
+            "--method adaptive",
+        ),
+        (vec!["tessellate", &teapot, "--tolerance-px", "1"], "Bézier"),
+        (vec!["tessellate", &torus, "--tolerance-px=-1"], "positive"),
+        (
+            vec!["tessellate", &torus, "--eye", "1,2", "--target", "0,0,0"],
+            "X,Y,Z",
+        ),
+        (
+            vec!["tessellate", &torus, "--eye", "1,1,1", "--target", "1,1,1"],
+            "distinct",
+        ),
+    ] {
+        let out = tessera().args(&args).output().unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success(), "{args:?}");
+        assert!(err.contains(says), "{args:?}: {err}");
+        assert!(!err.contains("panicked"), "{err}");
+    }
+}
