@@ -310,10 +310,17 @@ const TABLES: &[(&str, &str, &str)] = &[
          goes, the script's fixed cost with one leaf per patch, and the scaling from 3e-3 \
          to the first tolerance with 10× the triangles.",
     ),
+    (
+        "catmull_clark_view",
+        "Catmull-Clark in a view: a tolerance in pixels (CPU)",
+        "Close-ups of the car and of Spot: the tolerance in pixels against the same view \
+         culled at the world tolerance that guarantees the same pixel error everywhere in \
+         view.",
+    ),
 ];
 
 /// `cargo xtask bench [ARGS]` runs the bench (ARGS go to `tessera-bench`: `--quick`,
-/// `--only gpu|cpu|cc|creased|ccgpu`, ...), which writes `bench/NAME.{json,md}`, then assembles
+/// `--only gpu|cpu|cc|creased|ccgpu|view`, ...), which writes `bench/NAME.{json,md}`, then assembles
 /// `bench/RESULTS.md`; `cargo xtask bench --assemble-only` only assembles it.
 fn bench(extra: &[String]) -> Result<(), String> {
     let out = root().join("bench");

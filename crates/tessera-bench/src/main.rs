@@ -5,6 +5,7 @@
 mod cc;
 mod cc_creased;
 mod cc_gpu;
+mod cc_view;
 mod gpu;
 
 use std::path::{Path, PathBuf};
@@ -117,7 +118,7 @@ fn main() {
         .and_then(|i| args.get(i + 1))
         .cloned();
     std::fs::create_dir_all(&out_dir).expect("create bench output folder");
-    // `--only gpu|cpu|cc|creased|ccgpu`: one part of the bench (cpu is the Bézier CPU table).
+    // `--only gpu|cpu|cc|creased|ccgpu|view`: one part of the bench (cpu is the Bézier CPU table).
     let part = |name: &str| only.as_deref().is_none_or(|o| o == name);
     if part("gpu") {
         gpu::run(&assets, &out_dir, quick);
@@ -130,6 +131,9 @@ fn main() {
     }
     if part("ccgpu") {
         cc_gpu::run(&assets.join(".."), &out_dir, quick, model.as_deref());
+    }
+    if part("view") {
+        cc_view::run(&assets.join(".."), &out_dir, quick);
     }
     if !part("cpu") {
         return;

@@ -135,7 +135,11 @@ pub fn measure_error(samples: &[DVec3], mesh: &Mesh, bbox_diag: f64) -> ErrorSta
 /// frustum and the projection of its nearest 3D point on `mesh`; `None` when no sample is
 /// inside (infinite when some are and the mesh is empty). Runs on all cores.
 pub fn max_error_px(samples: &[DVec3], mesh: &Mesh, view: &crate::View) -> Option<f64> {
-    let inside: Vec<DVec3> = samples.iter().copied().filter(|&p| view.contains(p)).collect();
+    let inside: Vec<DVec3> = samples
+        .iter()
+        .copied()
+        .filter(|&p| view.contains(p))
+        .collect();
     if inside.is_empty() {
         return None;
     }

@@ -263,7 +263,10 @@ mod tests {
     struct Lcg(u64);
     impl Lcg {
         fn next(&mut self) -> f64 {
-            self.0 = self.0.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            self.0 = self
+                .0
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
             (self.0 >> 11) as f64 / (1u64 << 53) as f64
         }
         fn vec(&mut self, lo: f64, hi: f64) -> DVec3 {
@@ -275,7 +278,9 @@ mod tests {
     /// how many pixels per unit (power iteration on the Jacobian, by central differences).
     fn stretch(view: &View, x: DVec3) -> (DVec3, f64) {
         let h = 1e-6 * (1.0 + x.length());
-        let column = |e: DVec3| (view.pixel(x + e * h).unwrap() - view.pixel(x - e * h).unwrap()) / (2.0 * h);
+        let column = |e: DVec3| {
+            (view.pixel(x + e * h).unwrap() - view.pixel(x - e * h).unwrap()) / (2.0 * h)
+        };
         let j = [DVec3::X, DVec3::Y, DVec3::Z].map(column);
         let apply = |d: DVec3| j[0] * d.x + j[1] * d.y + j[2] * d.z;
         let mut d = DVec3::ONE.normalize();
@@ -294,7 +299,11 @@ mod tests {
         let mut worst: f64 = 0.0;
         for k in 0..8000 {
             let centre = rng.vec(-3.0, 3.0);
-            let half = if k % 2 == 0 { rng.vec(0.0, 0.5) } else { DVec3::splat(1e-4) };
+            let half = if k % 2 == 0 {
+                rng.vec(0.0, 0.5)
+            } else {
+                DVec3::splat(1e-4)
+            };
             let (lo, hi) = (centre - half, centre + half);
             let p = lo + (hi - lo) * DVec3::new(rng.next(), rng.next(), rng.next());
             if !view.contains(p) {
@@ -327,11 +336,17 @@ mod tests {
         assert!(worst > 0.95, "the gain is far from tight: {worst}");
         // A gain that forgets how off-axis points stretch is caught.
         let on_axis_only = |lo: DVec3, hi: DVec3, _reach: f64| {
-            let w = box_corners(lo, hi).map(|x| view.clip_of(x).w).into_iter().fold(f64::INFINITY, f64::min);
+            let w = box_corners(lo, hi)
+                .map(|x| view.clip_of(x).w)
+                .into_iter()
+                .fold(f64::INFINITY, f64::min);
             let [a_x, a_y] = [0, 1].map(|r| view.clip.row(r).truncate().length());
             (0.5 * view.viewport.x * a_x).max(0.5 * view.viewport.y * a_y) / w
         };
-        assert!(worst_ratio(&view, on_axis_only) > 1.0, "the planted gain went unnoticed");
+        assert!(
+            worst_ratio(&view, on_axis_only) > 1.0,
+            "the planted gain went unnoticed"
+        );
     }
 
     #[test]
@@ -351,14 +366,17 @@ mod tests {
                 continue;
             }
             let p = lo - DVec3::splat(eps)
-                + (hi - lo + DVec3::splat(2.0 * eps)) * DVec3::new(rng.next(), rng.next(), rng.next());
+                + (hi - lo + DVec3::splat(2.0 * eps))
+                    * DVec3::new(rng.next(), rng.next(), rng.next());
             if !view.contains(p) {
                 continue;
             }
             let dir = (rng.vec(-1.0, 1.0)).normalize_or_zero();
             let q = p + dir * eps;
             let (sp, sq) = (view.pixel(p).unwrap(), view.pixel(q));
-            let Some(sq) = sq else { panic!("a point within the tolerance went behind the eye") };
+            let Some(sq) = sq else {
+                panic!("a point within the tolerance went behind the eye")
+            };
             assert!((sp - sq).length() <= pixels * (1.0 + 1e-9));
             seen += 1;
         }
@@ -378,7 +396,11 @@ mod tests {
         // At the axis, far from the near plane, one pixel is about depth / focal length.
         let focal = 300.0 / (20f64.to_radians()).tan();
         let ratio = mid / (5.0 / focal);
-        assert!(ratio <= 1.0 && ratio > 0.99, "{mid} against {}", 5.0 / focal);
+        assert!(
+            ratio <= 1.0 && ratio > 0.99,
+            "{mid} against {}",
+            5.0 / focal
+        );
     }
 
     #[test]
@@ -413,7 +435,12 @@ mod tests {
         let view = DMat4::look_at_rh(eye, target, DVec3::Z);
         let fovy = 40f64.to_radians();
         let ours = car_view();
-        let finite = View::from_matrices(view, DMat4::perspective_rh(fovy, 800.0 / 600.0, 0.1, 100.0), (800, 600)).unwrap();
+        let finite = View::from_matrices(
+            view,
+            DMat4::perspective_rh(fovy, 800.0 / 600.0, 0.1, 100.0),
+            (800, 600),
+        )
+        .unwrap();
         // Reverse-Z with an infinite far plane: near at z = w.
         let reverse = View::from_matrices(
             view,
@@ -424,11 +451,19 @@ mod tests {
         for v in [finite, reverse] {
             assert!((v.near_w() - 0.1).abs() < 1e-9, "{}", v.near_w());
             let (lo, hi) = (DVec3::splat(-0.2), DVec3::splat(0.3));
-            let (a, b) = (ours.cell_tolerance(lo, hi, 1.0), v.cell_tolerance(lo, hi, 1.0));
+            let (a, b) = (
+                ours.cell_tolerance(lo, hi, 1.0),
+                v.cell_tolerance(lo, hi, 1.0),
+            );
             assert!((a / b - 1.0).abs() < 1e-9, "{a} against {b}");
         }
         // Orthographic: the same tolerance everywhere, one pixel of the view's height.
-        let ortho = View::from_matrices(view, DMat4::orthographic_rh(-4.0, 4.0, -3.0, 3.0, 0.1, 100.0), (800, 600)).unwrap();
+        let ortho = View::from_matrices(
+            view,
+            DMat4::orthographic_rh(-4.0, 4.0, -3.0, 3.0, 0.1, 100.0),
+            (800, 600),
+        )
+        .unwrap();
         let t = |c: DVec3| ortho.cell_tolerance(c, c + DVec3::splat(0.01), 1.0);
         let (a, b) = (t(DVec3::ZERO), t(DVec3::new(1.0, 2.0, -1.0)));
         assert!((a / b - 1.0).abs() < 1e-12);
