@@ -7,7 +7,7 @@ use std::time::Instant;
 use serde::Serialize;
 use tessera_core::catmull_clark::{
     surface_samples, tessellate_adaptive, tessellate_adaptive_in_view, tessellate_uniform,
-    CcParams, CcTessellation, ControlMesh, SurfaceModel, ViewTolerance, MAX_DEPTH, TREE_DEPTH,
+    CcParams, CcTessellation, SurfaceModel, ViewTolerance, MAX_DEPTH, TREE_DEPTH,
 };
 use tessera_core::io::export::MeshFormat;
 use tessera_core::io::load_control_mesh;
@@ -181,7 +181,16 @@ pub fn tessellate(args: TessellateArgs) -> Result<(), Error> {
             )
             .into());
         }
-        Some(view_tolerance(&args.view, &control)?)
+        let (lo, hi) = control.positions.iter().fold(
+            (
+                tessera_wgpu::glam::Vec3::INFINITY,
+                tessera_wgpu::glam::Vec3::NEG_INFINITY,
+            ),
+            |(lo, hi), p| (lo.min(p.as_vec3()), hi.max(p.as_vec3())),
+        );
+        let size = args.size.unwrap_or((800, 600));
+        let up = args.up.unwrap_or(Axis::Z);
+        Some(view_tolerance(&args.view, size, up, (lo, hi))?.0)
     } else {
         None
     };
@@ -362,19 +371,17 @@ pub fn tessellate(args: TessellateArgs) -> Result<(), Error> {
     Ok(())
 }
 
-/// The view of `args`: its camera (or `render`'s default framing of the control points),
-/// the pixel tolerance and culling.
-fn view_tolerance(args: &ViewArgs, control: &ControlMesh) -> Result<ViewTolerance, Error> {
-    let (w, h) = args.size.unwrap_or((800, 600));
-    let up_axis = args.up.unwrap_or(Axis::Z);
-    let (lo, hi) = control.positions.iter().fold(
-        (
-            tessera_wgpu::glam::Vec3::INFINITY,
-            tessera_wgpu::glam::Vec3::NEG_INFINITY,
-        ),
-        |(lo, hi), p| (lo.min(p.as_vec3()), hi.max(p.as_vec3())),
-    );
-    let framing = crate::render::default_framing(lo, hi, w as f32 / h as f32, up_axis);
+/// The view of `args` for a viewport of `size` pixels and the model's `up` axis: its
+/// camera (or `render`'s default framing of the box `lo..hi`), the pixel tolerance and
+/// culling; with the camera as the renderer draws it.
+pub(crate) fn view_tolerance(
+    args: &ViewArgs,
+    size: (u32, u32),
+    up: Axis,
+    (lo, hi): (tessera_wgpu::glam::Vec3, tessera_wgpu::glam::Vec3),
+) -> Result<(ViewTolerance, tessera_wgpu::Camera), Error> {
+    let (w, h) = size;
+    let framing = crate::render::default_framing(lo, hi, w as f32 / h as f32, up);
     let (eye, target) = match (args.eye, args.target) {
         (Some(e), Some(t)) => (
             tessera_wgpu::glam::DVec3::from(e),
@@ -382,19 +389,36 @@ fn view_tolerance(args: &ViewArgs, control: &ControlMesh) -> Result<ViewToleranc
         ),
         _ => (framing.eye.as_dvec3(), framing.target.as_dvec3()),
     };
-    let up = match up_axis {
-        Axis::X => tessera_wgpu::glam::DVec3::X,
-        Axis::Y => tessera_wgpu::glam::DVec3::Y,
-        Axis::Z => tessera_wgpu::glam::DVec3::Z,
-    };
     let fovy = args.fov.map_or(framing.fovy as f64, f64::to_radians);
-    let near = args.near.unwrap_or(framing.near as f64);
-    let view = View::look_at(eye, target, up, fovy, (w, h), near)?;
-    Ok(ViewTolerance {
+    // The framing's near plane is in front of the model from its own eye; from another
+    // eye, a hundredth of the model's size.
+    let near = match (args.near, args.eye) {
+        (Some(n), _) => n,
+        (None, Some(_)) => 0.01 * (hi - lo).length() as f64,
+        (None, None) => framing.near as f64,
+    };
+    let view = View::look_at(eye, target, framing.up.as_dvec3(), fovy, (w, h), near)?;
+    // The far plane past the farthest corner of the box.
+    let far = tessera_core::view::box_corners(lo.as_dvec3(), hi.as_dvec3())
+        .iter()
+        .map(|c| (*c - eye).length())
+        .fold(near, f64::max)
+        * 1.05
+        + near;
+    let camera = tessera_wgpu::Camera {
+        eye: eye.as_vec3(),
+        target: target.as_vec3(),
+        fovy: fovy as f32,
+        near: near as f32,
+        far: far as f32,
+        ..framing
+    };
+    let view = ViewTolerance {
         view,
         pixels: args.tolerance_px,
         cull: !args.no_cull,
-    })
+    };
+    Ok((view, camera))
 }
 
 pub fn info(input: &Path) -> Result<(), Error> {

@@ -163,12 +163,19 @@ pub struct TessellateArgs {
     /// for Catmull-Clark patches; at least 32).
     #[arg(long)]
     pub measure_samples: Option<usize>,
+    /// With a view: the viewport in pixels, WIDTHxHEIGHT (default 800x600).
+    #[arg(long, value_parser = tessera_wgpu::image_out::parse_size)]
+    pub size: Option<(u32, u32)>,
+    /// With a view: the model's up axis, which is up on the screen (default z).
+    #[arg(long, value_enum)]
+    pub up: Option<Axis>,
     #[command(flatten)]
     pub view: ViewArgs,
 }
 
 /// A camera for the Catmull-Clark adaptive tessellation: a tolerance in pixels, and
-/// culling. Without `--eye` and `--target`, the view is `render`'s default framing.
+/// culling (with `--size` and `--up`). Without `--eye` and `--target`, the view is
+/// `render`'s default framing.
 #[derive(Args, Debug, Default)]
 pub struct ViewArgs {
     /// Where the eye is, X,Y,Z (with --target).
@@ -180,15 +187,10 @@ pub struct ViewArgs {
     /// Vertical field of view in degrees (default: the framing's, 30).
     #[arg(long)]
     pub fov: Option<f64>,
-    /// Distance of the near plane (default: the framing's, in front of the model).
+    /// Distance of the near plane (default: the framing's, in front of the model; with
+    /// --eye, 0.01 of the diagonal of the control points' box).
     #[arg(long)]
     pub near: Option<f64>,
-    /// The viewport in pixels, WIDTHxHEIGHT (default 800x600).
-    #[arg(long = "size", value_parser = tessera_wgpu::image_out::parse_size)]
-    pub size: Option<(u32, u32)>,
-    /// The model's up axis, which is up on the screen (default z).
-    #[arg(long, value_enum)]
-    pub up: Option<Axis>,
     /// Every point of the limit surface inside the view frustum projects within this many
     /// pixels of the projection of its nearest point on the output (guaranteed). With
     /// --tolerance or --tolerance-rel as well, each cell keeps the smaller of the two.
@@ -273,6 +275,10 @@ pub struct RenderArgs {
     /// The model's up axis (the Newell teapot is z-up; the teacup and teaspoon y-up).
     #[arg(long, value_enum, default_value = "z")]
     pub up: Axis,
+    /// Catmull-Clark adaptive with `--backend cpu`: the camera drawn and tessellated for
+    /// (see `tessellate`).
+    #[command(flatten)]
+    pub view: ViewArgs,
 }
 
 #[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]

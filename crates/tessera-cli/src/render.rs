@@ -105,6 +105,13 @@ pub fn render(args: RenderArgs) -> Result<(), Error> {
         ))
         .into());
     }
+    if args.view.given() && !(cc && !uniform && args.backend == Some(Backend::Cpu)) {
+        return Err(CoreError::Param(
+            "a view (--eye, --tolerance-px, ...) is for Catmull-Clark meshes with --method adaptive, on the CPU reference only so far (--backend cpu)".into(),
+        )
+        .into());
+    }
+    let mut view_camera = None;
     let mut timings = GpuTimings::default();
     let (gpu, output, (lo, hi), what, (triangles, vertices)) = if cc {
         let mut control = tessera_core::io::load_control_mesh(&args.input)?;
@@ -138,6 +145,19 @@ pub fn render(args: RenderArgs) -> Result<(), Error> {
             let t = Instant::now();
             let out = if uniform {
                 tessera_core::catmull_clark::tessellate_uniform(&model, args.segments.unwrap_or(8))?
+            } else if args.view.given() {
+                let params = CcParams {
+                    // Pixels alone: no world cap beyond the whole model.
+                    tolerance: match (args.view.tolerance_px, args.tolerance_rel) {
+                        (Some(_), None) => tessera_core::Tolerance::Relative(1.0),
+                        _ => params.tolerance,
+                    },
+                    ..params
+                };
+                let (view, camera) =
+                    crate::catmull_clark::view_tolerance(&args.view, args.size, args.up, bounds)?;
+                view_camera = Some(camera);
+                tessera_core::catmull_clark::tessellate_adaptive_in_view(&model, &params, &view)?
             } else {
                 tessera_core::catmull_clark::tessellate_adaptive(&model, &params)?
             };
@@ -213,7 +233,7 @@ pub fn render(args: RenderArgs) -> Result<(), Error> {
     let t = Instant::now();
     let (w, h) = args.size;
     let aspect = w as f32 / h as f32;
-    let camera = default_framing(lo, hi, aspect, args.up);
+    let camera = view_camera.unwrap_or_else(|| default_framing(lo, hi, aspect, args.up));
     let image = render_camera_to_rgba(&gpu, output.mesh(), &camera, w, h, &options)?;
     let render_ms = t.elapsed().as_secs_f64() * 1e3;
     save_png(&image, &args.output)?;

@@ -186,7 +186,7 @@ fn tessellate(args: TessellateArgs) -> Result<(), Error> {
     if tessera_core::io::is_control_mesh(&args.input) {
         return crate::catmull_clark::tessellate(args);
     }
-    if args.view.given() || args.view.size.is_some() || args.view.up.is_some() {
+    if args.view.given() || args.size.is_some() || args.up.is_some() {
         return Err(CoreError::Param(
             "--eye, --target, --fov, --near, --size, --up, --tolerance-px and --no-cull set a view for Catmull-Clark meshes; Bézier inputs do not take one yet".into(),
         )

@@ -166,3 +166,67 @@ fn views_refuse_what_they_do_not_take_yet_with_one_line() {
         assert!(!err.contains("panicked"), "{err}");
     }
 }
+
+#[test]
+fn render_draws_what_the_view_tessellated_and_refuses_a_view_on_the_gpu() {
+    let torus = asset("opensubdiv/catmark_torus.obj");
+    let png = tmp("close.png");
+    let close = [
+        "render",
+        &torus,
+        "-o",
+        png.to_str().unwrap(),
+        "--backend",
+        "cpu",
+        "--eye",
+        "2.2,0,0.6",
+        "--target",
+        "1.5,1.5,0",
+        "--tolerance-px",
+        "1",
+        "--size",
+        "160x120",
+    ];
+    let out = tessera().args(close).output().unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let bytes = std::fs::read(&png).unwrap();
+    assert_eq!(&bytes[1..4], b"PNG");
+    // The tessellate command with the same view gives the triangles render reports.
+    let stats = stats_of(
+        &[
+            "tessellate",
+            &torus,
+            "--eye",
+            "2.2,0,0.6",
+            "--target",
+            "1.5,1.5,0",
+            "--tolerance-px",
+            "1",
+            "--size",
+            "160x120",
+        ],
+        "render_twin.json",
+    );
+    let said = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        said.contains(&format!(" {} triangles", stats["triangles"])),
+        "{said} against {stats}"
+    );
+    let gpu = tessera()
+        .args([
+            "render",
+            &torus,
+            "-o",
+            png.to_str().unwrap(),
+            "--tolerance-px",
+            "1",
+        ])
+        .output()
+        .unwrap();
+    assert!(!gpu.status.success());
+    assert!(String::from_utf8_lossy(&gpu.stderr).contains("--backend cpu"));
+}
