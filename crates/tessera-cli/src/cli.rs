@@ -179,10 +179,10 @@ pub struct TessellateArgs {
 #[derive(Args, Debug, Default)]
 pub struct ViewArgs {
     /// Where the eye is, X,Y,Z (with --target).
-    #[arg(long, value_parser = parse_point, requires = "target")]
+    #[arg(long, value_parser = parse_point, requires = "target", allow_hyphen_values = true)]
     pub eye: Option<[f64; 3]>,
     /// The point looked at, X,Y,Z (with --eye).
-    #[arg(long, value_parser = parse_point, requires = "eye")]
+    #[arg(long, value_parser = parse_point, requires = "eye", allow_hyphen_values = true)]
     pub target: Option<[f64; 3]>,
     /// Vertical field of view in degrees (default: the framing's, 30).
     #[arg(long)]

@@ -22,6 +22,16 @@ fn tmp(name: &str) -> PathBuf {
     dir.join(name)
 }
 
+/// Close to one side of the torus and looking past it: part of it out of view.
+const CLOSE_VIEW: [&str; 6] = [
+    "--eye",
+    "2.2,0,0.6",
+    "--target",
+    "1.5,1.5,0",
+    "--tolerance-px",
+    "1",
+];
+
 fn stats_of(args: &[&str], name: &str) -> serde_json::Value {
     let stats = tmp(name);
     let out = tessera()
@@ -75,20 +85,10 @@ fn a_pixel_tolerance_holds_when_measured_and_culling_drops_what_is_out_of_view()
     assert!(coarse["triangles"].as_u64() < framed["triangles"].as_u64());
     // Close to one side and looking past it: part of the torus is culled, and kept with
     // --no-cull.
-    let close = [
-        "tessellate",
-        &torus,
-        "--eye",
-        "2.2,0,0.6",
-        "--target",
-        "1.5,1.5,0",
-        "--tolerance-px",
-        "1",
-        "--size",
-        "320x240",
-    ];
+    let mut close = vec!["tessellate", &torus, "--size", "320x240"];
+    close.extend(CLOSE_VIEW);
     let culled = stats_of(&close, "close.json");
-    let mut kept_args = close.to_vec();
+    let mut kept_args = close.clone();
     kept_args.push("--no-cull");
     let kept = stats_of(&kept_args, "kept.json");
     assert!(culled["culled_patches"].as_u64().unwrap() > 0, "{culled}");
@@ -105,9 +105,9 @@ fn a_view_that_sees_nothing_writes_an_empty_mesh() {
             "tessellate",
             &torus,
             "--eye",
-            "10,0,0",
+            "-10,0,0",
             "--target",
-            "20,0,0",
+            "-20,0,0",
             "--tolerance-px",
             "1",
             "-o",
@@ -151,7 +151,7 @@ fn views_refuse_what_they_do_not_take_yet_with_one_line() {
         (vec!["tessellate", &teapot, "--tolerance-px", "1"], "Bézier"),
         (vec!["tessellate", &torus, "--tolerance-px=-1"], "positive"),
         (
-            vec!["tessellate", &torus, "--eye", "1,2", "--target", "0,0,0"],
+            vec!["tessellate", &torus, "--eye", "-1,2", "--target", "0,0,0"],
             "X,Y,Z",
         ),
         (
@@ -171,23 +171,19 @@ fn views_refuse_what_they_do_not_take_yet_with_one_line() {
 fn render_draws_what_the_view_tessellated_and_refuses_a_view_on_the_gpu() {
     let torus = asset("opensubdiv/catmark_torus.obj");
     let png = tmp("close.png");
-    let close = [
+    let png_path = png.to_str().unwrap();
+    let mut close = vec![
         "render",
         &torus,
         "-o",
-        png.to_str().unwrap(),
+        png_path,
         "--backend",
         "cpu",
-        "--eye",
-        "2.2,0,0.6",
-        "--target",
-        "1.5,1.5,0",
-        "--tolerance-px",
-        "1",
         "--size",
         "160x120",
     ];
-    let out = tessera().args(close).output().unwrap();
+    close.extend(CLOSE_VIEW);
+    let out = tessera().args(&close).output().unwrap();
     assert!(
         out.status.success(),
         "{}",
@@ -196,21 +192,9 @@ fn render_draws_what_the_view_tessellated_and_refuses_a_view_on_the_gpu() {
     let bytes = std::fs::read(&png).unwrap();
     assert_eq!(&bytes[1..4], b"PNG");
     // The tessellate command with the same view gives the triangles render reports.
-    let stats = stats_of(
-        &[
-            "tessellate",
-            &torus,
-            "--eye",
-            "2.2,0,0.6",
-            "--target",
-            "1.5,1.5,0",
-            "--tolerance-px",
-            "1",
-            "--size",
-            "160x120",
-        ],
-        "render_twin.json",
-    );
+    let mut twin = vec!["tessellate", &torus, "--size", "160x120"];
+    twin.extend(CLOSE_VIEW);
+    let stats = stats_of(&twin, "render_twin.json");
     let said = String::from_utf8_lossy(&out.stdout);
     assert!(
         said.contains(&format!(" {} triangles", stats["triangles"])),
