@@ -72,7 +72,12 @@ fn params() -> CcParams {
 }
 
 fn run(model: &SurfaceModel, view: View, pixels: Option<f64>, cull: bool) -> CcTessellation {
-    let vt = ViewTolerance { view, pixels, cull };
+    let vt = ViewTolerance {
+        view,
+        pixels,
+        cull,
+        max_triangles: None,
+    };
     tessellate_adaptive_in_view(model, &params(), &vt).unwrap()
 }
 
@@ -202,4 +207,55 @@ fn the_t_junction_check_catches_a_planted_one() {
         1e-5 * model.mesh.control_diag,
     );
     assert!(report.t_junctions > 0, "{report:?}");
+}
+
+#[test]
+fn a_triangle_cap_coarsens_the_pixels_until_the_mesh_fits() {
+    let model = cc_model("opensubdiv/catmark_car.obj");
+    let v = view(&model, Stand::Close);
+    let free = run(&model, v, Some(0.5), true);
+    assert_eq!(free.tolerance_px, Some(0.5));
+    // Halfway between the mesh at 0.5 px and the coarsest there is in this view.
+    let coarsest = run(&model, v, Some(1e4), true);
+    let cap = (free.mesh.triangle_count() + coarsest.mesh.triangle_count()) / 2;
+    let capped = tessellate_adaptive_in_view(
+        &model,
+        &params(),
+        &ViewTolerance {
+            view: v,
+            pixels: Some(0.5),
+            cull: true,
+            max_triangles: Some(cap),
+        },
+    )
+    .unwrap();
+    assert!(
+        capped.mesh.triangle_count() <= cap,
+        "{} > {cap}",
+        capped.mesh.triangle_count()
+    );
+    let achieved = capped.tolerance_px.unwrap();
+    assert!(achieved > 0.5, "{achieved}");
+    // One step finer would not have fitted, and what it reports holds when measured.
+    let finer = run(&model, v, Some(achieved / std::f64::consts::SQRT_2), true);
+    assert!(finer.mesh.triangle_count() > cap);
+    let err = max_error_px(&surface_samples(&model, 8), &capped.mesh, &v).unwrap();
+    assert!(err <= achieved, "{err} px > {achieved}");
+    // A cap that the mesh meets changes nothing.
+    let roomy = ViewTolerance {
+        view: v,
+        pixels: Some(0.5),
+        cull: true,
+        max_triangles: Some(free.mesh.triangle_count()),
+    };
+    let same = tessellate_adaptive_in_view(&model, &params(), &roomy).unwrap();
+    assert_eq!(same.mesh.indices, free.mesh.indices);
+    assert_eq!(same.tolerance_px, Some(0.5));
+    // A cap below the coarsest mesh is an error, not a loop.
+    let tight = ViewTolerance {
+        max_triangles: Some(coarsest.mesh.triangle_count() - 1),
+        ..roomy
+    };
+    let err = tessellate_adaptive_in_view(&model, &params(), &tight).unwrap_err();
+    assert!(err.to_string().contains("triangles"), "{err}");
 }

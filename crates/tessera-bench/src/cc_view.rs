@@ -115,6 +115,7 @@ pub fn run(assets: &Path, out_dir: &Path, quick: bool) {
                     view,
                     pixels: px,
                     cull: true,
+                    max_triangles: None,
                 };
                 median_time(repeats, || {
                     tessellate_adaptive_in_view(&model, &params, &vt).expect("tessellate")

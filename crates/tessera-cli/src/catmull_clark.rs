@@ -83,6 +83,9 @@ struct Stats {
     dispatches: Option<u32>,
     /// With a view: the pixel tolerance asked for (`--tolerance-px`).
     tolerance_px: Option<f64>,
+    /// With a view: the pixel tolerance the output meets, coarser than asked where
+    /// `--max-triangles` made it so.
+    achieved_tolerance_px: Option<f64>,
     /// With a view: patches all of whose cells lie outside the frustum (nothing emitted).
     culled_patches: Option<usize>,
     /// With a view: leaf cells outside the frustum.
@@ -322,6 +325,7 @@ pub fn tessellate(args: TessellateArgs) -> Result<(), Error> {
         triangle_bounds: tolerance.map(|_| out.triangle_bounds),
         dispatches,
         tolerance_px: view.and_then(|v| v.pixels),
+        achieved_tolerance_px: out.tolerance_px,
         culled_patches: view.map(|_| out.culled_patches),
         culled_leaves: view.map(|_| out.culled_leaves),
         max_error_px,
@@ -353,8 +357,12 @@ pub fn tessellate(args: TessellateArgs) -> Result<(), Error> {
         line += &format!(", segments {n}");
     }
     if let Some(v) = &view {
-        if let Some(px) = v.pixels {
-            line += &format!(", {px} px");
+        match (v.pixels, out.tolerance_px) {
+            (Some(asked), Some(got)) if got > asked => {
+                line += &format!(", {got:.4} px (coarsened from {asked} to fit --max-triangles)")
+            }
+            (Some(px), _) => line += &format!(", {px} px"),
+            _ => {}
         }
         line += &format!(", {} patches culled", out.culled_patches);
     }
@@ -417,6 +425,7 @@ pub(crate) fn view_tolerance(
         view,
         pixels: args.tolerance_px,
         cull: !args.no_cull,
+        max_triangles: args.max_triangles,
     };
     Ok((view, camera))
 }
@@ -492,6 +501,7 @@ pub fn run_gpu(
         triangle_bounds: 0,
         culled_leaves: 0,
         culled_patches: 0,
+        tolerance_px: None,
     };
     Ok((tessellation, stage.dispatches(), stage.upload_bytes()))
 }
@@ -528,6 +538,7 @@ pub fn run_gpu_uniform(
         triangle_bounds: 0,
         culled_leaves: 0,
         culled_patches: 0,
+        tolerance_px: None,
     };
     Ok((tessellation, stage.upload_bytes()))
 }

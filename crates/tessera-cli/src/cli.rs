@@ -199,6 +199,11 @@ pub struct ViewArgs {
     /// Keep the patches outside the view frustum (culled by default with a view).
     #[arg(long)]
     pub no_cull: bool,
+    /// At most this many triangles (with --tolerance-px): the pixel tolerance is coarsened
+    /// by √2 at a time until the mesh fits, and the stats report the one achieved
+    /// (`achieved_tolerance_px`).
+    #[arg(long, requires = "tolerance_px")]
+    pub max_triangles: Option<usize>,
 }
 
 impl ViewArgs {
@@ -209,6 +214,7 @@ impl ViewArgs {
             || self.fov.is_some()
             || self.near.is_some()
             || self.no_cull
+            || self.max_triangles.is_some()
     }
 }
 

@@ -214,3 +214,33 @@ fn render_draws_what_the_view_tessellated_and_refuses_a_view_on_the_gpu() {
     assert!(!gpu.status.success());
     assert!(String::from_utf8_lossy(&gpu.stderr).contains("--backend cpu"));
 }
+
+#[test]
+fn max_triangles_coarsens_the_pixels_and_reports_what_it_achieved() {
+    let torus = asset("opensubdiv/catmark_torus.obj");
+    let free = stats_of(
+        &["tessellate", &torus, "--tolerance-px", "0.25"],
+        "free.json",
+    );
+    let cap = free["triangles"].as_u64().unwrap() / 2;
+    let capped = stats_of(
+        &[
+            "tessellate",
+            &torus,
+            "--tolerance-px",
+            "0.25",
+            "--max-triangles",
+            &cap.to_string(),
+            "--measure",
+        ],
+        "capped.json",
+    );
+    assert!(capped["triangles"].as_u64().unwrap() <= cap, "{capped}");
+    let achieved = capped["achieved_tolerance_px"].as_f64().unwrap();
+    assert!(achieved > 0.25, "{capped}");
+    assert!(
+        capped["max_error_px"].as_f64().unwrap() <= achieved,
+        "{capped}"
+    );
+    assert_eq!(free["achieved_tolerance_px"], 0.25);
+}

@@ -42,7 +42,11 @@
 //! lies in `A ⊕ b`, its nearest point `Q` on the mesh is within `b` of it, and the segment
 //! `PQ` lies in `A ⊕ 2b`. With `g(δ) = p / K(A ⊕ 2δ, δ)`, any `δ ≤ g(δ)` guarantees
 //! `p` pixels for `b ≤ δ`. `K` grows with `δ`, so `g` falls, and `δ₁ = g(g(0))` is such a
-//! `δ`: `δ₀ = g(0) ≥ g(δ₀) = δ₁`, so `g(δ₁) ≥ g(δ₀) = δ₁` ([`View::cell_tolerance`]). A cell whose box `A ⊕ b` lies wholly
+//! `δ`: `δ₀ = g(0) ≥ g(δ₀) = δ₁`, so `g(δ₁) ≥ g(δ₀) = δ₁`. As `δ − g(δ)` grows, the valid
+//! `δ` are an interval from 0, below `δ₀`; a bisection from `δ₁` toward `δ₀` keeps a valid
+//! end and comes within 2⁻¹⁰ of the interval's end ([`View::cell_tolerance`]). `δ₁` alone
+//! can be far below it: where `δ₀` is large against the distance to the eye, the box
+//! grown by `2δ₀` reaches the eye and `g(δ₀)` collapses. A cell whose box `A ⊕ b` lies wholly
 //! outside one plane of the frustum has no point inside it ([`View::box_outside`]).
 
 use glam::{DMat4, DVec2, DVec3, DVec4};
@@ -199,15 +203,35 @@ impl View {
     }
 
     /// The largest bound in model units a cell may keep for `pixels` pixels, where the
-    /// box of its corners is `[lo, hi]` (see the module docs): `g(g(0))`.
+    /// box of its corners is `[lo, hi]` (see the module docs): the largest `δ ≤ g(δ)`,
+    /// found by bisection between `g(g(0))` and `g(0)` (every `δ ≤ g(δ)` lies below
+    /// `g(0)`, and the set of them is an interval from 0 as `δ − g(δ)` grows), always
+    /// returning one that satisfies it.
     pub fn cell_tolerance(&self, lo: DVec3, hi: DVec3, pixels: f64) -> f64 {
         let g = |delta: f64| {
             let grow = DVec3::splat(2.0 * delta);
             pixels / self.gain(lo - grow, hi + grow, delta)
         };
-        g(g(0.0))
+        let upper = g(0.0);
+        let mut valid = g(upper);
+        let mut invalid = upper;
+        if valid >= upper {
+            return valid;
+        }
+        for _ in 0..CELL_TOLERANCE_STEPS {
+            let mid = 0.5 * (valid + invalid);
+            if mid <= g(mid) {
+                valid = mid;
+            } else {
+                invalid = mid;
+            }
+        }
+        valid
     }
 }
+
+/// Bisection steps of [`View::cell_tolerance`]: within 2⁻¹⁰ of the largest tolerance.
+const CELL_TOLERANCE_STEPS: usize = 10;
 
 /// The eight corners of a box.
 pub fn box_corners(lo: DVec3, hi: DVec3) -> [DVec3; 8] {
@@ -393,6 +417,16 @@ mod tests {
         };
         let (near, mid, far) = (at(0.2), at(5.0), at(50.0));
         assert!(near < mid && mid < far, "{near} {mid} {far}");
+        // More pixels never give a smaller tolerance, even where the first guess, grown
+        // by twice itself, would reach the eye.
+        let eye = DVec3::new(3.0, -4.0, 1.5);
+        let c = eye + (DVec3::ZERO - eye).normalize() * 0.5;
+        let mut last = 0.0;
+        for px in [1.0, 10.0, 100.0, 200.0, 1000.0] {
+            let t = view.cell_tolerance(c - DVec3::splat(1e-3), c + DVec3::splat(1e-3), px);
+            assert!(t >= last, "{px} px: {t} < {last}");
+            last = t;
+        }
         // At the axis, far from the near plane, one pixel is about depth / focal length.
         let focal = 300.0 / (20f64.to_radians()).tan();
         let ratio = mid / (5.0 / focal);

@@ -224,6 +224,12 @@ pub struct ViewTolerance {
     pub pixels: Option<f64>,
     /// Cells whose bounds lie wholly outside the frustum emit nothing.
     pub cull: bool,
+    /// At most this many triangles: where the pixels would need more, they are coarsened
+    /// by √2 at a time until the mesh fits (the achieved pixels are reported in
+    /// [`CcTessellation::tolerance_px`]). A run that cannot fit stops marking as soon as
+    /// its leaves (two triangles at least each) pass the cap, so no step holds much more
+    /// than the cap.
+    pub max_triangles: Option<usize>,
 }
 
 /// A tessellation with what it cost.
@@ -245,6 +251,9 @@ pub struct CcTessellation {
     pub culled_leaves: usize,
     /// Patches all of whose leaves lie outside the view's frustum.
     pub culled_patches: usize,
+    /// The pixel tolerance the output meets in its view: the one asked for, or coarser
+    /// where a triangle cap made it so.
+    pub tolerance_px: Option<f64>,
     /// Flatness bounds computed, every trial of the first-split search included: the
     /// method's cost, most of its time.
     pub bounds: u64,
@@ -271,6 +280,8 @@ struct Evaluator<'a> {
     eps: f64,
     /// The view that sets each cell's ε and culls, if any.
     view: Option<ViewTolerance>,
+    /// The bound of a patch's whole box, computed to cull it: the first trial's root.
+    root_bound: Option<(usize, f64)>,
 }
 
 impl<'a> Evaluator<'a> {
@@ -285,6 +296,7 @@ impl<'a> Evaluator<'a> {
             triangle_bounds: 0,
             points: HashMap::default(),
             view: None,
+            root_bound: None,
         }
     }
 
@@ -406,6 +418,11 @@ fn decide_cell(
     let bound = if proven {
         eval.proven += 1;
         f64::INFINITY
+    } else if let Some(b) = eval
+        .root_bound
+        .filter(|&(q, _)| q == p && cell.w == eval.n && cell.h == eval.n)
+    {
+        b.1
     } else {
         eval.bounds += 1;
         box_bound(&eval.model.patches[p], bx, corners)
@@ -503,7 +520,33 @@ pub fn tessellate_adaptive_in_view(
             )));
         }
     }
-    tessellate_with_splits(model, params, &params.first_split.splits(), Some(*view))
+    let splits = params.first_split.splits();
+    let Some(cap) = view.max_triangles else {
+        return tessellate_with_splits(model, params, &splits, Some(*view));
+    };
+    let Some(asked) = view.pixels else {
+        return Err(Error::Param(
+            "a triangle cap needs a pixel tolerance to coarsen".into(),
+        ));
+    };
+    // Past the viewport's diagonal, coarser pixels change little: the coarsest mesh.
+    let coarsest = view.view.viewport().length();
+    let mut px = asked;
+    loop {
+        let step = ViewTolerance {
+            pixels: Some(px),
+            ..*view
+        };
+        if let Some(out) = tessellate_within(model, params, &splits, Some(step), Some(cap))? {
+            return Ok(out);
+        }
+        if px > coarsest {
+            return Err(Error::Param(format!(
+                "at most {cap} triangles: not met even at {px:.0} pixels ({asked} asked): the patches in view need more"
+            )));
+        }
+        px *= std::f64::consts::SQRT_2;
+    }
 }
 
 /// What `cc_traverse` writes for `params` (flatness bound): every leaf in the GPU's
@@ -516,7 +559,7 @@ pub fn marking_leaves(model: &SurfaceModel, params: &CcParams) -> Result<Vec<CcC
         leaf_bound: LeafBound::Flatness,
         ..*params
     };
-    let marking = mark_patches(&mut eval, &flatness, &params.first_split.splits());
+    let marking = mark_patches(&mut eval, &flatness, &params.first_split.splits(), None);
     let cells = marking
         .leaves
         .iter()
@@ -537,14 +580,32 @@ fn tessellate_with_splits(
     splits: &[(u32, u32)],
     view: Option<ViewTolerance>,
 ) -> Result<CcTessellation> {
+    let out = tessellate_within(model, params, splits, view, None)?;
+    Ok(out.expect("no triangle cap"))
+}
+
+/// [`tessellate_with_splits`], `None` where the mesh would have more than `cap` triangles.
+fn tessellate_within(
+    model: &SurfaceModel,
+    params: &CcParams,
+    splits: &[(u32, u32)],
+    view: Option<ViewTolerance>,
+    cap: Option<usize>,
+) -> Result<Option<CcTessellation>> {
     params.validate(model)?;
     let mut eval = Evaluator::new(model, params);
     eval.view = view;
     let n = eval.n;
     let mesh = &model.mesh;
-    let mut out = CcTessellation::default();
+    let mut out = CcTessellation {
+        tolerance_px: view.and_then(|v| v.pixels),
+        ..Default::default()
+    };
     // 1. Adaptive marking. 2. Base-quadrilateral replacement.
-    let mut marking = mark_patches(&mut eval, params, splits);
+    let mut marking = mark_patches(&mut eval, params, splits, cap.map(|c| c / 2));
+    if marking.over_cap {
+        return Ok(None);
+    }
     let polygons = settle_exact_leaves(&mut eval, &mut marking);
     out.unmet = marking.unmet;
     out.bounds = eval.bounds;
@@ -600,7 +661,10 @@ fn tessellate_with_splits(
         triangulate(&poly, *corners, position, &mut indices);
     }
     out.mesh.indices = indices;
-    Ok(out)
+    if cap.is_some_and(|c| out.mesh.triangle_count() > c) {
+        return Ok(None);
+    }
+    Ok(Some(out))
 }
 
 /// What step 1 found: every leaf, and the first split each patch chose.
@@ -616,11 +680,18 @@ struct Marking {
     max_bound: f64,
     culled_leaves: usize,
     culled_patches: usize,
+    /// Marking stopped: more leaves than the cap allowed.
+    over_cap: bool,
 }
 
 /// Step 1, adaptive marking: the first split ku×kv of each patch is the one with the
 /// fewest leaves.
-fn mark_patches(eval: &mut Evaluator, params: &CcParams, splits: &[(u32, u32)]) -> Marking {
+fn mark_patches(
+    eval: &mut Evaluator,
+    params: &CcParams,
+    splits: &[(u32, u32)],
+    leaf_cap: Option<usize>,
+) -> Marking {
     let eps = eval.eps;
     let (n, model) = (eval.n, eval.model);
     let mesh = &model.mesh;
@@ -633,6 +704,7 @@ fn mark_patches(eval: &mut Evaluator, params: &CcParams, splits: &[(u32, u32)]) 
         max_bound: 0.0,
         culled_leaves: 0,
         culled_patches: 0,
+        over_cap: false,
     };
     for p in mesh.surface_patches() {
         // A patch wholly outside a culling view costs one bound and no search.
@@ -647,7 +719,9 @@ fn mark_patches(eval: &mut Evaluator, params: &CcParams, splits: &[(u32, u32)]) 
             let corners = eval.corners(p, root);
             let bx = [0, WALK_ONE, 0, WALK_ONE];
             eval.bounds += 1;
-            if eval.outside(&corners, box_bound(&model.patches[p], bx, corners)) {
+            let bound = box_bound(&model.patches[p], bx, corners);
+            eval.root_bound = Some((p, bound));
+            if eval.outside(&corners, bound) {
                 out.culled_patches += 1;
                 continue;
             }
@@ -669,6 +743,10 @@ fn mark_patches(eval: &mut Evaluator, params: &CcParams, splits: &[(u32, u32)]) 
         }
         if !seen {
             out.culled_patches += 1;
+        }
+        if leaf_cap.is_some_and(|cap| out.leaves.len() > cap) {
+            out.over_cap = true;
+            return out;
         }
     }
     out
@@ -1053,7 +1131,7 @@ mod tests {
             assert!(ours.leaves < paper.leaves, "{name}: {} leaves", ours.leaves);
             assert!(ours.bounds > paper.bounds, "{name}");
             let mut eval = Evaluator::new(&model, &midpoint);
-            let marking = mark_patches(&mut eval, &midpoint, &FirstSplit::Midpoint.splits());
+            let marking = mark_patches(&mut eval, &midpoint, &FirstSplit::Midpoint.splits(), None);
             assert!(model
                 .mesh
                 .surface_patches()
@@ -1091,7 +1169,7 @@ mod tests {
             };
             let mut eval = Evaluator::new(&model, &params);
             let n = eval.n;
-            let marking = mark_patches(&mut eval, &params, &splits);
+            let marking = mark_patches(&mut eval, &params, &splits, None);
             let polygons = leaf_polygons(mesh, &marking.leaves, n);
             let topo = patch_topology(mesh);
             let cells: Vec<CcCell> = marking
