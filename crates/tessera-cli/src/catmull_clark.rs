@@ -223,12 +223,13 @@ pub fn tessellate(args: TessellateArgs) -> Result<(), Error> {
         }
         _ => {
             let params = CcParams {
-                tolerance: match (args.tolerance, args.tolerance_rel) {
-                    (Some(t), _) => Tolerance::Absolute(t),
-                    // Pixels alone: no world cap beyond the whole model.
-                    (None, None) if args.view.tolerance_px.is_some() => Tolerance::Relative(1.0),
-                    (None, r) => Tolerance::Relative(r.unwrap_or(DEFAULT_TOLERANCE_REL)),
-                },
+                tolerance: world_tolerance(
+                    &args.view,
+                    match (args.tolerance, args.tolerance_rel) {
+                        (Some(t), _) => Some(Tolerance::Absolute(t)),
+                        (None, r) => r.map(Tolerance::Relative),
+                    },
+                ),
                 max_depth,
                 first_split,
                 leaf_bound,
@@ -268,7 +269,7 @@ pub fn tessellate(args: TessellateArgs) -> Result<(), Error> {
         warnings.push(w);
     }
 
-    let (error, staged_mesh) = measure_and_write(
+    let (error, staged_mesh, samples) = measure_and_write(
         &out.mesh,
         args.measure,
         || surface_samples(&model, measure_samples),
@@ -276,14 +277,11 @@ pub fn tessellate(args: TessellateArgs) -> Result<(), Error> {
         args.output.as_deref(),
         &mut timings,
     )?;
+    // On the same samples as the error in model units.
     let max_error_px = match &view {
         Some(v) if args.measure => {
             let t = Instant::now();
-            let px = max_error_px(
-                &surface_samples(&model, measure_samples),
-                &out.mesh,
-                &v.view,
-            );
+            let px = max_error_px(&samples, &out.mesh, &v.view);
             timings.measure += ms(t);
             px
         }
@@ -377,6 +375,16 @@ pub fn tessellate(args: TessellateArgs) -> Result<(), Error> {
         );
     }
     Ok(())
+}
+
+/// The world tolerance given, if any; else none beyond the whole model where pixels set
+/// the tolerance, and the default without them.
+pub(crate) fn world_tolerance(view: &ViewArgs, given: Option<Tolerance>) -> Tolerance {
+    match given {
+        Some(t) => t,
+        None if view.tolerance_px.is_some() => Tolerance::Relative(1.0),
+        None => Tolerance::Relative(DEFAULT_TOLERANCE_REL),
+    }
 }
 
 /// The view of `args` for a viewport of `size` pixels and the model's `up` axis: its

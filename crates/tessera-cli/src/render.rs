@@ -147,11 +147,10 @@ pub fn render(args: RenderArgs) -> Result<(), Error> {
                 tessera_core::catmull_clark::tessellate_uniform(&model, args.segments.unwrap_or(8))?
             } else if args.view.given() {
                 let params = CcParams {
-                    // Pixels alone: no world cap beyond the whole model.
-                    tolerance: match (args.view.tolerance_px, args.tolerance_rel) {
-                        (Some(_), None) => tessera_core::Tolerance::Relative(1.0),
-                        _ => params.tolerance,
-                    },
+                    tolerance: crate::catmull_clark::world_tolerance(
+                        &args.view,
+                        args.tolerance_rel.map(tessera_core::Tolerance::Relative),
+                    ),
                     ..params
                 };
                 let (view, camera) =

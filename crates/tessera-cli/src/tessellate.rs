@@ -72,7 +72,8 @@ pub(crate) fn ms(t: Instant) -> f64 {
 
 /// With `measure`, the error of `mesh` against `samples()`; then `mesh` written under a
 /// temporary name beside `output` if given ([`finish_outputs`] puts it in place). Both
-/// timed into `timings`.
+/// timed into `timings`. Returns the samples too (empty without `measure`), for a
+/// caller that measures more on them.
 pub(crate) fn measure_and_write(
     mesh: &tessera_core::Mesh,
     measure: bool,
@@ -80,20 +81,28 @@ pub(crate) fn measure_and_write(
     bbox_diag: f64,
     output: Option<&Path>,
     timings: &mut Timings,
-) -> Result<(Option<ErrorStats>, Option<StagedFile>), CoreError> {
-    let error = if measure {
+) -> Result<MeasuredAndStaged, CoreError> {
+    let (error, samples) = if measure {
         let t = Instant::now();
-        let e = measure_error(&samples(), mesh, bbox_diag);
+        let samples = samples();
+        let e = measure_error(&samples, mesh, bbox_diag);
         timings.measure = ms(t);
-        Some(e)
+        (Some(e), samples)
     } else {
-        None
+        (None, Vec::new())
     };
     let t = Instant::now();
     let staged = output.map(|o| stage_mesh(o, mesh)).transpose()?;
     timings.write = ms(t);
-    Ok((error, staged))
+    Ok((error, staged, samples))
 }
+
+/// What [`measure_and_write`] returns: the error, the staged mesh and the samples.
+pub(crate) type MeasuredAndStaged = (
+    Option<ErrorStats>,
+    Option<StagedFile>,
+    Vec<tessera_wgpu::glam::DVec3>,
+);
 
 /// Writes the stats JSON (if asked), then puts the mesh and the stats in place together:
 /// if either cannot be written, neither is left behind.
@@ -386,7 +395,7 @@ fn tessellate(args: TessellateArgs) -> Result<(), Error> {
     };
     timings.gpu = gpu.as_ref().map(|_| gpu_timings);
 
-    let (error, staged_mesh) = measure_and_write(
+    let (error, staged_mesh, _) = measure_and_write(
         &out.mesh,
         args.measure,
         || bezier_surface_samples(&model, measure_samples),
