@@ -50,6 +50,17 @@ fn main(@builtin(global_invocation_id) gid: vec3u, @builtin(num_workgroups) grou
     }
     let grid = cc_params.grid;
     let cell = leaves[l];
+    // A leaf of a patch wholly out of view has no vertices, and puts no points on its
+    // neighbours' sides (a culled leaf of a patch partly in view still marks its
+    // corners: the polygons' side walk halves a side only where its midpoint is marked).
+    if (cell.trial_depth & CC_CELL_PATCH_CULLED) != 0u {
+        for (var k = 0u; k < 8u; k++) {
+            if 8u * l + k < arrayLength(&keys_out) {
+                keys_out[8u * l + k] = CC_NO_KEY;
+            }
+        }
+        return;
+    }
     let tp = topo[cell.patch_id];
     for (var k = 0u; k < 4u; k++) {
         let at = 8u * l + k;

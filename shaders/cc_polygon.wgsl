@@ -214,6 +214,14 @@ fn count(@builtin(global_invocation_id) gid: vec3u, @builtin(num_workgroups) gro
         return;
     }
     let cell = leaves[l];
+    // A culled leaf's polygon has two vertices that are never written: no triangles.
+    if (cell.trial_depth & CC_CELL_CULLED) != 0u {
+        for (var s = 0u; s < 4u; s++) {
+            poly_offsets[cc_side_base(l) + s] = 0u;
+        }
+        poly_offsets[l] = 2u;
+        return;
+    }
     line_topo = topo[cell.patch_id];
     emitting = false;
     var counts = vec4u(0u);
@@ -248,6 +256,9 @@ fn emit(@builtin(global_invocation_id) gid: vec3u, @builtin(local_invocation_ind
 
 fn emit_leaf(l: u32) {
     let cell = leaves[l];
+    if (cell.trial_depth & CC_CELL_CULLED) != 0u {
+        return;
+    }
     let counts = cc_side_counts(l);
     if any(counts != vec4u(0u)) {
         line_topo = topo[cell.patch_id];

@@ -23,6 +23,7 @@
 
 #include "shared/cc_tess.wgsl"
 #include "shared/cc_bound.wgsl"
+#include "shared/cc_view.wgsl"
 #include "shared/lane_order.wgsl"
 
 @group(0) @binding(55) var<storage, read_write> leaves: array<CcCell>;
@@ -39,11 +40,28 @@ struct CcDecision {
     split: bool,
     bound: f32,
     proven: bool,
+    // A leaf wholly outside the view's frustum: it emits nothing.
+    culled: bool,
+    // The cell's tolerance: the world's, or within its share of the view's pixels.
+    tolerance: f32,
+    // Flatness bounds computed (0 or 1).
+    bounds: u32,
 }
 
-// `traverse::decide` (and `adaptive::mark`): split unless the flatness bound is within
-// the tolerance or the cell is at the deepest level; a cell at a vertex whose children's
-// corners already prove it too far from flat is split without its bound.
+// Whether a cell with these corners and this bound lies wholly outside the frustum of a
+// culling view: its surface is within `bound` of its corners' hull.
+fn cc_outside(corners: array<vec3f, 4>, bound: f32) -> bool {
+    if cc_params.view.cull == 0u {
+        return false;
+    }
+    let b = vec3f(bound);
+    return cc_view_box_outside(cc_corners_lo(corners) - b, cc_corners_hi(corners) + b);
+}
+
+// `adaptive::decide_cell`: split unless the flatness bound is within the cell's
+// tolerance, the cell is outside the view, or it is at the deepest level; a cell at a
+// vertex whose children's corners already prove it too far from flat is split without
+// its bound.
 fn cc_decide(cell: CcCell) -> CcDecision {
     let size = cc_cell_size(cell);
     let i1 = cell.i + size.x;
@@ -52,6 +70,24 @@ fn cc_decide(cell: CcCell) -> CcDecision {
     let corners = array<vec3f, 4>(cc_corner(p, cell.i, cell.j), cc_corner(p, i1, cell.j),
         cc_corner(p, i1, j1), cc_corner(p, cell.i, j1));
     let depth = cell.trial_depth >> 8u;
+    var tolerance = cc_params.tolerance;
+    if cc_params.view.pixels > 0.0 {
+        tolerance = min(tolerance, cc_view_tolerance(cc_corners_lo(corners), cc_corners_hi(corners)));
+    }
+    // Grid units to walk units: CC_WALK_ONE / grid = 2^(18 - max_depth).
+    let scale = CC_WALK_ONE / cc_params.grid;
+    let walk_box = vec4u(cell.i, i1, cell.j, j1) * scale;
+    var bound = CC_INFINITY;
+    var bounds = 0u;
+    // A whole patch outside a culling view costs one bound and no search: trial 0's
+    // root (1 × 1) is culled before the proof, and its bound serves the decision.
+    if cc_params.view.cull != 0u && (cell.trial_depth & 0xffu) == 0u && depth == 0u {
+        bound = cc_box_bound(p, walk_box, corners);
+        bounds = 1u;
+        if cc_outside(corners, bound) {
+            return CcDecision(false, bound, false, true, tolerance, bounds);
+        }
+    }
     // Only at a vertex: a regular patch's bound is one Bézier piece, about as costly as
     // the proof's five evaluations.
     let regular = (cc_nodes[cc_roots[p].node].kind & CC_NODE_KIND_MASK) == CC_NODE_BEZIER;
@@ -61,15 +97,17 @@ fn cc_decide(cell: CcCell) -> CcDecision {
         let centre = cc_corner(p, cell.i + w, cell.j + h);
         let mids = array<vec3f, 4>(cc_corner(p, cell.i + w, cell.j), cc_corner(p, i1, cell.j + h),
             cc_corner(p, cell.i + w, j1), cc_corner(p, cell.i, cell.j + h));
-        if cc_split_proof(corners, centre, mids) > cc_params.tolerance {
-            return CcDecision(true, CC_INFINITY, true);
+        if cc_split_proof(corners, centre, mids) > tolerance {
+            return CcDecision(true, CC_INFINITY, true, false, tolerance, bounds);
         }
     }
-    // Grid units to walk units: CC_WALK_ONE / grid = 2^(18 - max_depth).
-    let scale = CC_WALK_ONE / cc_params.grid;
-    let bound = cc_box_bound(p, vec4u(cell.i, i1, cell.j, j1) * scale, corners);
-    let leaf = bound <= cc_params.tolerance || depth >= cc_params.max_depth;
-    return CcDecision(!leaf, bound, false);
+    if bounds == 0u {
+        bound = cc_box_bound(p, walk_box, corners);
+        bounds = 1u;
+    }
+    let culled = cc_outside(corners, bound);
+    let leaf = bound <= tolerance || culled || depth >= cc_params.max_depth;
+    return CcDecision(!leaf, bound, false, culled, tolerance, bounds);
 }
 
 // Per invocation: what its decisions cost, and (emit) what its leaves guarantee.
@@ -77,21 +115,26 @@ var<private> lane_bounds: u32;
 var<private> lane_proven: u32;
 var<private> lane_unmet: u32;
 var<private> lane_max_bound: f32;
+var<private> lane_culled: u32;
 
-fn decide_counted(cell: CcCell) -> bool {
+// `adaptive::Marking::keep_leaf`: a culled leaf counts apart, the others by their bound.
+fn decide_counted(cell: CcCell) -> CcDecision {
     let d = cc_decide(cell);
+    lane_bounds += d.bounds;
     if d.proven {
         lane_proven += 1u;
-    } else {
-        lane_bounds += 1u;
     }
     if !d.split {
-        lane_max_bound = max(lane_max_bound, min(d.bound, CC_INFINITY));
-        if d.bound > cc_params.tolerance {
-            lane_unmet += 1u;
+        if d.culled {
+            lane_culled += 1u;
+        } else {
+            lane_max_bound = max(lane_max_bound, min(d.bound, CC_INFINITY));
+            if d.bound > d.tolerance {
+                lane_unmet += 1u;
+            }
         }
     }
-    return d.split;
+    return d;
 }
 
 // A cell during a walk: `i | depth << 20`, `j` (i < 840 · 2^MAX_DEPTH < 2^20).
@@ -159,7 +202,8 @@ fn cc_best_so_far(p: u32) -> u32 {
     return ~atomicLoad(&marks[cc_best_at(p)]);
 }
 
-// The decision blocks of one walk: where the next bit goes (or comes from). Block
+// The decision blocks of one walk: where the next bit goes (or comes from). With a
+// culling view, each leaf's bit is followed by one saying whether it is culled. Block
 // p·T + t is trial t of patch p's own; further blocks are taken from the pool in turn
 // (`cc_state.decision_blocks`).
 struct CcChain {
@@ -244,9 +288,12 @@ fn count_trial(p: u32, t: u32) {
             stopped = true;
         } else {
             let cell = cc_cell_of(p, t, at_cell);
-            let split = decide_counted(cell);
-            cc_record(&chain, split);
-            if split {
+            let d = decide_counted(cell);
+            cc_record(&chain, d.split);
+            if !d.split && cc_params.view.cull != 0u {
+                cc_record(&chain, d.culled);
+            }
+            if d.split {
                 at_cell = cc_first_child(at_cell);
             } else {
                 mine += 1u;
@@ -266,6 +313,7 @@ fn count_trial(p: u32, t: u32) {
                     }
                     atomicStore(&marks[cc_stats_at(p, t)], bitcast<u32>(lane_max_bound));
                     atomicStore(&marks[cc_stats_at(p, t) + 1u], lane_unmet);
+                    atomicStore(&marks[cc_stats_at(p, t) + 2u], lane_culled);
                     atomicMax(&marks[cc_best_at(p)], ~cc_key(mine, t));
                     atomicMax(&marks[p], ~cc_key(mine, t));
                 }
@@ -295,6 +343,8 @@ fn emit_patch(p: u32) {
     let first = atomicLoad(&marks[p]);
     let own = p * cc_params.trials + t;
     var chain = CcChain(own, 0u, atomicLoad(&marks[cc_bits_at(own)]));
+    let culled_leaves = atomicLoad(&marks[cc_stats_at(p, t) + 2u]);
+    let patch_flag = select(0u, CC_CELL_PATCH_CULLED, culled_leaves == count);
     let s = cc_trial_split(t);
     let area = s.x * s.y;
     var r = 0u;
@@ -306,10 +356,17 @@ fn emit_patch(p: u32) {
         if cc_replay(&chain) {
             at_cell = cc_first_child(at_cell);
         } else {
+            var culled = false;
+            if cc_params.view.cull != 0u {
+                culled = cc_replay(&chain);
+            }
             // At most what the count pass found.
             let k = first + mine;
             if mine < count && k < cc_params.leaf_capacity && k < arrayLength(&leaves) {
                 leaves[k] = cell;
+                if culled {
+                    leaves[k].trial_depth |= CC_CELL_CULLED | patch_flag;
+                }
             }
             mine += 1u;
             let next = cc_next_cell(t, at_cell);
@@ -331,6 +388,11 @@ fn emit_patch(p: u32) {
     }
     atomicMax(&cc_state.max_bound_bits, atomicLoad(&marks[cc_stats_at(p, t)]));
     atomicAdd(&cc_state.unmet, atomicLoad(&marks[cc_stats_at(p, t) + 1u]));
+    if culled_leaves == count {
+        atomicAdd(&cc_state.culled_patches, 1u);
+    } else {
+        atomicAdd(&cc_state.culled_leaves, culled_leaves);
+    }
 }
 
 // Whether patch p has an extraordinary vertex (its tree splits at the root): its bounds

@@ -75,6 +75,10 @@ fn main(@builtin(global_invocation_id) gid: vec3u, @builtin(num_workgroups) grou
         return;
     }
     index_at = 3u * (poly_base - 2u * l);
+    // A culled leaf (`cc_polygon`'s two-vertex polygon): no triangles.
+    if poly_len < 4u {
+        return;
+    }
     if cc_side_base(l) + 4u > arrayLength(&poly_offsets) {
         return;
     }

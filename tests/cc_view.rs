@@ -2,7 +2,7 @@
 //! (every sampled surface point inside the frustum projects within p pixels of its
 //! nearest mesh point), culling, and no T-junction whatever the level of detail.
 
-use glam::{DVec3, Vec3};
+use glam::Vec3;
 use tessera_core::catmull_clark::{
     surface_samples, tessellate_adaptive_in_view, CcParams, CcTessellation, SurfaceModel,
     ViewTolerance,
@@ -10,56 +10,7 @@ use tessera_core::catmull_clark::{
 use tessera_core::measure::max_error_px;
 use tessera_core::watertight::check_watertight;
 use tessera_core::{Tolerance, View};
-use tessera_tests::{cc_model, open_boundary};
-
-/// Where a view stands relative to a model.
-#[derive(Clone, Copy, Debug)]
-enum Stand {
-    /// The whole model on screen.
-    Far,
-    /// Close, looking past the centre: part of the model off screen.
-    Close,
-    /// Among the model, looking out: part of it behind the eye.
-    Beside,
-    /// Looking away from the model.
-    Away,
-}
-
-fn model_box(model: &SurfaceModel) -> (DVec3, f64) {
-    let samples = surface_samples(model, 2);
-    let lo = samples.iter().fold(DVec3::INFINITY, |a, &p| a.min(p));
-    let hi = samples.iter().fold(DVec3::NEG_INFINITY, |a, &p| a.max(p));
-    ((lo + hi) / 2.0, (hi - lo).length())
-}
-
-fn view(model: &SurfaceModel, stand: Stand) -> View {
-    let (c, d) = model_box(model);
-    let dir = DVec3::new(0.5, -1.0, 0.45).normalize();
-    let side = dir.cross(DVec3::Z).normalize();
-    let (eye, target) = match stand {
-        Stand::Far => (c + dir * 2.5 * d, c),
-        Stand::Close => (c + dir * 0.9 * d, c + side * 0.3 * d),
-        Stand::Beside => {
-            // Inside the model's box, looking out: the surface around and behind the eye.
-            let eye = c + side * 0.05 * d;
-            let nearest = surface_samples(model, 2)
-                .into_iter()
-                .min_by(|a, b| (*a - eye).length().total_cmp(&(*b - eye).length()))
-                .unwrap();
-            (eye, nearest)
-        }
-        Stand::Away => (c + dir * 2.0 * d, c + dir * 3.0 * d),
-    };
-    View::look_at(
-        eye,
-        target,
-        DVec3::Z,
-        40f64.to_radians(),
-        (320, 240),
-        0.02 * d,
-    )
-    .unwrap()
-}
+use tessera_tests::{cc_model, open_boundary, view, Stand};
 
 fn params() -> CcParams {
     CcParams {

@@ -182,3 +182,57 @@ pub fn triangle_torus(around: usize, across: usize) -> tessera_core::catmull_cla
     }
     tessera_core::catmull_clark::ControlMesh::new(positions, faces)
 }
+
+/// Where a test view stands relative to a model ([`view`]).
+#[derive(Clone, Copy, Debug)]
+pub enum Stand {
+    /// The whole model on screen.
+    Far,
+    /// Close, looking past the centre: part of the model off screen.
+    Close,
+    /// Among the model, looking out: part of it behind the eye.
+    Beside,
+    /// Looking away from the model.
+    Away,
+}
+
+/// The centre and diagonal of the box of the model's surface samples.
+pub fn model_box(model: &tessera_core::catmull_clark::SurfaceModel) -> (glam::DVec3, f64) {
+    let samples = tessera_core::catmull_clark::surface_samples(model, 2);
+    let lo = samples.iter().fold(glam::DVec3::INFINITY, |a, &p| a.min(p));
+    let hi = samples
+        .iter()
+        .fold(glam::DVec3::NEG_INFINITY, |a, &p| a.max(p));
+    ((lo + hi) / 2.0, (hi - lo).length())
+}
+
+/// A 320 × 240 view of `model` from `stand`, 40° vertical field, near plane at 0.02 of
+/// the model's size.
+pub fn view(model: &tessera_core::catmull_clark::SurfaceModel, stand: Stand) -> tessera_core::View {
+    let (c, d) = model_box(model);
+    let dir = glam::DVec3::new(0.5, -1.0, 0.45).normalize();
+    let side = dir.cross(glam::DVec3::Z).normalize();
+    let (eye, target) = match stand {
+        Stand::Far => (c + dir * 2.5 * d, c),
+        Stand::Close => (c + dir * 0.9 * d, c + side * 0.3 * d),
+        Stand::Beside => {
+            // Inside the model's box, looking out: the surface around and behind the eye.
+            let eye = c + side * 0.05 * d;
+            let nearest = tessera_core::catmull_clark::surface_samples(model, 2)
+                .into_iter()
+                .min_by(|a, b| (*a - eye).length().total_cmp(&(*b - eye).length()))
+                .unwrap();
+            (eye, nearest)
+        }
+        Stand::Away => (c + dir * 2.0 * d, c + dir * 3.0 * d),
+    };
+    tessera_core::View::look_at(
+        eye,
+        target,
+        glam::DVec3::Z,
+        40f64.to_radians(),
+        (320, 240),
+        0.02 * d,
+    )
+    .unwrap()
+}

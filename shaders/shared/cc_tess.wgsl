@@ -20,6 +20,8 @@ struct CcCounters {
     bounds: atomic<u32>,
     proven: atomic<u32>,
     decision_blocks: atomic<u32>,
+    culled_leaves: atomic<u32>,
+    culled_patches: atomic<u32>,
 }
 
 // `tessera_core::gpu_types::CcHashStatus` as the kernels around the hash read and set it
@@ -40,7 +42,7 @@ struct CcHashStatusView {
 // - [P + 1, 2P + 1): the same key, kept; [2P + 1, 3P + 1): the key of the best trial
 //   the device cut short; [3P + 1, 4P + 1): the trial chosen;
 // - per patch and trial, what its leaves guarantee: the largest bound, the leaves over
-//   the tolerance;
+//   their tolerance, the leaves culled;
 // - blocks of 32 decisions, `[bits, next]`: one per patch and trial, then a pool.
 // Declared by the kernels that use it (atomic where marking writes it).
 
@@ -61,7 +63,7 @@ fn cc_chosen_at(p: u32) -> u32 {
 }
 
 fn cc_stats_at(p: u32, t: u32) -> u32 {
-    return 4u * cc_params.patch_count + 1u + 2u * (p * cc_params.trials + t);
+    return 4u * cc_params.patch_count + 1u + 3u * (p * cc_params.trials + t);
 }
 
 fn cc_bits_at(block: u32) -> u32 {
@@ -84,7 +86,7 @@ fn cc_trial_split(t: u32) -> vec2u {
 // Width and height of a cell in grid units.
 fn cc_cell_size(cell: CcCell) -> vec2u {
     let s = cc_trial_split(cell.trial_depth & 0xffu);
-    let depth = cell.trial_depth >> 8u;
+    let depth = (cell.trial_depth & ~(CC_CELL_CULLED | CC_CELL_PATCH_CULLED)) >> 8u;
     return vec2u((cc_params.grid / s.x) >> depth, (cc_params.grid / s.y) >> depth);
 }
 

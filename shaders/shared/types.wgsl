@@ -271,7 +271,27 @@ struct CcTessParams {
     vertex_capacity: u32,
     pad0: u32,
     pad1: u32,
+    view: CcView,
 }
+
+// `tessera_core::gpu_types::CcView`: a view for tolerances in pixels (`pixels` > 0)
+// and culling (`cull` = 1), all zero for none.
+struct CcView {
+    clip: mat4x4f,
+    viewport: vec2f,
+    pixels: f32,
+    near_w: f32,
+    cull: u32,
+    pad0: u32,
+    pad1: u32,
+    pad2: u32,
+}
+
+// `tessera_core::gpu_types::{CC_CELL_CULLED, CC_CELL_PATCH_CULLED}`: a leaf outside the
+// view, which emits no triangles (its corners still mark its neighbours' sides), and one
+// of a patch wholly outside, which has no vertices either.
+const CC_CELL_CULLED: u32 = 0x80000000u;
+const CC_CELL_PATCH_CULLED: u32 = 0x40000000u;
 
 // Uniform Catmull-Clark tessellation (`tessera_core::gpu_types::{CcUniformPatch,
 // CcUniformParams}`, flags of `tessera_core::catmull_clark::gpu_uniform`).

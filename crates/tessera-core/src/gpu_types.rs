@@ -847,7 +847,7 @@ pub struct CcCell {
     /// Patch index in the mesh.
     pub patch_id: u32,
     /// `trial | depth << 8`: the first-split trial (`0..CC_TRIALS`) in the low byte, the
-    /// midpoint splits below it above.
+    /// midpoint splits below it above; a culled leaf has [`CC_CELL_CULLED`] set too.
     pub trial_depth: u32,
     /// Lower-left corner along u, grid units.
     pub i: u32,
@@ -972,7 +972,40 @@ pub struct CcTessParams {
     pub vertex_capacity: u32,
     /// Padding to a multiple of 16 bytes (`pad0`, `pad1` in WGSL).
     pub pad: [u32; 2],
+    /// The view that sets each cell's tolerance in pixels and culls; all zero for none.
+    pub view: CcView,
 }
+
+/// A view as the adaptive Catmull-Clark kernels read it (`shaders/shared/cc_view.wgsl`,
+/// twin of [`View`](crate::View)): each cell's tolerance is the smaller of the world
+/// tolerance and the one that keeps it within `pixels` of the mesh, and cells wholly
+/// outside the frustum emit nothing.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable, PartialEq)]
+pub struct CcView {
+    /// Model to clip space, column-major.
+    pub clip: [[f32; 4]; 4],
+    /// The viewport's width and height in pixels.
+    pub viewport: [f32; 2],
+    /// The tolerance in pixels; 0 for the world tolerance alone.
+    pub pixels: f32,
+    /// The least clip `w` of a point in the frustum.
+    pub near_w: f32,
+    /// 1: cells wholly outside the frustum emit nothing.
+    pub cull: u32,
+    /// Padding to a multiple of 16 bytes (`pad0`..`pad2` in WGSL).
+    pub pad: [u32; 3],
+}
+
+/// Bit of [`CcCell::trial_depth`] that marks a leaf outside the view's frustum: it keeps
+/// its place in the leaf list, as its trial counted it, and emits no triangles. Its
+/// corners still mark points on its neighbours' sides, unless its whole patch is out of
+/// view ([`CC_CELL_PATCH_CULLED`]).
+pub const CC_CELL_CULLED: u32 = 1 << 31;
+
+/// Bit of [`CcCell::trial_depth`] set, with [`CC_CELL_CULLED`], on the leaves of a patch
+/// wholly out of view: they have no vertices at all.
+pub const CC_CELL_PATCH_CULLED: u32 = 1 << 30;
 
 /// Counters of the adaptive Catmull-Clark kernels, read back to check capacities.
 #[repr(C)]
@@ -1005,4 +1038,8 @@ pub struct CcState {
     /// Blocks of 32 decisions the walks took from the pool, beyond each trial's own
     /// (also beyond capacity: what is needed).
     pub decision_blocks: u32,
+    /// Leaves outside the view's frustum, in patches partly in view.
+    pub culled_leaves: u32,
+    /// Patches with no leaf in the view's frustum.
+    pub culled_patches: u32,
 }

@@ -56,6 +56,10 @@ pub const SOURCES: &[(&str, &str)] = &[
         include_str!("../../../shaders/shared/cc_tess.wgsl"),
     ),
     (
+        "shared/cc_view.wgsl",
+        include_str!("../../../shaders/shared/cc_view.wgsl"),
+    ),
+    (
         "shared/cc_poly.wgsl",
         include_str!("../../../shaders/shared/cc_poly.wgsl"),
     ),

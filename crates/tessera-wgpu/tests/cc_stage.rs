@@ -1314,3 +1314,227 @@ fn the_tie_count_catches_a_quad_cut_against_its_diagonals() {
     moved.indices.swap(0, 3);
     assert!(same_mesh_up_to_ties(&moved, &mesh, s).is_err());
 }
+
+/// A run in `view`, read back, after one without: the view is set through the queue.
+fn run_in_view(
+    gpu: &Gpu,
+    model: &SurfaceModel,
+    params: &CcParams,
+    view: &tessera_core::catmull_clark::ViewTolerance,
+) -> (Mesh, tessera_wgpu::catmull_clark::CcStatus) {
+    let mut stage =
+        CcStage::new(&gpu.device, &gpu.queue, &kernels(gpu), model, params).expect("stage");
+    stage.set_view(&gpu.queue, Some(view)).expect("view");
+    let status = stage.run_blocking(&gpu.device, &gpu.queue).expect("run");
+    assert_eq!(
+        stage.dispatches(),
+        CcStage::DISPATCHES,
+        "the script is the same in a view"
+    );
+    gpu.check().expect("no wgpu errors");
+    let mesh = stage
+        .read_mesh(&gpu.device, &gpu.queue, &status)
+        .expect("read");
+    (mesh, status)
+}
+
+#[test]
+fn in_a_view_the_gpu_gives_the_cpu_references_mesh_within_the_pixels() {
+    // Far, close (partly off screen) and from among the model (partly behind the eye),
+    // creased models included: the same triangles as `tessellate_adaptive_in_view`, the
+    // same culled leaves and patches, and the pixel error measured on the GPU's mesh.
+    use tessera_core::catmull_clark::{
+        surface_samples, tessellate_adaptive_in_view, ViewTolerance,
+    };
+    use tessera_core::measure::max_error_px;
+    use tessera_core::watertight::check_watertight;
+    use tessera_tests::{view, Stand};
+    let gpu = gpu();
+    let (mut ties, mut triangles) = (0, 0);
+    for (name, stands) in [
+        (
+            "opensubdiv/catmark_cube.obj",
+            &[Stand::Far, Stand::Close, Stand::Beside][..],
+        ),
+        (
+            "opensubdiv/catmark_torus.obj",
+            &[Stand::Close, Stand::Beside][..],
+        ),
+        (
+            "opensubdiv/catmark_cube_creases1.obj",
+            &[Stand::Far, Stand::Beside][..],
+        ),
+        ("opensubdiv/catmark_bishop.obj", &[Stand::Close][..]),
+        ("catmull_clark/spot_control_mesh.obj", &[Stand::Close][..]),
+    ] {
+        let model = tessera_tests::cc_model(name);
+        let samples = surface_samples(&model, 6);
+        let params = CcParams {
+            tolerance: Tolerance::Relative(1.0),
+            max_depth: 8,
+            first_split: FirstSplit::Search,
+            leaf_bound: Default::default(),
+        };
+        for &stand in stands {
+            let px = if matches!(stand, Stand::Beside) {
+                2.0
+            } else {
+                1.0
+            };
+            let v = ViewTolerance {
+                view: view(&model, stand),
+                pixels: Some(px),
+                cull: true,
+                max_triangles: None,
+            };
+            let cpu = tessellate_adaptive_in_view(&model, &params, &v).expect("cpu");
+            let (mesh, status) = run_in_view(&gpu, &model, &params, &v);
+            let what = format!("{name} {stand:?}");
+            eprintln!(
+                "{what}: gpu {} tris, {} culled patches, {} culled leaves; cpu {} tris",
+                mesh.triangle_count(),
+                status.state.culled_patches,
+                status.state.culled_leaves,
+                cpu.mesh.triangle_count()
+            );
+            let s = &status.state;
+            assert_eq!(
+                s.culled_leaves as usize, cpu.culled_leaves,
+                "{what}: culled leaves"
+            );
+            assert_eq!(
+                s.culled_patches as usize, cpu.culled_patches,
+                "{what}: culled patches"
+            );
+            assert_eq!(s.unmet as usize, cpu.unmet, "{what}: unmet");
+            // The corners of culled leaves in patches partly in view, and the copies of
+            // seam points in the chart of a patch across that is out of view, are
+            // vertices no triangle uses.
+            let (used, unused) = without_unused_vertices(&mesh);
+            let culled = (s.culled_leaves + s.culled_patches) as usize;
+            assert!(
+                unused <= 4 * culled + mesh.vertices.len() / 20,
+                "{what}: {unused} unused vertices"
+            );
+            if s.culled_leaves + s.culled_patches == 0 {
+                assert_eq!(unused, 0, "{what}: nothing culled");
+            }
+            // Quads of the bishop, a surface of revolution, whose diagonals are equal
+            // may be cut either way (counted).
+            ties += same_mesh_up_to_ties(&used, &cpu.mesh, size(&model))
+                .unwrap_or_else(|e| panic!("{what}: {e}"));
+            triangles += used.triangle_count();
+            let err = max_error_px(&samples, &mesh, &v.view).expect("samples in view");
+            assert!(err <= px, "{what}: {err} px > {px}");
+            let positions: Vec<glam::Vec3> = mesh
+                .vertices
+                .iter()
+                .map(|v| glam::Vec3::from(v.position))
+                .collect();
+            let report = check_watertight(
+                &positions,
+                &mesh.indices,
+                &tessera_tests::open_boundary(&model),
+                1e-5 * model.mesh.control_diag,
+            );
+            assert_eq!(
+                (
+                    report.t_junctions,
+                    report.degenerate_triangles,
+                    report.non_manifold_edges
+                ),
+                (0, 0, 0),
+                "{what}: {report:?}"
+            );
+        }
+    }
+    eprintln!("{ties} tied quads in {triangles} triangles");
+    assert!(ties * 50 < triangles, "{ties} ties");
+}
+
+/// The mesh without the vertices no triangle uses, and how many there were.
+fn without_unused_vertices(mesh: &Mesh) -> (Mesh, usize) {
+    let mut new_id = vec![u32::MAX; mesh.vertices.len()];
+    let mut vertices = Vec::new();
+    for &i in &mesh.indices {
+        if new_id[i as usize] == u32::MAX {
+            new_id[i as usize] = vertices.len() as u32;
+            vertices.push(mesh.vertices[i as usize]);
+        }
+    }
+    let unused = mesh.vertices.len() - vertices.len();
+    let indices = mesh.indices.iter().map(|&i| new_id[i as usize]).collect();
+    (Mesh { vertices, indices }, unused)
+}
+
+#[test]
+fn the_view_moves_through_the_queue_and_a_view_looking_away_draws_nothing() {
+    // One stage, its view set per run: looking away, nothing is drawn and every patch is
+    // culled; back in view, the CPU reference's mesh (and a view at other pixels is
+    // told apart); without a view, the world tolerance's mesh again, byte for byte.
+    use tessera_core::catmull_clark::{tessellate_adaptive_in_view, ViewTolerance};
+    use tessera_tests::{view, Stand};
+    let gpu = gpu();
+    let model = tessera_tests::cc_model("opensubdiv/catmark_torus.obj");
+    let params = CcParams {
+        tolerance: Tolerance::Relative(1e-2),
+        max_depth: 6,
+        first_split: FirstSplit::Search,
+        leaf_bound: Default::default(),
+    };
+    let mut stage =
+        CcStage::new(&gpu.device, &gpu.queue, &kernels(&gpu), &model, &params).expect("stage");
+    let first = stage.run_blocking(&gpu.device, &gpu.queue).expect("run");
+    let world = stage
+        .read_mesh(&gpu.device, &gpu.queue, &first)
+        .expect("read");
+    let in_view = |stand: Stand, pixels: Option<f64>| ViewTolerance {
+        view: view(&model, stand),
+        pixels,
+        cull: true,
+        max_triangles: None,
+    };
+    for pixels in [Some(1.0), None] {
+        stage
+            .set_view(&gpu.queue, Some(&in_view(Stand::Away, pixels)))
+            .expect("view");
+        let away = stage.run_blocking(&gpu.device, &gpu.queue).expect("run");
+        assert_eq!(away.indices, 0, "{pixels:?}: nothing drawn");
+        assert_eq!(
+            away.state.culled_patches as usize,
+            model.mesh.surface_patches().count()
+        );
+        assert_eq!(away.vertices(), 0, "{pixels:?}: no vertex evaluated");
+    }
+    let close = in_view(Stand::Close, Some(1.0));
+    stage.set_view(&gpu.queue, Some(&close)).expect("view");
+    let status = stage.run_blocking(&gpu.device, &gpu.queue).expect("run");
+    let (mesh, _) = without_unused_vertices(
+        &stage
+            .read_mesh(&gpu.device, &gpu.queue, &status)
+            .expect("read"),
+    );
+    let s = size(&model);
+    let cpu = tessellate_adaptive_in_view(&model, &params, &close).expect("cpu");
+    same_mesh(&mesh, &cpu.mesh, s).expect("the CPU reference's mesh");
+    let coarser = ViewTolerance {
+        pixels: Some(1.5),
+        ..close
+    };
+    let other = tessellate_adaptive_in_view(&model, &params, &coarser).expect("cpu");
+    assert!(
+        same_mesh(&mesh, &other.mesh, s).is_err(),
+        "the comparison misses a different view's mesh"
+    );
+    stage.set_view(&gpu.queue, None).expect("no view");
+    let again = stage.run_blocking(&gpu.device, &gpu.queue).expect("run");
+    let back = stage
+        .read_mesh(&gpu.device, &gpu.queue, &again)
+        .expect("read");
+    assert_eq!(back.indices, world.indices);
+    assert_eq!(
+        bytemuck::cast_slice::<_, u8>(&back.vertices),
+        bytemuck::cast_slice::<_, u8>(&world.vertices)
+    );
+    gpu.check().expect("no wgpu errors");
+}

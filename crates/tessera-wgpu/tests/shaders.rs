@@ -349,6 +349,7 @@ fn catmull_clark_parameters_and_counters_match_their_rust_twins() {
         ("vertex_capacity", offset_of!(CcTessParams, vertex_capacity)),
         ("pad0", offset_of!(CcTessParams, pad)),
         ("pad1", offset_of!(CcTessParams, pad) + 4),
+        ("view", offset_of!(CcTessParams, view)),
     ];
     let members: Vec<(&str, usize)> = members
         .iter()
@@ -369,12 +370,31 @@ fn catmull_clark_parameters_and_counters_match_their_rust_twins() {
         ("bounds", offset_of!(CcState, bounds)),
         ("proven", offset_of!(CcState, proven)),
         ("decision_blocks", offset_of!(CcState, decision_blocks)),
+        ("culled_leaves", offset_of!(CcState, culled_leaves)),
+        ("culled_patches", offset_of!(CcState, culled_patches)),
     ];
     let members: Vec<(&str, usize)> = members
         .iter()
         .map(|(n, o)| (n.as_str(), *o as usize))
         .collect();
     assert_eq!(members, rust, "CcCounters");
+    let (size, members) = layout(&module, "CcView");
+    assert_eq!(size as usize, size_of::<CcView>());
+    let rust = [
+        ("clip", offset_of!(CcView, clip)),
+        ("viewport", offset_of!(CcView, viewport)),
+        ("pixels", offset_of!(CcView, pixels)),
+        ("near_w", offset_of!(CcView, near_w)),
+        ("cull", offset_of!(CcView, cull)),
+        ("pad0", offset_of!(CcView, pad)),
+        ("pad1", offset_of!(CcView, pad) + 4),
+        ("pad2", offset_of!(CcView, pad) + 8),
+    ];
+    let members: Vec<(&str, usize)> = members
+        .iter()
+        .map(|(n, o)| (n.as_str(), *o as usize))
+        .collect();
+    assert_eq!(members, rust, "CcView");
 }
 
 #[test]

@@ -247,7 +247,7 @@ pub struct CcTessellation {
     pub unmet: usize,
     /// The largest flatness bound of any leaf: the guaranteed error of the output.
     pub max_bound: f64,
-    /// Leaves outside the view's frustum, which emit nothing.
+    /// Leaves outside the view's frustum, which emit nothing, in patches partly in view.
     pub culled_leaves: usize,
     /// Patches all of whose leaves lie outside the view's frustum.
     pub culled_patches: usize,
@@ -680,6 +680,10 @@ struct Marking {
     max_bound: f64,
     culled_leaves: usize,
     culled_patches: usize,
+    /// The culled leaves of patches partly in view: they emit nothing, but their corners
+    /// still mark points on their neighbours' sides, as on the GPU (whose side walk finds
+    /// a side's points by halving it, and needs every corner of the quadtree marked).
+    culled: Vec<(usize, Cell)>,
     /// Marking stopped: more leaves than the cap allowed.
     over_cap: bool,
 }
@@ -704,6 +708,7 @@ fn mark_patches(
         max_bound: 0.0,
         culled_leaves: 0,
         culled_patches: 0,
+        culled: Vec::new(),
         over_cap: false,
     };
     for p in mesh.surface_patches() {
@@ -732,17 +737,24 @@ fn mark_patches(
         let mut decide = |c: Cell| decide_cell(eval, p, c, max_depth - c.depth, eps, exact);
         let (trial, walk) = traverse::search(n, splits, &mut decide);
         out.first_split[p] = trial;
+        let culled_before = out.culled_leaves;
         let mut seen = false;
+        let mut culled = Vec::new();
         for (c, (bound, e)) in walk.leaves {
             if !out.keep_leaf(eval, p, c, bound) {
+                culled.push((p, c));
                 continue;
             }
             seen = true;
             out.leaves.push((p, c));
             out.bounds.push((bound, e));
         }
-        if !seen {
+        // A patch wholly out of view counts as a patch, not as leaves.
+        if seen {
+            out.culled.extend(culled);
+        } else {
             out.culled_patches += 1;
+            out.culled_leaves = culled_before;
         }
         if leaf_cap.is_some_and(|cap| out.leaves.len() > cap) {
             out.over_cap = true;
@@ -778,7 +790,7 @@ fn settle_exact_leaves(eval: &mut Evaluator, marking: &mut Marking) -> Vec<Polyg
     let eps = eval.eps;
     let (n, mesh) = (eval.n, &eval.model.mesh);
     loop {
-        let polygons = leaf_polygons(mesh, &marking.leaves, n);
+        let polygons = leaf_polygons(mesh, &marking.leaves, &marking.culled, n);
         let mut failed = Vec::new();
         for (k, (poly, corners)) in polygons.iter().enumerate() {
             let Some(_) = marking.bounds[k].1 else {
@@ -839,6 +851,8 @@ fn settle_exact_leaves(eval: &mut Evaluator, marking: &mut Marking) -> Vec<Polyg
                     if marking.keep_leaf(eval, p, c, b) {
                         leaves.push((p, c));
                         bounds.push((b, None));
+                    } else {
+                        marking.culled.push((p, c));
                     }
                 }
             } else {
@@ -854,10 +868,16 @@ fn settle_exact_leaves(eval: &mut Evaluator, marking: &mut Marking) -> Vec<Polyg
 /// A leaf's polygon, with the positions of its four corners in it.
 type Polygon = (Vec<(u32, u32)>, [usize; 4]);
 
-/// Step 2, base-quadrilateral replacement: the marked points on every line, in order.
-fn leaf_polygons(mesh: &PatchMesh, leaves: &[(usize, Cell)], n: u32) -> Vec<Polygon> {
+/// Step 2, base-quadrilateral replacement: the marked points on every line, in order
+/// (the corners of the leaves and of the culled leaves marked).
+fn leaf_polygons(
+    mesh: &PatchMesh,
+    leaves: &[(usize, Cell)],
+    culled: &[(usize, Cell)],
+    n: u32,
+) -> Vec<Polygon> {
     let mut lines = Lines::default();
-    for &(p, cell) in leaves {
+    for &(p, cell) in leaves.iter().chain(culled) {
         for (a, b) in cell.corners() {
             lines.add(point_key(mesh, p, a, b, n));
         }
@@ -1170,7 +1190,7 @@ mod tests {
             let mut eval = Evaluator::new(&model, &params);
             let n = eval.n;
             let marking = mark_patches(&mut eval, &params, &splits, None);
-            let polygons = leaf_polygons(mesh, &marking.leaves, n);
+            let polygons = leaf_polygons(mesh, &marking.leaves, &marking.culled, n);
             let topo = patch_topology(mesh);
             let cells: Vec<CcCell> = marking
                 .leaves

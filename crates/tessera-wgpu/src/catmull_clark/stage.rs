@@ -73,9 +73,9 @@ use tessera_core::catmull_clark::gpu_model::{patch_topology, point_homes};
 use tessera_core::catmull_clark::stencil::CcStencils;
 
 use glam::Vec3;
-use tessera_core::catmull_clark::{CcParams, LeafBound, PatchMesh, SurfaceModel};
+use tessera_core::catmull_clark::{CcParams, LeafBound, PatchMesh, SurfaceModel, ViewTolerance};
 use tessera_core::gpu_types::{
-    CcCell, CcHashStatus, CcState, CcTessParams, CcVertexPoint, OutVertex, CC_TRIALS,
+    CcCell, CcHashStatus, CcState, CcTessParams, CcVertexPoint, CcView, OutVertex, CC_TRIALS,
 };
 use tessera_core::Mesh;
 use wgpu::util::DeviceExt;
@@ -302,6 +302,8 @@ pub struct CcStage {
     /// Level-1 points: where the edges' homes start.
     point_count: u32,
     params: CcParams,
+    /// The view of the runs, as the kernels read it (all zero for none).
+    view: CcView,
     topo: wgpu::Buffer,
     homes: wgpu::Buffer,
     state: wgpu::Buffer,
@@ -321,12 +323,12 @@ pub struct CcStage {
 /// Words of the marks buffer (`shaders/shared/cc_tess.wgsl`) for `patches` patches and
 /// `leaves` leaves, any first split: per patch the key of its best trial (scanned into
 /// its first leaf; the total after them), the same key kept, the key of the best trial
-/// cut short, the trial chosen; per patch and trial two words of what its leaves
-/// guarantee and a block of 32 decisions; then the pool of blocks ([`pool_blocks`]).
+/// cut short, the trial chosen; per patch and trial three words of what its leaves
+/// guarantee (and how many are culled) and a block of 32 decisions; then the pool of blocks ([`pool_blocks`]).
 fn marks_words(patches: u32, leaves: u32) -> u64 {
     let p = patches.max(1) as u64;
     let trials = CC_TRIALS as u64;
-    4 * p + 1 + 2 * p * trials + 2 * (p * trials + pool_blocks(patches, leaves))
+    4 * p + 1 + 3 * p * trials + 2 * (p * trials + pool_blocks(patches, leaves))
 }
 
 /// The words of the marks buffer cleared before each run (the keys).
@@ -421,7 +423,14 @@ impl CcStage {
         });
         let eps = params.epsilon(model);
         let counts = (patch_count, point_count);
-        let buffers = Buffers::new(device, &kernels, (counts, &state), (params, eps), caps)?;
+        let view = CcView::default();
+        let buffers = Buffers::new(
+            device,
+            &kernels,
+            (counts, &state),
+            (params, eps, view),
+            caps,
+        )?;
         let fixed = Fixed {
             topo: &topo,
             homes: &homes,
@@ -440,6 +449,7 @@ impl CcStage {
             patch_count,
             point_count,
             params: *params,
+            view,
             topo,
             homes,
             state,
@@ -466,13 +476,35 @@ impl CcStage {
         params.validate_for(&self.patches, self.depth)?;
         gpu_leaf_bound(params)?;
         self.params = *params;
+        self.write_params(queue);
+        Ok(())
+    }
+
+    /// The view of the next runs, written through `queue` (no reallocation: once per
+    /// frame as the camera moves), or `None` for the world tolerance alone. Place the
+    /// model with [`View::with_model`](tessera_core::View::with_model). Each cell's
+    /// tolerance becomes the smaller of the world tolerance and its share of
+    /// `view.pixels`, and with `view.cull` the cells wholly outside the frustum emit
+    /// nothing: the mesh of
+    /// [`tessellate_adaptive_in_view`](tessera_core::catmull_clark::tessellate_adaptive_in_view),
+    /// in the same dispatches. A triangle cap is the CPU reference's alone (an error
+    /// here).
+    pub fn set_view(&mut self, queue: &wgpu::Queue, view: Option<&ViewTolerance>) -> Result<()> {
+        self.view = match view {
+            None => CcView::default(),
+            Some(v) => gpu_view(v)?,
+        };
+        self.write_params(queue);
+        Ok(())
+    }
+
+    fn write_params(&self, queue: &wgpu::Queue) {
         let p = tess_params(
             (self.patch_count, self.point_count),
-            (params, self.epsilon()),
+            (&self.params, self.epsilon(), self.view),
             self.buffers.caps,
         );
         queue.write_buffer(&self.buffers.params, 0, bytemuck::bytes_of(&p));
-        Ok(())
     }
 
     /// ε in model units: a relative tolerance is a fraction of the control box as loaded.
@@ -784,7 +816,7 @@ impl CcStage {
             device,
             &self.kernels,
             ((self.patch_count, self.point_count), &self.state),
-            (&self.params, self.epsilon()),
+            (&self.params, self.epsilon(), self.view),
             caps,
         )?;
         let fixed = Fixed {
@@ -964,7 +996,7 @@ fn status_from_bytes(bytes: &[u8]) -> CcStatus {
 /// patches and level-1 points.
 fn tess_params(
     (patch_count, points): (u32, u32),
-    (params, eps): (&CcParams, f64),
+    (params, eps, view): (&CcParams, f64, CcView),
     caps: CcCapacities,
 ) -> CcTessParams {
     CcTessParams {
@@ -979,7 +1011,44 @@ fn tess_params(
         points,
         vertex_capacity: caps.vertices,
         pad: [0; 2],
+        view,
     }
+}
+
+/// A view as the kernels read it: in single precision, the pixels 0 for none.
+fn gpu_view(v: &ViewTolerance) -> Result<CcView> {
+    if v.max_triangles.is_some() {
+        return Err(tessera_core::Error::Param(
+            "the GPU stage has no triangle cap: that is the CPU reference's (`tessellate_adaptive_in_view`)".into(),
+        )
+        .into());
+    }
+    let pixels = match v.pixels {
+        None => 0.0,
+        Some(px) if px.is_finite() && px > 0.0 => px as f32,
+        Some(px) => {
+            return Err(tessera_core::Error::Param(format!(
+                "pixel tolerance must be a positive number, got {px}"
+            ))
+            .into())
+        }
+    };
+    let view = &v.view;
+    let clip = view.clip_matrix().as_mat4();
+    if !clip.is_finite() {
+        return Err(tessera_core::Error::Param(
+            "view: the matrix does not fit single precision".into(),
+        )
+        .into());
+    }
+    Ok(CcView {
+        clip: clip.to_cols_array_2d(),
+        viewport: view.viewport().as_vec2().to_array(),
+        pixels,
+        near_w: view.near_w() as f32,
+        cull: u32::from(v.cull),
+        pad: [0; 3],
+    })
 }
 
 impl Buffers {
@@ -987,7 +1056,7 @@ impl Buffers {
         device: &wgpu::Device,
         kernels: &CcKernels,
         (counts, state): ((u32, u32), &wgpu::Buffer),
-        params: (&CcParams, f64),
+        params: (&CcParams, f64, CcView),
         caps: CcCapacities,
     ) -> Result<Self> {
         let caps = CcCapacities {
