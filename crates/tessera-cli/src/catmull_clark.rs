@@ -178,12 +178,6 @@ pub fn tessellate(args: TessellateArgs) -> Result<(), Error> {
             )
             .into());
         }
-        if on_gpu {
-            return Err(CoreError::Param(
-                "a view (--eye, --tolerance-px, ...) runs on the CPU reference only so far (--backend cpu)".into(),
-            )
-            .into());
-        }
         let (lo, hi) = control.positions.iter().fold(
             (
                 tessera_wgpu::glam::Vec3::INFINITY,
@@ -238,7 +232,8 @@ pub fn tessellate(args: TessellateArgs) -> Result<(), Error> {
             let tolerance = params.epsilon(&model);
             if on_gpu {
                 let mut gpu_timings = GpuTimings::default();
-                let (out, recorded, uploaded) = run_gpu(&model, &params, &mut gpu_timings)?;
+                let (out, recorded, uploaded) =
+                    run_gpu(&model, &params, view.as_ref(), &mut gpu_timings)?;
                 timings.gpu = Some(gpu_timings);
                 dispatches = Some(recorded);
                 upload_bytes = Some(uploaded);
@@ -488,12 +483,15 @@ pub fn info(input: &Path) -> Result<(), Error> {
 pub fn run_gpu(
     model: &SurfaceModel,
     params: &CcParams,
+    view: Option<&ViewTolerance>,
     timings: &mut GpuTimings,
 ) -> Result<(CcTessellation, u32, usize), Error> {
     let gpu = crate::gpu::open(timings)?;
     let kernels = Kernels::new(&gpu.device);
     let (stage, status) = crate::gpu::run(&gpu, timings, || {
-        CcStage::new(&gpu.device, &gpu.queue, &kernels, model, params)
+        let mut stage = CcStage::new(&gpu.device, &gpu.queue, &kernels, model, params)?;
+        stage.set_view(&gpu.queue, view)?;
+        Ok(stage)
     })?;
     let t = Instant::now();
     let mesh = stage.read_mesh(&gpu.device, &gpu.queue, &status)?;
@@ -507,9 +505,9 @@ pub fn run_gpu(
         bounds: status.state.bounds as u64,
         proven: status.state.proven as u64,
         triangle_bounds: 0,
-        culled_leaves: 0,
-        culled_patches: 0,
-        tolerance_px: None,
+        culled_leaves: status.state.culled_leaves as usize,
+        culled_patches: status.state.culled_patches as usize,
+        tolerance_px: view.and_then(|v| v.pixels),
     };
     Ok((tessellation, stage.dispatches(), stage.upload_bytes()))
 }

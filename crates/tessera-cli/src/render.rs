@@ -105,9 +105,9 @@ pub fn render(args: RenderArgs) -> Result<(), Error> {
         ))
         .into());
     }
-    if args.view.given() && !(cc && !uniform && args.backend == Some(Backend::Cpu)) {
+    if args.view.given() && (!cc || uniform) {
         return Err(CoreError::Param(
-            "a view (--eye, --tolerance-px, ...) is for Catmull-Clark meshes with --method adaptive, on the CPU reference only so far (--backend cpu)".into(),
+            "a view (--eye, --tolerance-px, ...) is for Catmull-Clark meshes with --method adaptive".into(),
         )
         .into());
     }
@@ -141,22 +141,32 @@ pub fn render(args: RenderArgs) -> Result<(), Error> {
         let gpu = crate::gpu::open(&mut timings)?;
         let kernels = Kernels::new(&gpu.device);
         let bounds = (lo.as_vec3(), hi.as_vec3());
+        // The camera drawn is the one tessellated for, and the world tolerance only caps
+        // the pixels' unless given.
+        let view = if args.view.given() {
+            let (view, camera) =
+                crate::catmull_clark::view_tolerance(&args.view, args.size, args.up, bounds)?;
+            view_camera = Some(camera);
+            Some(view)
+        } else {
+            None
+        };
+        let params = CcParams {
+            tolerance: match view {
+                Some(_) => crate::catmull_clark::world_tolerance(
+                    &args.view,
+                    args.tolerance_rel.map(tessera_core::Tolerance::Relative),
+                ),
+                None => params.tolerance,
+            },
+            ..params
+        };
         if on_cpu {
             let t = Instant::now();
             let out = if uniform {
                 tessera_core::catmull_clark::tessellate_uniform(&model, args.segments.unwrap_or(8))?
-            } else if args.view.given() {
-                let params = CcParams {
-                    tolerance: crate::catmull_clark::world_tolerance(
-                        &args.view,
-                        args.tolerance_rel.map(tessera_core::Tolerance::Relative),
-                    ),
-                    ..params
-                };
-                let (view, camera) =
-                    crate::catmull_clark::view_tolerance(&args.view, args.size, args.up, bounds)?;
-                view_camera = Some(camera);
-                tessera_core::catmull_clark::tessellate_adaptive_in_view(&model, &params, &view)?
+            } else if let Some(view) = &view {
+                tessera_core::catmull_clark::tessellate_adaptive_in_view(&model, &params, view)?
             } else {
                 tessera_core::catmull_clark::tessellate_adaptive(&model, &params)?
             };
@@ -194,7 +204,9 @@ pub fn render(args: RenderArgs) -> Result<(), Error> {
             (gpu, output, bounds, "uniform", counts)
         } else {
             let (stage, status) = crate::gpu::run(&gpu, &mut timings, || {
-                CcStage::new(&gpu.device, &gpu.queue, &kernels, &model, &params)
+                let mut stage = CcStage::new(&gpu.device, &gpu.queue, &kernels, &model, &params)?;
+                stage.set_view(&gpu.queue, view.as_ref())?;
+                Ok(stage)
             })?;
             let counts = (status.indices / 3, status.vertices());
             let output = StageOutput::Cc(Box::new(stage));

@@ -134,8 +134,10 @@ fn views_refuse_what_they_do_not_take_yet_with_one_line() {
                 "1",
                 "--backend",
                 "gpu",
+                "--max-triangles",
+                "100",
             ],
-            "--backend cpu",
+            "triangle cap",
         ),
         (
             vec![
@@ -168,7 +170,7 @@ fn views_refuse_what_they_do_not_take_yet_with_one_line() {
 }
 
 #[test]
-fn render_draws_what_the_view_tessellated_and_refuses_a_view_on_the_gpu() {
+fn render_draws_what_the_view_tessellated_on_either_backend() {
     let torus = asset("opensubdiv/catmark_torus.obj");
     let png = tmp("close.png");
     let png_path = png.to_str().unwrap();
@@ -200,19 +202,27 @@ fn render_draws_what_the_view_tessellated_and_refuses_a_view_on_the_gpu() {
         said.contains(&format!(" {} triangles", stats["triangles"])),
         "{said} against {stats}"
     );
-    let gpu = tessera()
-        .args([
-            "render",
-            &torus,
-            "-o",
-            png.to_str().unwrap(),
-            "--tolerance-px",
-            "1",
-        ])
-        .output()
-        .unwrap();
-    assert!(!gpu.status.success());
-    assert!(String::from_utf8_lossy(&gpu.stderr).contains("--backend cpu"));
+    // The GPU stage tessellates the same view into the same triangles.
+    let mut on_gpu = close.clone();
+    on_gpu[5] = "gpu";
+    let gpu = tessera().args(&on_gpu).output().unwrap();
+    assert!(
+        gpu.status.success(),
+        "{}",
+        String::from_utf8_lossy(&gpu.stderr)
+    );
+    let said = String::from_utf8_lossy(&gpu.stdout);
+    assert!(
+        said.contains(&format!(" {} triangles", stats["triangles"])),
+        "{said} against {stats}"
+    );
+    let mut gpu_twin = twin.clone();
+    gpu_twin.extend(["--backend", "gpu"]);
+    let gpu_stats = stats_of(&gpu_twin, "render_gpu_twin.json");
+    for key in ["triangles", "culled_patches", "achieved_tolerance_px"] {
+        assert_eq!(gpu_stats[key], stats[key], "{key}");
+    }
+    assert!(stats["culled_patches"].as_u64().unwrap() > 0);
 }
 
 #[test]
