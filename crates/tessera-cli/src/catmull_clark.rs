@@ -13,7 +13,7 @@ use tessera_core::io::export::MeshFormat;
 use tessera_core::io::load_control_mesh;
 use tessera_core::measure::{max_error_px, ErrorStats};
 use tessera_core::Error as CoreError;
-use tessera_core::{Tolerance, View};
+use tessera_core::{Pose, Tolerance};
 use tessera_wgpu::catmull_clark::{CcStage, CcUniformStage, UniformParams};
 use tessera_wgpu::Error;
 use tessera_wgpu::Kernels;
@@ -187,7 +187,7 @@ pub fn tessellate(args: TessellateArgs) -> Result<(), Error> {
         );
         let size = args.size.unwrap_or((800, 600));
         let up = args.up.unwrap_or(Axis::Z);
-        Some(view_tolerance(&args.view, size, up, (lo, hi))?.0)
+        Some(view_tolerance(&args.view, size, up, (lo, hi))?)
     } else {
         None
     };
@@ -383,54 +383,52 @@ pub(crate) fn world_tolerance(view: &ViewArgs, given: Option<Tolerance>) -> Tole
 }
 
 /// The view of `args` for a viewport of `size` pixels and the model's `up` axis: its
-/// camera (or `render`'s default framing of the box `lo..hi`), the pixel tolerance and
-/// culling; with the camera as the renderer draws it.
+/// camera (or `render`'s default framing of the box `lo..hi`), with a far plane past the
+/// box (the renderer draws it too), the pixel tolerance and culling.
 pub(crate) fn view_tolerance(
     args: &ViewArgs,
     size: (u32, u32),
     up: Axis,
     (lo, hi): (tessera_wgpu::glam::Vec3, tessera_wgpu::glam::Vec3),
-) -> Result<(ViewTolerance, tessera_wgpu::Camera), Error> {
-    let (w, h) = size;
-    let framing = crate::render::default_framing(lo, hi, w as f32 / h as f32, up);
+) -> Result<ViewTolerance, Error> {
+    let (lo, hi) = (lo.as_dvec3(), hi.as_dvec3());
+    let framing = crate::render::default_framing(lo, hi, size, up);
     let (eye, target) = match (args.eye, args.target) {
         (Some(e), Some(t)) => (
             tessera_wgpu::glam::DVec3::from(e),
             tessera_wgpu::glam::DVec3::from(t),
         ),
-        _ => (framing.eye.as_dvec3(), framing.target.as_dvec3()),
+        _ => (framing.eye, framing.target),
     };
-    let fovy = args.fov.map_or(framing.fovy as f64, f64::to_radians);
+    let fovy = args.fov.map_or(framing.fovy, f64::to_radians);
     // The framing's near plane is in front of the model from its own eye; from another
     // eye, a hundredth of the model's size.
     let near = match (args.near, args.eye) {
         (Some(n), _) => n,
-        (None, Some(_)) => 0.01 * (hi - lo).length() as f64,
-        (None, None) => framing.near as f64,
+        (None, Some(_)) => 0.01 * (hi - lo).length(),
+        (None, None) => framing.near,
     };
-    let view = View::look_at(eye, target, framing.up.as_dvec3(), fovy, (w, h), near)?;
-    // The far plane past the farthest corner of the box.
-    let far = tessera_core::view::box_corners(lo.as_dvec3(), hi.as_dvec3())
+    // The far plane past the farthest corner of the box: nothing of the model beyond it.
+    let far = tessera_core::view::box_corners(lo, hi)
         .iter()
         .map(|c| (*c - eye).length())
         .fold(near, f64::max)
         * 1.05
         + near;
-    let camera = tessera_wgpu::Camera {
-        eye: eye.as_vec3(),
-        target: target.as_vec3(),
-        fovy: fovy as f32,
-        near: near as f32,
-        far: far as f32,
+    let pose = Pose {
+        eye,
+        target,
+        fovy,
+        near,
+        far,
         ..framing
     };
-    let view = ViewTolerance {
-        view,
+    Ok(ViewTolerance {
+        view: pose.view(size)?,
         pixels: args.tolerance_px,
         cull: !args.no_cull,
         max_triangles: args.max_triangles,
-    };
-    Ok((view, camera))
+    })
 }
 
 pub fn info(input: &Path) -> Result<(), Error> {

@@ -5,10 +5,9 @@ use std::time::Instant;
 
 use tessera_core::bezier::{AdaptiveParams, EdgeTest, PreparedBezier};
 use tessera_core::Error as CoreError;
-use tessera_wgpu::glam::Vec3;
-use tessera_wgpu::image_out::{render_camera_to_rgba, save_png};
-use tessera_wgpu::{Camera, Kernels};
+use tessera_wgpu::image_out::{render_view_to_rgba, save_png};
 use tessera_wgpu::{Error, RenderOptions};
+use tessera_wgpu::{Kernels, Pose, View};
 
 use tessera_core::catmull_clark::{CcParams, SurfaceModel, MAX_DEPTH, TREE_DEPTH};
 use tessera_wgpu::bezier::BezierStage;
@@ -111,7 +110,7 @@ pub fn render(args: RenderArgs) -> Result<(), Error> {
         )
         .into());
     }
-    let mut view_camera = None;
+    let mut drawn_view = None;
     let mut timings = GpuTimings::default();
     let (gpu, output, (lo, hi), what, (triangles, vertices)) = if cc {
         let mut control = tessera_core::io::load_control_mesh(&args.input)?;
@@ -144,9 +143,9 @@ pub fn render(args: RenderArgs) -> Result<(), Error> {
         // The camera drawn is the one tessellated for, and the world tolerance only caps
         // the pixels' unless given.
         let view = if args.view.given() {
-            let (view, camera) =
+            let view =
                 crate::catmull_clark::view_tolerance(&args.view, args.size, args.up, bounds)?;
-            view_camera = Some(camera);
+            drawn_view = Some(view.view);
             Some(view)
         } else {
             None
@@ -243,9 +242,11 @@ pub fn render(args: RenderArgs) -> Result<(), Error> {
     };
     let t = Instant::now();
     let (w, h) = args.size;
-    let aspect = w as f32 / h as f32;
-    let camera = view_camera.unwrap_or_else(|| default_framing(lo, hi, aspect, args.up));
-    let image = render_camera_to_rgba(&gpu, output.mesh(), &camera, w, h, &options)?;
+    let view = match drawn_view {
+        Some(v) => v,
+        None => default_framing(lo.as_dvec3(), hi.as_dvec3(), (w, h), args.up).view((w, h))?,
+    };
+    let image = render_view_to_rgba(&gpu, output.mesh(), &view, w, h, &options)?;
     let render_ms = t.elapsed().as_secs_f64() * 1e3;
     save_png(&image, &args.output)?;
     println!(
@@ -265,12 +266,12 @@ pub fn render(args: RenderArgs) -> Result<(), Error> {
 
 /// The default view (front-right, above) of the box `lo..hi`, for the model's up axis:
 /// `render`'s camera, and the view `tessellate` takes without `--eye`.
-pub(crate) fn default_framing(lo: Vec3, hi: Vec3, aspect: f32, up: Axis) -> Camera {
-    let d = Camera::FRAMING_DIRECTION;
+pub(crate) fn default_framing(lo: DVec3, hi: DVec3, size: (u32, u32), up: Axis) -> Pose {
+    let d = View::FRAMING_DIRECTION;
     let (direction, up) = match up {
-        Axis::Z => (d, Vec3::Z),
-        Axis::Y => (Vec3::new(d.x, d.z, -d.y), Vec3::Y),
-        Axis::X => (Vec3::new(d.z, d.x, d.y), Vec3::X),
+        Axis::Z => (d, DVec3::Z),
+        Axis::Y => (DVec3::new(d.x, d.z, -d.y), DVec3::Y),
+        Axis::X => (DVec3::new(d.z, d.x, d.y), DVec3::X),
     };
-    Camera::framing_along(lo, hi, aspect, direction, up)
+    Pose::framing(lo, hi, size, direction, up)
 }

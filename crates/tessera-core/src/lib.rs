@@ -33,4 +33,4 @@ pub mod weld;
 pub use error::{Error, Result};
 pub use mesh::Mesh;
 pub use tolerance::Tolerance;
-pub use view::View;
+pub use view::{Pose, View};

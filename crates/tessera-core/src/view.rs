@@ -1,7 +1,9 @@
 //! A view: what a camera sees, and how many pixels a distance in model space can become.
 //!
-//! A [`View`] is the matrix from model space to wgpu's clip space (projection · view ·
-//! model) and the viewport in pixels. The frustum is `−w ≤ x ≤ w`, `−w ≤ y ≤ w`,
+//! A [`View`] is one camera for everything: the renderer draws with it and the stages
+//! tessellate for it. It holds the model, view and projection matrices apart (the
+//! renderer lights in view space) and their product from model space to wgpu's clip
+//! space, and the viewport in pixels. The frustum is `−w ≤ x ≤ w`, `−w ≤ y ≤ w`,
 //! `0 ≤ z ≤ w` in clip coordinates `c = (x, y, z, w)`, whatever the depth convention
 //! (reverse-Z and an infinite far plane included), and a point `X` projects to the pixel
 //! offset `s(X) = (W/2 · x/w, H/2 · y/w)` from the viewport's centre.
@@ -56,6 +58,15 @@ use crate::error::{Error, Result};
 /// A camera and its viewport: model space to clip space, and the pixels of the viewport.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct View {
+    /// World to view space.
+    view: DMat4,
+    /// View to clip space.
+    projection: DMat4,
+    /// Model to world space.
+    model: DMat4,
+    /// Up on the screen, in world space (the scene's up where the camera was made with
+    /// one).
+    up: DVec3,
     /// Model to clip space (projection · view · model).
     clip: DMat4,
     /// The viewport's width and height in pixels.
@@ -76,23 +87,43 @@ impl View {
         viewport: (u32, u32),
         near: f64,
     ) -> Result<View> {
-        let bad = |what: &str| Err(Error::Param(format!("view: {what}")));
-        if !(eye - target).is_finite() || (eye - target).length() == 0.0 {
-            return bad("the eye and the target must be distinct points");
-        }
-        if (target - eye).cross(up).length() <= 1e-12 * (target - eye).length() * up.length() {
-            return bad("the up direction must not be parallel to the line of sight");
-        }
-        if !(fovy > 0.0 && fovy < std::f64::consts::PI) {
-            return bad("the vertical field of view must be between 0 and 180 degrees");
-        }
-        if !(near.is_finite() && near > 0.0) {
-            return bad("the near plane must be a positive distance");
-        }
+        check_camera(eye, target, up, fovy, near)?;
         let aspect = viewport.0.max(1) as f64 / viewport.1.max(1) as f64;
         let view = DMat4::look_at_rh(eye, target, up);
         let projection = DMat4::perspective_infinite_rh(fovy, aspect, near);
-        View::from_matrices(view, projection, viewport)
+        let mut out = View::from_matrices(view, projection, viewport)?;
+        out.up = up.normalize();
+        Ok(out)
+    }
+
+    /// Vertical field of view of [`framing`](Self::framing), radians: a mild telephoto,
+    /// so that the model is not distorted.
+    pub const FRAMING_FOVY: f64 = 30.0 * std::f64::consts::PI / 180.0;
+
+    /// The direction [`framing`](Self::framing) looks from, from the target toward the
+    /// eye: front (−Y), a little from the right (+X) and from above (+Z).
+    pub const FRAMING_DIRECTION: DVec3 = DVec3::new(0.5, -1.0, 0.45);
+
+    /// A 3/4 view of the box `min..max` for models with +Z up (the Newell teaset): from
+    /// the front-right and above, looking at the box's centre, at the distance where
+    /// every corner of the box is inside the view with a small margin.
+    pub fn framing(min: DVec3, max: DVec3, viewport: (u32, u32)) -> View {
+        Self::framing_along(min, max, viewport, Self::FRAMING_DIRECTION, DVec3::Z)
+    }
+
+    /// Frames the box `min..max` from `direction` (target toward eye) with `up` up, the
+    /// near and far planes around the box's bounding sphere. A box that is empty or not
+    /// finite is taken as the unit cube around the origin; a point as a unit sphere.
+    pub fn framing_along(
+        min: DVec3,
+        max: DVec3,
+        viewport: (u32, u32),
+        direction: DVec3,
+        up: DVec3,
+    ) -> View {
+        Pose::framing(min, max, viewport, direction, up)
+            .view(viewport)
+            .expect("a framing: the eye off the target, the near plane in front")
     }
 
     /// A view from a renderer's own matrices (world to view, view to wgpu's clip space:
@@ -110,7 +141,16 @@ impl View {
         let near_w = frustum_least_w(clip).ok_or_else(|| {
             Error::Param("view: the frustum must lie in front of the eye (w > 0 inside)".into())
         })?;
+        // Up on the screen: the view's y axis in world space.
+        let up = view
+            .inverse()
+            .transform_vector3(DVec3::Y)
+            .normalize_or(DVec3::Z);
         Ok(View {
+            view,
+            projection,
+            model: DMat4::IDENTITY,
+            up,
             clip,
             viewport: DVec2::new(viewport.0 as f64, viewport.1 as f64),
             near_w,
@@ -121,7 +161,8 @@ impl View {
     /// distances are then in model space.
     pub fn with_model(&self, model: DMat4) -> View {
         View {
-            clip: self.clip * model,
+            model,
+            clip: self.projection * self.view * model,
             ..*self
         }
     }
@@ -129,6 +170,32 @@ impl View {
     /// Model to clip space.
     pub fn clip_matrix(&self) -> DMat4 {
         self.clip
+    }
+
+    /// World to view space.
+    pub fn view_matrix(&self) -> DMat4 {
+        self.view
+    }
+
+    /// View to clip space.
+    pub fn projection_matrix(&self) -> DMat4 {
+        self.projection
+    }
+
+    /// Model to world space.
+    pub fn model_matrix(&self) -> DMat4 {
+        self.model
+    }
+
+    /// The eye in world space (for an orthographic projection, the view's origin).
+    pub fn eye(&self) -> DVec3 {
+        self.view.inverse().transform_point3(DVec3::ZERO)
+    }
+
+    /// Up on the screen in world space: the `up` the camera was made with, or the view
+    /// matrix's.
+    pub fn up(&self) -> DVec3 {
+        self.up
     }
 
     /// The viewport in pixels.
@@ -228,6 +295,132 @@ impl View {
         }
         valid
     }
+}
+
+/// Where a perspective camera stands and what it looks at, with finite near and far
+/// planes: what [`View::framing_along`] builds, and what an orbit moves.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Pose {
+    /// Where the camera is.
+    pub eye: DVec3,
+    /// The point it looks at.
+    pub target: DVec3,
+    /// Up on the screen.
+    pub up: DVec3,
+    /// Vertical field of view, radians.
+    pub fovy: f64,
+    /// Distance of the near clipping plane.
+    pub near: f64,
+    /// Distance of the far clipping plane.
+    pub far: f64,
+}
+
+impl Pose {
+    /// See [`View::framing_along`].
+    pub fn framing(
+        min: DVec3,
+        max: DVec3,
+        viewport: (u32, u32),
+        direction: DVec3,
+        up: DVec3,
+    ) -> Pose {
+        let (min, max) = if min.is_finite() && max.is_finite() && min.cmple(max).all() {
+            (min, max)
+        } else {
+            (DVec3::splat(-0.5), DVec3::splat(0.5))
+        };
+        let aspect = viewport.0.max(1) as f64 / viewport.1.max(1) as f64;
+        let (center, radius) = bounding_sphere(min, max);
+        let back = direction
+            .try_normalize()
+            .unwrap_or(View::FRAMING_DIRECTION.normalize());
+        let up = if up.cross(back).length_squared() > 1e-6 {
+            up.normalize()
+        } else {
+            back.any_orthonormal_vector()
+        };
+        // Camera basis: `back` toward the eye, `right`, `cam_up`.
+        let right = up.cross(back).normalize();
+        let cam_up = back.cross(right);
+        const MARGIN: f64 = 0.95;
+        let tan_y = (0.5 * View::FRAMING_FOVY).tan() * MARGIN;
+        let tan_x = tan_y * aspect;
+        // A corner at (x, y, z) in the camera basis relative to the centre is at depth
+        // d − z from an eye at distance d; it fits when |x| ≤ (d − z)·tan_x and likewise y.
+        let mut distance: f64 = 0.0;
+        for corner in box_corners(min, max) {
+            let c = corner - center;
+            let (x, y, z) = (c.dot(right), c.dot(cam_up), c.dot(back));
+            distance = distance.max(z + x.abs() / tan_x).max(z + y.abs() / tan_y);
+        }
+        let distance = distance.max(radius * 1.05);
+        Pose {
+            eye: center + back * distance,
+            target: center,
+            up,
+            fovy: View::FRAMING_FOVY,
+            near: (distance - radius * 1.05).max(radius * 0.01),
+            far: distance + radius * 1.05,
+        }
+    }
+
+    /// The near and far planes moved to enclose the box's bounding sphere from the eye.
+    pub fn around(self, min: DVec3, max: DVec3) -> Pose {
+        let (center, radius) = bounding_sphere(min, max);
+        let d = (self.eye - center).length();
+        Pose {
+            near: (d - radius * 1.05).max(radius * 0.01),
+            far: d + radius * 1.05,
+            ..self
+        }
+    }
+
+    /// The view of this pose with `viewport` (right-handed, depth 0 at `near` to 1 at
+    /// `far`, as glam's `perspective_rh`); an error for a pose that is not a camera (the
+    /// eye on the target, up along the line of sight, planes not in front).
+    pub fn view(&self, viewport: (u32, u32)) -> Result<View> {
+        let aspect = viewport.0.max(1) as f64 / viewport.1.max(1) as f64;
+        check_camera(self.eye, self.target, self.up, self.fovy, self.near)?;
+        if !(self.far > self.near && self.far.is_finite()) {
+            return Err(Error::Param(
+                "view: the far plane must lie beyond the near plane".into(),
+            ));
+        }
+        let view = DMat4::look_at_rh(self.eye, self.target, self.up);
+        let projection = DMat4::perspective_rh(self.fovy, aspect, self.near, self.far);
+        let viewport = (viewport.0.max(1), viewport.1.max(1));
+        let mut out = View::from_matrices(view, projection, viewport)?;
+        out.up = self.up.normalize();
+        Ok(out)
+    }
+}
+
+/// Whether a perspective camera is one: one line naming what is wrong.
+fn check_camera(eye: DVec3, target: DVec3, up: DVec3, fovy: f64, near: f64) -> Result<()> {
+    let bad = |what: &str| Err(Error::Param(format!("view: {what}")));
+    if !(eye - target).is_finite() || (eye - target).length() == 0.0 {
+        return bad("the eye and the target must be distinct points");
+    }
+    if (target - eye).cross(up).length() <= 1e-12 * (target - eye).length() * up.length() {
+        return bad("the up direction must not be parallel to the line of sight");
+    }
+    if !(fovy > 0.0 && fovy < std::f64::consts::PI) {
+        return bad("the vertical field of view must be between 0 and 180 degrees");
+    }
+    if !(near.is_finite() && near > 0.0) {
+        return bad("the near plane must be a positive distance");
+    }
+    Ok(())
+}
+
+/// The centre and radius of the box's bounding sphere (a unit sphere for a point or a
+/// box that is not one).
+fn bounding_sphere(min: DVec3, max: DVec3) -> (DVec3, f64) {
+    if !(min.is_finite() && max.is_finite() && min.cmple(max).all()) {
+        return (DVec3::ZERO, 1.0);
+    }
+    let r = 0.5 * (max - min).length();
+    (0.5 * (min + max), if r > 0.0 { r } else { 1.0 })
 }
 
 /// Bisection steps of [`View::cell_tolerance`]: within 2⁻¹⁰ of the largest tolerance.
@@ -506,5 +699,78 @@ mod tests {
         assert!(View::look_at(eye, eye, DVec3::Z, fovy, (800, 600), 0.1).is_err());
         assert!(View::look_at(eye, target, eye - target, fovy, (800, 600), 0.1).is_err());
         assert!(View::look_at(eye, target, DVec3::Z, fovy, (800, 600), 0.0).is_err());
+    }
+
+    #[test]
+    fn framing_keeps_every_corner_in_view_and_depth_range() {
+        let boxes = [
+            (DVec3::new(-3.0, -2.0, 0.0), DVec3::new(3.4, 2.0, 3.15)), // teapot-like
+            (DVec3::new(0.0, 0.0, 0.0), DVec3::new(1.0, 10.0, 0.1)),
+            (DVec3::splat(2.0), DVec3::splat(2.0)),
+        ];
+        for (min, max) in boxes {
+            for viewport in [(50, 100), (100, 100), (400, 300), (200, 100)] {
+                let v = View::framing(min, max, viewport);
+                let mut widest: f64 = 0.0;
+                for c in box_corners(min, max) {
+                    let p = v.clip_matrix().project_point3(c);
+                    assert!(
+                        p.x.abs() <= 1.0 && p.y.abs() <= 1.0,
+                        "{min} {max} {viewport:?}: {p}"
+                    );
+                    assert!((0.0..=1.0).contains(&p.z), "{min} {max} {viewport:?}: {p}");
+                    widest = widest.max(p.x.abs()).max(p.y.abs());
+                }
+                if min != max {
+                    // Framed, not lost in the middle of the image.
+                    assert!(widest > 0.8, "{min} {max} {viewport:?}: {widest}");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn framing_looks_from_front_right_above_with_z_up() {
+        let v = View::framing(DVec3::splat(-1.0), DVec3::splat(1.0), (100, 100));
+        let d = v.eye();
+        assert!(d.x > 0.0 && d.y < 0.0 && d.z > 0.0, "{d}");
+        assert_eq!(v.up(), DVec3::Z);
+        // +Z projects upward on screen.
+        let m = v.clip_matrix();
+        assert!(m.project_point3(DVec3::Z).y > m.project_point3(DVec3::ZERO).y);
+    }
+
+    #[test]
+    fn framing_survives_degenerate_input() {
+        for (min, max) in [
+            (DVec3::splat(f64::NAN), DVec3::ONE),
+            (DVec3::ONE, DVec3::ZERO),
+            (DVec3::splat(f64::INFINITY), DVec3::splat(f64::INFINITY)),
+        ] {
+            let pose = Pose::framing(min, max, (0, 0), DVec3::ZERO, DVec3::ZERO);
+            assert!(pose.near > 0.0 && pose.far > pose.near);
+            let v = View::framing_along(min, max, (0, 0), DVec3::ZERO, DVec3::ZERO);
+            assert!(v.clip_matrix().is_finite(), "{min} {max}");
+        }
+    }
+
+    #[test]
+    fn a_view_keeps_its_matrices_apart() {
+        let v = car_view();
+        let model = DMat4::from_translation(DVec3::new(1.0, 2.0, 3.0));
+        let placed = v.with_model(model);
+        assert_eq!(placed.model_matrix(), model);
+        assert_eq!(placed.view_matrix(), v.view_matrix());
+        let x = DVec3::new(0.3, -0.2, 0.1);
+        let a = placed.clip_of(x);
+        let b = v.clip_of(x + DVec3::new(1.0, 2.0, 3.0));
+        assert!((a - b).length() < 1e-12, "{a} {b}");
+        assert!((v.eye() - DVec3::new(3.0, -4.0, 1.5)).length() < 1e-12);
+        assert_eq!(v.up(), DVec3::Z);
+        // From matrices alone, up is the view's y axis.
+        let m = View::from_matrices(v.view_matrix(), v.projection_matrix(), (800, 600)).unwrap();
+        assert!(m.up().dot(DVec3::Z) > 0.9, "{}", m.up());
+        assert!(m.up().dot(v.eye().normalize()).abs() < 1e-9, "{}", m.up());
+        assert_eq!(m.clip_matrix(), v.clip_matrix());
     }
 }

@@ -292,8 +292,8 @@ impl Running {
                         Drag::Orbit => self.orbit.orbit(-0.01 * dx, 0.01 * dy),
                         Drag::Pan => {
                             let h = self.viewport[3].max(1.0);
-                            let camera = self.camera();
-                            self.orbit.pan(&camera, -dx / h, dy / h);
+                            let pose = self.pose();
+                            self.orbit.pan(&pose, -dx / h, dy / h);
                         }
                     }
                 }
@@ -321,10 +321,20 @@ impl Running {
         }
     }
 
-    fn camera(&self) -> tessera_wgpu::Camera {
+    /// The scene's viewport in whole pixels (at least one each way).
+    fn viewport_px(&self) -> (u32, u32) {
         let [_, _, w, h] = self.viewport;
-        let aspect = if w >= 1.0 && h >= 1.0 { w / h } else { 1.0 };
-        self.orbit.camera(self.tess.model.bounds, aspect)
+        (w.max(1.0) as u32, h.max(1.0) as u32)
+    }
+
+    /// Where the orbit stands now.
+    fn pose(&self) -> tessera_wgpu::Pose {
+        self.orbit.pose(self.tess.model.bounds, self.viewport_px())
+    }
+
+    /// The view drawn now.
+    fn view(&self) -> tessera_wgpu::View {
+        self.orbit.view(self.tess.model.bounds, self.viewport_px())
     }
 
     /// Opens `path`; on failure the open model stays and the panel shows the error.
@@ -361,8 +371,8 @@ impl Running {
             Action::Orbit { yaw, pitch } => self.orbit.orbit(yaw.to_radians(), pitch.to_radians()),
             Action::Zoom(f) => self.orbit.zoom(*f),
             Action::Pan { right, up } => {
-                let camera = self.camera();
-                self.orbit.pan(&camera, *right, *up);
+                let pose = self.pose();
+                self.orbit.pan(&pose, *right, *up);
             }
             Action::Frame => self.orbit.home(),
             Action::Up(axis) => self.set_up(*axis),
@@ -598,10 +608,10 @@ impl Running {
         let (w, h) = self.gpu.size();
         let left = (panel_right * ppp).clamp(0.0, w as f32);
         self.viewport = [left, 0.0, w as f32 - left, h as f32];
-        let camera = self.camera();
+        let view = self.view();
         self.painter.mesh.prepare(
             &self.gpu.queue,
-            &camera,
+            &view,
             &RenderOptions {
                 wireframe: self.view.wireframe,
                 patch_tint: self.view.patch_tint,

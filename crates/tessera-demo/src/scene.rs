@@ -285,7 +285,7 @@ pub fn deform(p: DVec3, t: f64, (lo, hi): (Vec3, Vec3), up: Axis) -> DVec3 {
     let (lo, hi) = (lo.as_dvec3(), hi.as_dvec3());
     let center = 0.5 * (lo + hi);
     let radius = (0.5 * (hi - lo).length()).max(1e-12);
-    let up = up.vector().as_dvec3();
+    let up = up.vector();
     let q = p - center;
     let along = up * q.dot(up);
     let phase = std::f64::consts::TAU * t / PERIOD + 3.0 * q.dot(up) / radius;

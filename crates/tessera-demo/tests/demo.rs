@@ -17,12 +17,11 @@ use std::sync::Mutex;
 
 use tessera_core::bezier::{AdaptiveParams, BezierModel, EdgeTest, PreparedBezier};
 use tessera_wgpu::bezier::BezierStage;
-use tessera_wgpu::glam::Vec3;
 use tessera_wgpu::headless::Gpu;
 use tessera_wgpu::image::{Rgba, RgbaImage};
-use tessera_wgpu::image_out::{load_png, render_camera_to_rgba, save_png, BACKGROUND};
+use tessera_wgpu::image_out::{load_png, render_view_to_rgba, save_png, BACKGROUND};
 use tessera_wgpu::snapshot::{compare, delta_e, Tolerance};
-use tessera_wgpu::{Camera, Kernels, RenderOptions};
+use tessera_wgpu::{Kernels, RenderOptions, View};
 
 const BIN: &str = env!("CARGO_BIN_EXE_tessera-demo");
 const SIZE: (u32, u32) = (320, 240);
@@ -166,22 +165,9 @@ fn tessera_render_teapot() -> RgbaImage {
     .expect("stage");
     stage.run_blocking(&gpu.device, &gpu.queue).expect("run");
     let (w, h) = SIZE;
-    let camera = Camera::framing_along(
-        lo,
-        hi,
-        w as f32 / h as f32,
-        Camera::FRAMING_DIRECTION,
-        Vec3::Z,
-    );
-    let image = render_camera_to_rgba(
-        &gpu,
-        stage.output(),
-        &camera,
-        w,
-        h,
-        &RenderOptions::default(),
-    )
-    .expect("render");
+    let view = View::framing(lo.as_dvec3(), hi.as_dvec3(), (w, h));
+    let image = render_view_to_rgba(&gpu, stage.output(), &view, w, h, &RenderOptions::default())
+        .expect("render");
     gpu.check().expect("no wgpu errors");
     image
 }

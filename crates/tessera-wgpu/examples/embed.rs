@@ -19,7 +19,7 @@ use tessera_wgpu::glam::{Mat4, Vec3};
 use tessera_wgpu::tessera_core::bezier::{AdaptiveParams, BezierModel, EdgeTest, PreparedBezier};
 use tessera_wgpu::tessera_core::catmull_clark::{load_surface, CcParams};
 use tessera_wgpu::tessera_core::{io::load_control_mesh, Tolerance};
-use tessera_wgpu::{wgpu, Camera, Kernels, MeshBuffers};
+use tessera_wgpu::{wgpu, Kernels, MeshBuffers, View};
 
 /// Width and height of the frame.
 pub const SIZE: (u32, u32) = (640, 320);
@@ -170,8 +170,11 @@ pub fn run(assets: &Path, frames: u32) -> Result<tessera_wgpu::image::RgbaImage,
 
 /// View-projection of a camera framing `bounds` in one half of the frame.
 fn view(bounds: &(Vec3, Vec3), up: Vec3) -> Mat4 {
-    let aspect = SIZE.0 as f32 / 2.0 / SIZE.1 as f32;
-    Camera::framing_along(bounds.0, bounds.1, aspect, Camera::FRAMING_DIRECTION, up).view_proj()
+    let half = (SIZE.0 / 2, SIZE.1);
+    let (lo, hi) = (bounds.0.as_dvec3(), bounds.1.as_dvec3());
+    View::framing_along(lo, hi, half, View::FRAMING_DIRECTION, up.as_dvec3())
+        .clip_matrix()
+        .as_mat4()
 }
 
 fn bounds(points: &[Vec3]) -> (Vec3, Vec3) {

@@ -11,7 +11,8 @@ use crate::error::{Error, Result};
 use crate::headless::Gpu;
 use crate::output::MeshBuffers;
 use crate::readback::TextureReadback;
-use crate::render::{Camera, MeshRenderer, RenderOptions};
+use crate::render::{MeshRenderer, RenderOptions};
+use tessera_core::View;
 
 /// Colour format of the offscreen target: 8-bit sRGB, what PNG files hold.
 pub const COLOR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
@@ -20,7 +21,7 @@ pub const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
 /// The light background the model is drawn on, sRGB.
 pub const BACKGROUND: [u8; 3] = [236, 238, 242];
 
-/// Renders `mesh` framed by [`Camera::framing`] of `bounds` (usually the model's
+/// Renders `mesh` framed by [`View::framing`] of `bounds` (usually the model's
 /// bounding box) into a `width` × `height` image.
 pub fn render_to_rgba(
     gpu: &Gpu,
@@ -30,18 +31,19 @@ pub fn render_to_rgba(
     height: u32,
     options: &RenderOptions,
 ) -> Result<RgbaImage> {
-    let camera = Camera::framing(bounds.0, bounds.1, width as f32 / height.max(1) as f32);
-    render_camera_to_rgba(gpu, mesh, &camera, width, height, options)
+    let view = View::framing(bounds.0.as_dvec3(), bounds.1.as_dvec3(), (width, height));
+    render_view_to_rgba(gpu, mesh, &view, width, height, options)
 }
 
-/// Renders `mesh` seen by `camera` into a `width` × `height` image: an sRGB colour target
+/// Renders `mesh` seen from `view` (whose viewport is usually `width` × `height`) into a
+/// `width` × `height` image: an sRGB colour target
 /// (4× multisampled where the format allows it) and a depth buffer, cleared to
 /// [`BACKGROUND`], read back without the row padding wgpu's copies need. Fails on any
 /// wgpu error the device reported meanwhile.
-pub fn render_camera_to_rgba(
+pub fn render_view_to_rgba(
     gpu: &Gpu,
     mesh: &MeshBuffers,
-    camera: &Camera,
+    view: &View,
     width: u32,
     height: u32,
     options: &RenderOptions,
@@ -98,19 +100,19 @@ pub fn render_camera_to_rgba(
         .as_ref()
         .map(|t| t.create_view(&Default::default()));
     let depth_view = depth.create_view(&Default::default());
-    let (view, resolve_target) = match &multisampled_view {
+    let (target_view, resolve_target) = match &multisampled_view {
         Some(ms) => (ms, Some(&resolved_view)),
         None => (&resolved_view, None),
     };
 
     let renderer = MeshRenderer::new(device, COLOR_FORMAT, Some(DEPTH_FORMAT), samples);
-    renderer.prepare(&gpu.queue, camera, options);
+    renderer.prepare(&gpu.queue, view, options);
 
     let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
         label: Some("tessera image"),
     });
     {
-        let mut pass = begin_scene_pass(&mut encoder, view, resolve_target, &depth_view);
+        let mut pass = begin_scene_pass(&mut encoder, target_view, resolve_target, &depth_view);
         renderer.draw(&mut pass, mesh);
     }
     let readback = TextureReadback::record(device, &mut encoder, &resolved);
@@ -169,7 +171,7 @@ pub fn parse_size(s: &str) -> std::result::Result<(u32, u32), String> {
     Ok((parse(w)?, parse(h)?))
 }
 
-/// The samples per pixel of [`render_camera_to_rgba`] on `adapter`: 4 where
+/// The samples per pixel of [`render_view_to_rgba`] on `adapter`: 4 where
 /// [`COLOR_FORMAT`] and [`DEPTH_FORMAT`] both allow it, else 1. A window that draws its
 /// frames as these images are drawn (the demo's) takes the same.
 pub fn sample_count(adapter: &wgpu::Adapter) -> u32 {

@@ -41,7 +41,7 @@
 
 pub use tessera_core;
 pub use wgpu;
-// In the public API: models, cameras and bounds are glam vectors.
+// In the public API: models, views and bounds are glam vectors.
 pub use glam;
 /// Renders are `image` buffers (feature `headless`).
 #[cfg(feature = "headless")]
@@ -72,5 +72,6 @@ mod stage;
 pub use error::{Error, Result};
 pub use kernels::Kernels;
 pub use output::MeshBuffers;
-pub use render::{Camera, MeshRenderer, RenderOptions};
+pub use render::{MeshRenderer, RenderOptions};
 pub use stage::{GpuTimer, RunTimestamps};
+pub use tessera_core::{Pose, View};

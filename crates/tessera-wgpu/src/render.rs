@@ -22,117 +22,10 @@
 use std::sync::atomic::{AtomicBool, Ordering};
 
 use bytemuck::{Pod, Zeroable};
-use glam::{Mat4, Vec3};
+use glam::Vec3;
+use tessera_core::View;
 
 use crate::output::MeshBuffers;
-
-/// A perspective camera (right-handed, depth 0 at `near` to 1 at `far`, as wgpu expects).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Camera {
-    /// Where the camera is.
-    pub eye: Vec3,
-    /// The point it looks at.
-    pub target: Vec3,
-    /// Up on the screen.
-    pub up: Vec3,
-    /// Vertical field of view, radians.
-    pub fovy: f32,
-    /// Width over height.
-    pub aspect: f32,
-    /// Distance of the near clipping plane.
-    pub near: f32,
-    /// Distance of the far clipping plane.
-    pub far: f32,
-}
-
-impl Camera {
-    /// Vertical field of view of [`framing`](Self::framing): a mild telephoto, so that the
-    /// model is not distorted.
-    pub const FRAMING_FOVY: f32 = 30.0 * std::f32::consts::PI / 180.0;
-
-    /// The direction [`framing`](Self::framing) looks from, from the target toward the eye:
-    /// front (−Y), a little from the right (+X) and from above (+Z).
-    pub const FRAMING_DIRECTION: Vec3 = Vec3::new(0.5, -1.0, 0.45);
-
-    /// World to view space (`look_at_rh`).
-    pub fn view(&self) -> Mat4 {
-        Mat4::look_at_rh(self.eye, self.target, self.up)
-    }
-
-    /// View to clip space (`perspective_rh`).
-    pub fn projection(&self) -> Mat4 {
-        Mat4::perspective_rh(self.fovy, self.aspect, self.near, self.far)
-    }
-
-    /// World to clip space.
-    pub fn view_proj(&self) -> Mat4 {
-        self.projection() * self.view()
-    }
-
-    /// A 3/4 view of the box `min..max` for models with +Z up (the Newell teaset): from
-    /// the front-right and above, looking at the box's centre, at the distance where
-    /// every corner of the box is inside the view with a small margin.
-    pub fn framing(min: Vec3, max: Vec3, aspect: f32) -> Camera {
-        Self::framing_along(min, max, aspect, Self::FRAMING_DIRECTION, Vec3::Z)
-    }
-
-    /// Frames the box `min..max` from `direction` (target toward eye) with `up` up.
-    /// Near and far planes enclose the box's bounding sphere. A box that is empty or not
-    /// finite is treated as the unit cube around the origin; a point as a unit sphere.
-    pub fn framing_along(min: Vec3, max: Vec3, aspect: f32, direction: Vec3, up: Vec3) -> Camera {
-        let (min, max) = if min.is_finite() && max.is_finite() && min.cmple(max).all() {
-            (min, max)
-        } else {
-            (Vec3::splat(-0.5), Vec3::splat(0.5))
-        };
-        let aspect = if aspect.is_finite() && aspect > 0.0 {
-            aspect
-        } else {
-            1.0
-        };
-        let center = 0.5 * (min + max);
-        let radius = match 0.5 * (max - min).length() {
-            r if r > 0.0 => r,
-            _ => 1.0,
-        };
-        let back = direction
-            .try_normalize()
-            .unwrap_or(Self::FRAMING_DIRECTION.normalize());
-        let up = if up.cross(back).length_squared() > 1e-6 {
-            up.normalize()
-        } else {
-            back.any_orthonormal_vector()
-        };
-        // Camera basis: `back` toward the eye, `right`, `cam_up`.
-        let right = up.cross(back).normalize();
-        let cam_up = back.cross(right);
-        const MARGIN: f32 = 0.95;
-        let tan_y = (0.5 * Self::FRAMING_FOVY).tan() * MARGIN;
-        let tan_x = tan_y * aspect;
-        // A corner at (x, y, z) in the camera basis relative to the centre is at depth
-        // d − z from an eye at distance d; it fits when |x| ≤ (d − z)·tan_x and likewise y.
-        let mut distance = 0.0f32;
-        for i in 0..8 {
-            let corner = Vec3::new(
-                if i & 1 == 0 { min.x } else { max.x },
-                if i & 2 == 0 { min.y } else { max.y },
-                if i & 4 == 0 { min.z } else { max.z },
-            ) - center;
-            let (x, y, z) = (corner.dot(right), corner.dot(cam_up), corner.dot(back));
-            distance = distance.max(z + x.abs() / tan_x).max(z + y.abs() / tan_y);
-        }
-        let distance = distance.max(radius * 1.05);
-        Camera {
-            eye: center + back * distance,
-            target: center,
-            up,
-            fovy: Self::FRAMING_FOVY,
-            aspect,
-            near: (distance - radius * 1.05).max(radius * 0.01),
-            far: distance + radius * 1.05,
-        }
-    }
-}
 
 /// What [`MeshRenderer::prepare`] sets for the following draws.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -325,26 +218,34 @@ impl MeshRenderer {
         self.wire.is_some()
     }
 
-    /// Writes the camera and options for the next [`draw`](Self::draw)s.
-    pub fn prepare(&self, queue: &wgpu::Queue, camera: &Camera, options: &RenderOptions) {
-        let view = camera.view().inverse();
+    /// Writes the view and options for the next [`draw`](Self::draw)s: the mesh is drawn
+    /// in the view's model space ([`View::with_model`]).
+    pub fn prepare(&self, queue: &wgpu::Queue, view: &View, options: &RenderOptions) {
+        // Lit in model space: the eye, the lights and up brought there from the view.
+        let model_to_view = (view.view_matrix() * view.model_matrix()).as_mat4();
+        let view_to_model = model_to_view.inverse();
+        let world_to_model = view.model_matrix().inverse().as_mat4();
         // Lights fixed relative to the camera: the key from the upper left and in front,
         // a weaker fill from the right and slightly below.
-        let to_world = |x: f32, y: f32, z: f32| {
-            view.transform_vector3(Vec3::new(x, y, z))
+        let to_model = |x: f32, y: f32, z: f32| {
+            view_to_model
+                .transform_vector3(Vec3::new(x, y, z))
                 .normalize_or(Vec3::Z)
                 .extend(0.0)
                 .to_array()
         };
-        let mut key = to_world(-0.45, 0.65, 0.6);
+        let mut key = to_model(-0.45, 0.65, 0.6);
         key[3] = 0.85;
-        let mut fill = to_world(0.7, -0.15, 0.45);
+        let mut fill = to_model(0.7, -0.15, 0.45);
         fill[3] = 0.25;
-        let up = camera.up.normalize_or(Vec3::Z);
+        let eye = view_to_model.transform_point3(Vec3::ZERO);
+        let up = world_to_model
+            .transform_vector3(view.up().as_vec3())
+            .normalize_or(Vec3::Z);
         let [r, g, b] = options.base_color;
         let u = Uniforms {
-            view_proj: camera.view_proj().to_cols_array_2d(),
-            eye: camera.eye.extend(WIRE_PULL).to_array(),
+            view_proj: view.clip_matrix().as_mat4().to_cols_array_2d(),
+            eye: eye.extend(WIRE_PULL).to_array(),
             key,
             fill,
             up: up.extend(0.22).to_array(),
@@ -363,7 +264,7 @@ impl MeshRenderer {
             .store(options.wireframe, Ordering::Relaxed);
     }
 
-    /// Draws `mesh` with the last prepared camera and options: shaded, then the wireframe
+    /// Draws `mesh` with the last prepared view and options: shaded, then the wireframe
     /// when it was asked for and is available. Sets the pipeline, bind group 0, vertex
     /// buffer 0 and the index buffer of `pass`.
     pub fn draw(&self, pass: &mut wgpu::RenderPass<'_>, mesh: &MeshBuffers) {
@@ -382,69 +283,6 @@ impl MeshRenderer {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    fn corners(min: Vec3, max: Vec3) -> impl Iterator<Item = Vec3> {
-        (0..8).map(move |i| {
-            Vec3::new(
-                if i & 1 == 0 { min.x } else { max.x },
-                if i & 2 == 0 { min.y } else { max.y },
-                if i & 4 == 0 { min.z } else { max.z },
-            )
-        })
-    }
-
-    #[test]
-    fn framing_keeps_every_corner_in_view_and_depth_range() {
-        let boxes = [
-            (Vec3::new(-3.0, -2.0, 0.0), Vec3::new(3.4, 2.0, 3.15)), // teapot-like
-            (Vec3::new(0.0, 0.0, 0.0), Vec3::new(1.0, 10.0, 0.1)),
-            (Vec3::splat(2.0), Vec3::splat(2.0)),
-        ];
-        for (min, max) in boxes {
-            for aspect in [0.5, 1.0, 4.0 / 3.0, 2.0] {
-                let cam = Camera::framing(min, max, aspect);
-                let vp = cam.view_proj();
-                let mut widest = 0.0f32;
-                for c in corners(min, max) {
-                    let p = vp.project_point3(c);
-                    assert!(
-                        p.x.abs() <= 1.0 && p.y.abs() <= 1.0,
-                        "{min} {max} {aspect}: {p}"
-                    );
-                    assert!((0.0..=1.0).contains(&p.z), "{min} {max} {aspect}: {p}");
-                    widest = widest.max(p.x.abs()).max(p.y.abs());
-                }
-                if min != max {
-                    // Framed, not lost in the middle of the image.
-                    assert!(widest > 0.8, "{min} {max} {aspect}: {widest}");
-                }
-            }
-        }
-    }
-
-    #[test]
-    fn framing_looks_from_front_right_above_with_z_up() {
-        let cam = Camera::framing(Vec3::splat(-1.0), Vec3::splat(1.0), 1.0);
-        let d = cam.eye - cam.target;
-        assert!(d.x > 0.0 && d.y < 0.0 && d.z > 0.0, "{d}");
-        assert_eq!(cam.up, Vec3::Z);
-        // +Z projects upward on screen.
-        let vp = cam.view_proj();
-        assert!(vp.project_point3(Vec3::Z).y > vp.project_point3(Vec3::ZERO).y);
-    }
-
-    #[test]
-    fn framing_survives_degenerate_input() {
-        for (min, max) in [
-            (Vec3::splat(f32::NAN), Vec3::ONE),
-            (Vec3::ONE, Vec3::ZERO),
-            (Vec3::splat(f32::INFINITY), Vec3::splat(f32::INFINITY)),
-        ] {
-            let cam = Camera::framing_along(min, max, 0.0, Vec3::ZERO, Vec3::ZERO);
-            assert!(cam.view_proj().is_finite(), "{min} {max}");
-            assert!(cam.near > 0.0 && cam.far > cam.near);
-        }
-    }
 
     #[test]
     fn render_shader_validates() {

@@ -23,11 +23,11 @@ use tessera_core::bezier::{
 };
 use tessera_wgpu::glam::Vec3;
 use tessera_wgpu::headless::Gpu;
-use tessera_wgpu::image_out::{load_png, render_camera_to_rgba, render_to_rgba, BACKGROUND};
+use tessera_wgpu::image_out::{load_png, render_to_rgba, render_view_to_rgba, BACKGROUND};
 use tessera_wgpu::snapshot::{
     self, check_images, check_snapshot, delta_e, failure_paths, Tolerance,
 };
-use tessera_wgpu::{wgpu, Camera, Error, MeshBuffers, MeshRenderer, RenderOptions};
+use tessera_wgpu::{wgpu, Error, MeshBuffers, MeshRenderer, RenderOptions, View};
 
 const WIDTH: u32 = 160;
 const HEIGHT: u32 = 120;
@@ -75,7 +75,7 @@ fn upload(gpu: &Gpu, model: &str) -> (MeshBuffers, (Vec3, Vec3)) {
     (MeshBuffers::from_mesh(&gpu.device, &mesh), mesh.bounds())
 }
 
-/// `model` framed by [`Camera::framing`] (Z up, as the teapot is).
+/// `model` framed by [`View::framing`] (Z up, as the teapot is).
 fn render(gpu: &Gpu, model: &str, options: &RenderOptions) -> RgbaImage {
     let (mesh, bounds) = upload(gpu, model);
     render_to_rgba(gpu, &mesh, bounds, WIDTH, HEIGHT, options)
@@ -85,15 +85,15 @@ fn render(gpu: &Gpu, model: &str, options: &RenderOptions) -> RgbaImage {
 /// The teacup, which is Y up in the teaset data, upright in the same 3/4 view.
 fn render_teacup(gpu: &Gpu) -> RgbaImage {
     let (mesh, (min, max)) = upload(gpu, "teacup");
-    let d = Camera::FRAMING_DIRECTION;
-    let camera = Camera::framing_along(
-        min,
-        max,
-        WIDTH as f32 / HEIGHT as f32,
-        Vec3::new(d.x, d.z, -d.y),
-        Vec3::Y,
+    let d = View::FRAMING_DIRECTION;
+    let view = View::framing_along(
+        min.as_dvec3(),
+        max.as_dvec3(),
+        (WIDTH, HEIGHT),
+        tessera_wgpu::glam::DVec3::new(d.x, d.z, -d.y),
+        tessera_wgpu::glam::DVec3::Y,
     );
-    render_camera_to_rgba(gpu, &mesh, &camera, WIDTH, HEIGHT, &shaded())
+    render_view_to_rgba(gpu, &mesh, &view, WIDTH, HEIGHT, &shaded())
         .unwrap_or_else(|e| panic!("rendering the teacup failed: {e}"))
 }
 
@@ -334,12 +334,12 @@ fn teapot_tessellated_on_the_gpu_matches_the_wireframe_snapshot() {
 #[test]
 fn a_frame_drawn_into_the_callers_target_reads_back_as_the_image() {
     // A window draws into its own target, with the samples, formats and background of
-    // `render_camera_to_rgba`, and saves it through `read_rgba`: the same pixels.
+    // `render_view_to_rgba`, and saves it through `read_rgba`: the same pixels.
     let gpu = gpu();
     let (mesh, (min, max)) = upload(&gpu, "teapot");
-    let camera = Camera::framing(min, max, WIDTH as f32 / HEIGHT as f32);
+    let view = View::framing(min.as_dvec3(), max.as_dvec3(), (WIDTH, HEIGHT));
     let want =
-        render_camera_to_rgba(&gpu, &mesh, &camera, WIDTH, HEIGHT, &wireframe()).expect("render");
+        render_view_to_rgba(&gpu, &mesh, &view, WIDTH, HEIGHT, &wireframe()).expect("render");
 
     let samples = tessera_wgpu::image_out::sample_count(&gpu.adapter);
     assert!(samples == 4 || samples == 1, "{samples}");
@@ -370,7 +370,7 @@ fn a_frame_drawn_into_the_callers_target_reads_back_as_the_image() {
         depth.create_view(&Default::default()),
     );
     let renderer = MeshRenderer::new(&gpu.device, COLOR_FORMAT, Some(DEPTH_FORMAT), samples);
-    renderer.prepare(&gpu.queue, &camera, &wireframe());
+    renderer.prepare(&gpu.queue, &view, &wireframe());
     let mut encoder = gpu.device.create_command_encoder(&Default::default());
     {
         let (view, resolve_target) = if samples > 1 {
