@@ -89,8 +89,8 @@ struct Running {
     tess: Tessellator,
     timer: Option<GpuTimer>,
     params: Params,
-    /// The parameters of the last run recorded.
-    ran_with: Option<Params>,
+    /// The parameters of the last run recorded, and its view where the mesh follows it.
+    ran_with: Option<(Params, Option<tessera_wgpu::View>)>,
     view: View,
     orbit: Orbit,
     /// Something the output depends on changed since the last run.
@@ -414,7 +414,14 @@ impl Running {
                     Setting::Threshold(_) => return Err(wrong(
                         "threshold is a Bézier setting; Catmull-Clark meshes take tolerance-rel",
                     )),
-                    Setting::ToleranceRel(t) if kind == Kind::CatmullClark => p.tolerance_rel = t,
+                    Setting::ToleranceRel(t) if kind == Kind::CatmullClark => {
+                        p.tolerance_rel = t;
+                        p.pixels = None;
+                    }
+                    Setting::TolerancePx(px) if kind == Kind::CatmullClark => p.pixels = Some(px),
+                    Setting::TolerancePx(_) => return Err(wrong(
+                        "tolerance-px is a Catmull-Clark setting; Bézier surfaces take threshold",
+                    )),
                     Setting::ToleranceRel(_) => return Err(wrong(
                         "tolerance-rel is a Catmull-Clark setting; Bézier surfaces take threshold",
                     )),
@@ -558,7 +565,17 @@ impl Running {
             self.tess.animate(Some(self.anim_time), self.view.up);
             self.dirty = true;
         }
-        if self.ran_with != Some(self.params) || self.tess.grow_pending() {
+        // The scene right of the panel: the view drawn, and tessellated for in pixels.
+        let ppp = full.pixels_per_point;
+        let (w, h) = self.gpu.size();
+        let left = (panel_right * ppp).clamp(0.0, w as f32);
+        self.viewport = [left, 0.0, w as f32 - left, h as f32];
+        let drawn_view = self.view();
+        let follows = self
+            .params
+            .follows_view(self.tess.model.kind())
+            .then_some(drawn_view);
+        if self.ran_with != Some((self.params, follows)) || self.tess.grow_pending() {
             self.dirty = true;
         }
 
@@ -566,13 +583,14 @@ impl Running {
         let mut tessellated = false;
         if self.dirty {
             self.dirty = false;
-            self.ran_with = Some(self.params);
+            self.ran_with = Some((self.params, follows));
             let mut encoder = self.gpu.device.create_command_encoder(&Default::default());
             let t0 = Instant::now();
             match self.tess.record(
                 &self.gpu.device,
                 &self.gpu.queue,
                 &self.params,
+                &drawn_view,
                 &mut encoder,
                 self.timer.as_mut(),
             ) {
@@ -603,15 +621,10 @@ impl Running {
             }
         }
 
-        // The draw: the scene right of the panel, the panel, the copy to the surface.
-        let ppp = full.pixels_per_point;
-        let (w, h) = self.gpu.size();
-        let left = (panel_right * ppp).clamp(0.0, w as f32);
-        self.viewport = [left, 0.0, w as f32 - left, h as f32];
-        let view = self.view();
+        // The draw: the scene, the panel, the copy to the surface.
         self.painter.mesh.prepare(
             &self.gpu.queue,
-            &view,
+            &drawn_view,
             &RenderOptions {
                 wireframe: self.view.wireframe,
                 patch_tint: self.view.patch_tint,
@@ -742,6 +755,16 @@ impl Running {
             vertices: counts.vertices,
             patches: self.tess.model.patches,
             guaranteed_bound: counts.guaranteed_bound,
+            tolerance_px: self
+                .params
+                .follows_view(self.tess.model.kind())
+                .then_some(self.params.pixels)
+                .flatten(),
+            culled_patches: self
+                .params
+                .follows_view(self.tess.model.kind())
+                .then_some(counts.culled_patches)
+                .flatten(),
             gpu_ms,
             wall_ms,
             frame_ms: start.elapsed().as_secs_f64() * 1e3,

@@ -34,8 +34,10 @@
 //! FRAME frame                 the home view (the key F)
 //! FRAME up x|y|z              the model's up axis (framed again)
 //! FRAME set KEY VALUE         method map2p|map4p|map8p|flat|uniform|adaptive,
-//!                             threshold T (Bézier, model units), tolerance-rel R
-//!                             (Catmull-Clark, fraction of the diagonal), max-depth D,
+//!                             threshold T (Bézier, model units), tolerance-px P
+//!                             (Catmull-Clark, pixels of the view: the default, 1),
+//!                             tolerance-rel R (Catmull-Clark, fraction of the
+//!                             diagonal, instead of pixels), max-depth D,
 //!                             first-split search|midpoint, segments N,
 //!                             wireframe on|off, patch-tint on|off, backend gpu|cpu
 //! FRAME animate on|off|toggle the control points' animation

@@ -150,16 +150,35 @@ fn tessellation(ui: &mut egui::Ui, shown: &Shown, params: &mut Params) {
             ));
         }
         (Kind::CatmullClark, _) => {
-            let slider = egui::Slider::new(&mut params.tolerance_rel, 1e-5..=3e-2)
-                .logarithmic(true)
-                .text("tolerance")
-                .custom_formatter(|v, _| format!("{v:.2e}"))
-                .custom_parser(|s| s.trim().parse().ok());
-            ui.add(slider);
-            ui.small(format!(
-                "fraction of the diagonal: {:.3e} model units",
-                shown.model.tolerance(params.tolerance_rel)
-            ));
+            let mut in_pixels = params.pixels.is_some();
+            ui.horizontal(|ui| {
+                ui.label("tolerance in");
+                ui.radio_value(&mut in_pixels, true, "pixels");
+                ui.radio_value(&mut in_pixels, false, "model units");
+            });
+            if in_pixels != params.pixels.is_some() {
+                params.pixels = in_pixels.then_some(crate::scene::DEFAULT_PIXELS);
+            }
+            if let Some(px) = &mut params.pixels {
+                let slider = egui::Slider::new(px, 0.25..=16.0)
+                    .logarithmic(true)
+                    .text("pixels")
+                    .custom_formatter(|v, _| format!("{v:.2}"))
+                    .custom_parser(|s| s.trim().parse().ok());
+                ui.add(slider);
+                ui.small("guaranteed in the view drawn; moving it tessellates again, and patches out of view are culled");
+            } else {
+                let slider = egui::Slider::new(&mut params.tolerance_rel, 1e-5..=3e-2)
+                    .logarithmic(true)
+                    .text("tolerance")
+                    .custom_formatter(|v, _| format!("{v:.2e}"))
+                    .custom_parser(|s| s.trim().parse().ok());
+                ui.add(slider);
+                ui.small(format!(
+                    "fraction of the diagonal: {:.3e} model units",
+                    shown.model.tolerance(params.tolerance_rel)
+                ));
+            }
         }
     }
     if params.method != Method::Uniform {
@@ -231,10 +250,19 @@ fn stats(ui: &mut egui::Ui, shown: &Shown, params: &Params) {
         row("vertices", s.vertices.to_string());
         row("patches", s.patches.to_string());
         // Short rows: a resizable panel widens to its widest row and stays so.
-        if let Some(b) = s.guaranteed_bound {
-            row("guaranteed bound", format!("{b:.3e}"));
-            let eps = shown.model.tolerance(params.tolerance_rel);
-            row("tolerance ε", format!("{eps:.3e}"));
+        match (s.guaranteed_bound, s.tolerance_px) {
+            (Some(b), None) => {
+                row("guaranteed bound", format!("{b:.3e}"));
+                let eps = shown.model.tolerance(params.tolerance_rel);
+                row("tolerance ε", format!("{eps:.3e}"));
+            }
+            (_, Some(px)) => {
+                row("tolerance", format!("{px:.2} px"));
+                if let Some(c) = s.culled_patches {
+                    row("culled patches", c.to_string());
+                }
+            }
+            _ => {}
         }
         match (s.gpu_ms, s.wall_ms) {
             (Some(ms), _) => row("tessellation (GPU)", format!("{ms:.2} ms")),

@@ -7,7 +7,7 @@ use std::time::Instant;
 
 use tessera_core::bezier::{self, AdaptiveParams, BezierModel, EdgeTest, PreparedBezier};
 use tessera_core::catmull_clark::{
-    self, patch_mesh, CcParams, FirstSplit, SurfaceModel, MAX_DEPTH, TREE_DEPTH,
+    self, patch_mesh, CcParams, FirstSplit, SurfaceModel, ViewTolerance, MAX_DEPTH, TREE_DEPTH,
 };
 use tessera_core::gpu_types::MAX_DEPTH_LIMIT;
 use tessera_core::io::{is_control_mesh, load_control_mesh};
@@ -15,7 +15,7 @@ use tessera_core::Tolerance;
 use tessera_wgpu::bezier::BezierStage;
 use tessera_wgpu::catmull_clark::{CcStage, CcUniformStage, UniformParams};
 use tessera_wgpu::glam::{DVec3, Vec3};
-use tessera_wgpu::{wgpu, GpuTimer, Kernels, MeshBuffers};
+use tessera_wgpu::{wgpu, GpuTimer, Kernels, MeshBuffers, View};
 
 use crate::camera::Axis;
 
@@ -108,8 +108,12 @@ pub struct Params {
     pub method: Method,
     /// Bézier edge-test threshold, model units.
     pub threshold: f32,
-    /// Catmull-Clark tolerance, fraction of the control box's diagonal.
+    /// Catmull-Clark tolerance, fraction of the control box's diagonal (where `pixels` is
+    /// `None`).
     pub tolerance_rel: f64,
+    /// Catmull-Clark adaptive: the tolerance in pixels of the view drawn (moving the
+    /// camera tessellates again), patches out of view culled; `None`: `tolerance_rel`.
+    pub pixels: Option<f64>,
     pub bezier_depth: u32,
     pub cc_depth: u32,
     pub first_split: FirstSplit,
@@ -121,6 +125,8 @@ pub struct Params {
 /// 1e-3 (the CLI's `DEFAULT_TOLERANCE_REL`), depth 6 (Bézier) or 10, search, 8 segments.
 pub const DEFAULT_THRESHOLD_REL: f32 = 0.002;
 pub const DEFAULT_TOLERANCE_REL: f64 = 1e-3;
+/// The demo's default for Catmull-Clark surfaces: one pixel in the view drawn.
+pub const DEFAULT_PIXELS: f64 = 1.0;
 
 impl Params {
     /// The defaults for `model`.
@@ -132,6 +138,7 @@ impl Params {
             },
             threshold: model.default_threshold(),
             tolerance_rel: DEFAULT_TOLERANCE_REL,
+            pixels: Some(DEFAULT_PIXELS),
             bezier_depth: AdaptiveParams::DEFAULT_MAX_DEPTH,
             cc_depth: MAX_DEPTH,
             first_split: FirstSplit::Search,
@@ -172,9 +179,31 @@ impl Params {
         })
     }
 
+    /// Whether the mesh depends on the view: Catmull-Clark adaptive in pixels.
+    pub fn follows_view(&self, kind: Kind) -> bool {
+        kind == Kind::CatmullClark && self.method == Method::Adaptive && self.pixels.is_some()
+    }
+
+    /// The view's tolerance for a run in `view`, in pixels (culling too).
+    fn in_view(&self, view: &View) -> Option<ViewTolerance> {
+        (self.method == Method::Adaptive)
+            .then_some(self.pixels)
+            .flatten()
+            .map(|px| ViewTolerance {
+                view: *view,
+                pixels: Some(px),
+                cull: true,
+                max_triangles: None,
+            })
+    }
+
     fn cc(&self) -> CcParams {
         CcParams {
-            tolerance: Tolerance::Relative(self.tolerance_rel),
+            // In pixels, the world tolerance only caps: the pixels decide.
+            tolerance: Tolerance::Relative(match self.pixels {
+                Some(_) => 1.0,
+                None => self.tolerance_rel,
+            }),
             max_depth: self.cc_depth,
             first_split: self.first_split,
             leaf_bound: Default::default(),
@@ -308,6 +337,7 @@ struct CpuOutput {
     triangles: u32,
     vertices: u32,
     bound: Option<f64>,
+    culled_patches: Option<u32>,
 }
 
 /// What a run reported: counts of the drawn output, as they have arrived.
@@ -317,6 +347,8 @@ pub struct Counts {
     pub vertices: u32,
     /// Catmull-Clark adaptive: the largest leaf bound, model units.
     pub guaranteed_bound: Option<f64>,
+    /// Catmull-Clark adaptive in a view: patches wholly out of view.
+    pub culled_patches: Option<u32>,
     /// Reallocations of the drawn stage's buffers.
     pub growths: u32,
     /// The newest status says the run overflowed (nothing drawn until the rerun).
@@ -413,6 +445,7 @@ impl Tessellator {
                     triangles: if drawn { status.indices / 3 } else { 0 },
                     vertices: if drawn { status.vertices } else { 0 },
                     guaranteed_bound: None,
+                    culled_patches: None,
                     growths: s.growths(),
                     overflowed: !drawn,
                 })
@@ -425,6 +458,7 @@ impl Tessellator {
                     triangles: status.indices / 3,
                     vertices: if drawn { status.vertices() } else { 0 },
                     guaranteed_bound: drawn.then_some(status.max_bound() as f64),
+                    culled_patches: drawn.then_some(status.state.culled_patches),
                     growths: s.growths(),
                     overflowed: !drawn,
                 })
@@ -443,6 +477,7 @@ impl Tessellator {
                     triangles: c.triangles,
                     vertices: c.vertices,
                     guaranteed_bound: c.bound,
+                    culled_patches: c.culled_patches,
                     ..Counts::default()
                 })
             }
@@ -459,8 +494,8 @@ impl Tessellator {
         }
     }
 
-    /// Records one tessellation with `params` into `encoder` (GPU), or makes it on the
-    /// CPU and uploads it. A stage is made the first time its method is asked for, and
+    /// Records one tessellation with `params` for `view` (the view drawn) into `encoder`
+    /// (GPU), or makes it on the CPU and uploads it. A stage is made the first time its method is asked for, and
     /// run to fit on its own submission then (as after loading in the CLI); every later
     /// run is recorded here, timed by `timer` when there is one.
     pub fn record(
@@ -468,6 +503,7 @@ impl Tessellator {
         device: &wgpu::Device,
         queue: &wgpu::Queue,
         params: &Params,
+        view: &View,
         encoder: &mut wgpu::CommandEncoder,
         timer: Option<&mut GpuTimer>,
     ) -> Result<RunTime, String> {
@@ -484,9 +520,9 @@ impl Tessellator {
         }
         let on_gpu = params.backend == Backend::Gpu && params.method.on_gpu(kind);
         let result = if on_gpu {
-            self.record_gpu(device, queue, params, encoder, timer)
+            self.record_gpu(device, queue, params, view, encoder, timer)
         } else {
-            self.run_cpu(device, params).map(RunTime::Cpu)
+            self.run_cpu(device, params, view).map(RunTime::Cpu)
         };
         if result.is_err() {
             // The old output may belong to other parameters: draw nothing rather than
@@ -501,6 +537,7 @@ impl Tessellator {
         device: &wgpu::Device,
         queue: &wgpu::Queue,
         params: &Params,
+        view: &View,
         encoder: &mut wgpu::CommandEncoder,
         timer: Option<&mut GpuTimer>,
     ) -> Result<RunTime, String> {
@@ -572,6 +609,10 @@ impl Tessellator {
                 if *stage.params() != p {
                     stage.set_params(device, queue, &p).map_err(e)?;
                 }
+                // A few bytes through the queue, every run.
+                stage
+                    .set_view(queue, params.in_view(view).as_ref())
+                    .map_err(e)?;
                 match timer {
                     Some(t) => {
                         stage
@@ -624,10 +665,15 @@ impl Tessellator {
     }
 
     /// The CPU reference at the current points, uploaded; its wall time in ms.
-    fn run_cpu(&mut self, device: &wgpu::Device, params: &Params) -> Result<f64, String> {
+    fn run_cpu(
+        &mut self,
+        device: &wgpu::Device,
+        params: &Params,
+        view: &View,
+    ) -> Result<f64, String> {
         let start = Instant::now();
         let e = |e: tessera_core::Error| e.to_string();
-        let (mesh, bound) = match self.model.kind() {
+        let (mesh, bound, culled_patches) = match self.model.kind() {
             Kind::Bezier => {
                 self.bezier_now();
                 let Some((_, model, prepared)) = &self.bezier_at else {
@@ -641,7 +687,7 @@ impl Tessellator {
                             .mesh
                     }
                 };
-                (mesh, None)
+                (mesh, None, None)
             }
             Kind::CatmullClark => {
                 self.cc_now().map_err(e)?;
@@ -652,13 +698,19 @@ impl Tessellator {
                     Method::Adaptive => {
                         let p = params.cc();
                         p.validate(model).map_err(e)?;
-                        let out = catmull_clark::tessellate_adaptive(model, &p).map_err(e)?;
-                        (out.mesh, Some(out.max_bound))
+                        let out = match params.in_view(view) {
+                            Some(v) => catmull_clark::tessellate_adaptive_in_view(model, &p, &v)
+                                .map_err(e)?,
+                            None => catmull_clark::tessellate_adaptive(model, &p).map_err(e)?,
+                        };
+                        let culled = params.pixels.map(|_| out.culled_patches as u32);
+                        (out.mesh, Some(out.max_bound), culled)
                     }
                     _ => (
                         catmull_clark::tessellate_uniform(model, params.segments)
                             .map_err(e)?
                             .mesh,
+                        None,
                         None,
                     ),
                 }
@@ -670,6 +722,7 @@ impl Tessellator {
             triangles: mesh.triangle_count() as u32,
             vertices: mesh.vertices.len() as u32,
             bound,
+            culled_patches,
         });
         self.drawn = Drawn::Cpu;
         Ok(ms)

@@ -46,8 +46,11 @@ pub enum Setting {
     Method(Method),
     /// Bézier edge-test threshold, model units (as `tessera render --threshold`).
     Threshold(f32),
-    /// Catmull-Clark tolerance, fraction of the control box's diagonal (`--tolerance-rel`).
+    /// Catmull-Clark tolerance, fraction of the control box's diagonal (`--tolerance-rel`):
+    /// the tolerance is then no longer in pixels.
     ToleranceRel(f64),
+    /// Catmull-Clark tolerance in pixels of the view drawn (`--tolerance-px`).
+    TolerancePx(f64),
     MaxDepth(u32),
     FirstSplit(FirstSplit),
     /// Uniform methods: segments per patch side.
@@ -257,6 +260,7 @@ pub fn setting(key: &str, value: &str) -> Result<Setting, String> {
         })?),
         "threshold" => Setting::Threshold(finite(value, "threshold")? as f32),
         "tolerance-rel" => Setting::ToleranceRel(finite(value, "tolerance-rel")?),
+        "tolerance-px" => Setting::TolerancePx(finite(value, "tolerance-px")?),
         "max-depth" => Setting::MaxDepth(number(value, "max-depth")?),
         "first-split" => Setting::FirstSplit(match value {
             "search" => FirstSplit::Search,
@@ -279,7 +283,7 @@ pub fn setting(key: &str, value: &str) -> Result<Setting, String> {
         }),
         _ => {
             return Err(format!(
-                "unknown setting {key:?} (method, threshold, tolerance-rel, max-depth, first-split, segments, wireframe, patch-tint, backend)"
+                "unknown setting {key:?} (method, threshold, tolerance-rel, tolerance-px, max-depth, first-split, segments, wireframe, patch-tint, backend)"
             ))
         }
     })

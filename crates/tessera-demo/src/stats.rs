@@ -16,6 +16,10 @@ pub struct FrameStats {
     pub patches: usize,
     /// Catmull-Clark adaptive: the largest leaf bound, model units; else null.
     pub guaranteed_bound: Option<f64>,
+    /// Catmull-Clark adaptive in pixels: the tolerance, pixels; else null.
+    pub tolerance_px: Option<f64>,
+    /// Catmull-Clark adaptive in pixels: patches wholly out of view; else null.
+    pub culled_patches: Option<u32>,
     /// The newest run's GPU time from timestamp queries, ms.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub gpu_ms: Option<f64>,

@@ -369,6 +369,58 @@ fn a_finer_tolerance_gives_more_triangles_and_a_still_scene_does_not_tessellate(
 }
 
 #[test]
+fn in_pixels_by_default_moving_the_camera_tessellates_again_and_culls() {
+    // A Catmull-Clark model opens with a tolerance of one pixel of the view drawn: a
+    // still view does not tessellate again, zooming in does (more triangles, and patches
+    // off screen culled), and a tolerance in model units no longer follows the view.
+    let d = dir("pixels");
+    let (json, script) = (d.join("stats.json"), d.join("pixels.txt"));
+    std::fs::write(
+        &script,
+        "5 zoom 3\n\
+         12 set tolerance-rel 3e-3\n\
+         14 zoom 0.5\n",
+    )
+    .expect("script");
+    demo_ok(&[
+        s(&asset("opensubdiv/catmark_torus.obj")),
+        "--frames",
+        "16",
+        "--size",
+        &size_arg(),
+        "--no-panel",
+        "--script",
+        s(&script),
+        "--stats-json",
+        s(&json),
+    ]);
+    let rows = stats(&json);
+    assert_eq!(rows.len(), 16);
+    for r in &rows[..12] {
+        assert_eq!(r["tolerance_px"].as_f64(), Some(1.0), "{r}");
+    }
+    let (home, close) = (&rows[4], &rows[11]);
+    eprintln!(
+        "home: {home}
+close: {close}"
+    );
+    assert_eq!(u(home, "culled_patches"), 0, "the home view frames it all");
+    assert!(u(close, "culled_patches") > 0, "{close}");
+    assert!(
+        u(close, "triangles") > u(home, "triangles"),
+        "{home} then {close}"
+    );
+    assert_eq!(rows[5]["tessellated"], true, "the zoom tessellates again");
+    for r in &rows[1..5] {
+        assert_eq!(r["tessellated"], false, "a still frame tessellated: {r}");
+    }
+    // In model units the mesh stays as the camera moves.
+    assert!(rows[12]["tolerance_px"].is_null(), "{}", rows[12]);
+    assert_eq!(rows[14]["tessellated"], false, "{}", rows[14]);
+    assert_eq!(u(&rows[15], "triangles"), u(&rows[14], "triangles"));
+}
+
+#[test]
 fn a_bad_file_or_script_line_exits_1_with_one_line() {
     let d = dir("bad");
     let bad = d.join("bad.obj");
