@@ -312,10 +312,11 @@ const TABLES: &[(&str, &str, &str)] = &[
     ),
     (
         "catmull_clark_view",
-        "Catmull-Clark in a view: a tolerance in pixels (CPU)",
-        "Close-ups of the car and of Spot: the tolerance in pixels against the same view \
-         culled at the world tolerance that guarantees the same pixel error everywhere in \
-         view.",
+        "Catmull-Clark in a view: a tolerance in pixels",
+        "Close-ups of the car and of Spot, on the CPU reference and the GPU stage: the \
+         tolerance in pixels against the same view culled at the world tolerance that \
+         guarantees the same pixel error everywhere in view; the car's stage as the camera \
+         moves; a scene of 64 cars.",
     ),
 ];
 

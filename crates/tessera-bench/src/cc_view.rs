@@ -1,8 +1,13 @@
-//! Catmull-Clark close-ups (CPU reference): a tolerance in pixels against the same view
-//! culled at the one world tolerance that guarantees the same pixel error everywhere in
-//! view, `p` times the nearest visible depth over the focal length in pixels. Per model
-//! and `p`: triangles, time, the measured `max_error_px` of both, and the view's depth
-//! range. Writes `OUT/catmull_clark_view.{json,md}`.
+//! Catmull-Clark in a view: a tolerance in pixels against the same view culled at the
+//! one world tolerance that guarantees the same pixel error everywhere in view, `p` times
+//! the nearest visible depth over the focal length in pixels.
+//! - Close-ups of the car and Spot: triangles, time on the CPU reference and the GPU
+//!   stage, the measured `max_error_px` of both meshes, and the view's depth range.
+//! - A scene of 64 cars in a grid, one control mesh, seen from ground level.
+//! - Camera motion: the car's stage re-tessellated per frame as the view moves along a
+//!   path (the view written through the queue, nothing else).
+//!
+//! Writes `OUT/catmull_clark_view.{json,md}`.
 
 use std::path::Path;
 
@@ -15,8 +20,12 @@ use tessera_core::catmull_clark::{
 use tessera_core::io::load_control_mesh;
 use tessera_core::measure::max_error_px;
 use tessera_core::{Tolerance, View};
+use tessera_wgpu::catmull_clark::CcStage;
+use tessera_wgpu::headless::Gpu;
+use tessera_wgpu::Kernels;
 
-use crate::median_time;
+use crate::gpu::gpu_median_ms;
+use crate::{median, median_time};
 
 #[derive(Serialize)]
 struct Row {
@@ -27,6 +36,9 @@ struct Row {
     depth_range: f64,
     px_triangles: usize,
     px_ms: f64,
+    /// The GPU stage in the same view: a run recorded, submitted and waited for.
+    px_gpu_ms: f64,
+    px_gpu_triangles: u32,
     px_max_error_px: f64,
     px_unmet: usize,
     culled_patches: usize,
@@ -84,7 +96,10 @@ pub fn run(assets: &Path, out_dir: &Path, quick: bool) {
         ]
     };
     let repeats = if quick { 1 } else { 3 };
+    let gpu = Gpu::new().expect("a wgpu adapter");
+    let kernels = Kernels::new(&gpu.device);
     let mut rows = Vec::new();
+    let mut motion = None;
     for rel in models {
         let control = load_control_mesh(&assets.join(rel)).expect("mesh");
         let model = SurfaceModel::new(PatchMesh::new(&control).expect("valid"), TREE_DEPTH);
@@ -122,6 +137,19 @@ pub fn run(assets: &Path, out_dir: &Path, quick: bool) {
                 })
             };
             let (px_ms, px) = run(Tolerance::Relative(1.0), Some(pixels));
+            let (px_gpu_ms, px_gpu_triangles) = gpu_in_view(
+                &gpu,
+                &kernels,
+                &model,
+                &ViewTolerance {
+                    view,
+                    pixels: Some(pixels),
+                    cull: true,
+                    max_triangles: None,
+                },
+                repeats,
+            )
+            .expect("the close-up fits the device");
             let world_tolerance = pixels * nearest / focal;
             let (world_ms, world) = run(Tolerance::Absolute(world_tolerance), None);
             let err = |m| max_error_px(&samples, m, &view).unwrap_or(0.0);
@@ -132,6 +160,8 @@ pub fn run(assets: &Path, out_dir: &Path, quick: bool) {
                 depth_range: farthest / nearest,
                 px_triangles: px.mesh.triangle_count(),
                 px_ms,
+                px_gpu_ms,
+                px_gpu_triangles,
                 px_max_error_px: err(&px.mesh),
                 px_unmet: px.unmet,
                 culled_patches: px.culled_patches,
@@ -149,21 +179,28 @@ pub fn run(assets: &Path, out_dir: &Path, quick: bool) {
             );
             rows.push(row);
         }
+        if rel.contains("car") || quick {
+            motion = Some(camera_motion(&gpu, &kernels, &name, &model, repeats));
+        }
     }
+    let scene = (!quick).then(|| scene(&gpu, &kernels, assets));
     let mut s = format!(
-        "Close-ups ({}×{} pixels, {FOVY_DEG}° vertical field of view, from just off one end of the model's longest side, looking along it; CPU reference, midpoint splits, medians of {repeats}): the tolerance in pixels against the same view culled at the world tolerance that guarantees the same pixel error everywhere in view (p × nearest visible depth / focal length). Measured pixel errors over {SAMPLES}×{SAMPLES} samples per patch inside the frustum (the target: at most 0.5× the triangles):\n\n",
-        VIEWPORT.0, VIEWPORT.1
+        "Close-ups ({}×{} pixels, {FOVY_DEG}° vertical field of view, from just off one end of the model's longest side, looking along it; midpoint splits, medians of {repeats}; the CPU reference, and the GPU stage in the pixels' view on {adapter}): the tolerance in pixels against the same view culled at the world tolerance that guarantees the same pixel error everywhere in view (p × nearest visible depth / focal length). Measured pixel errors over {SAMPLES}×{SAMPLES} samples per patch inside the frustum (the target: at most 0.5× the triangles):\n\n",
+        VIEWPORT.0,
+        VIEWPORT.1,
+        adapter = gpu.adapter_name()
     );
-    s += "| model | patches | p (px) | depth range | triangles in pixels | ms | measured px | unmet | culled patches | world ε | triangles at world ε | ms | measured px | **triangles ratio** | time ratio |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
+    s += "| model | patches | p (px) | depth range | triangles in pixels | CPU ms | GPU ms | measured px | unmet | culled patches | world ε | triangles at world ε | CPU ms | measured px | **triangles ratio** | CPU time ratio |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
     for r in &rows {
         s += &format!(
-            "| {} | {} | {} | {:.1}:1 | {} | {:.0} | {:.3} | {} | {} | {:.2e} | {} | {:.0} | {:.3} | **{:.2}** | {:.2} |\n",
+            "| {} | {} | {} | {:.1}:1 | {} | {:.0} | {:.1} | {:.3} | {} | {} | {:.2e} | {} | {:.0} | {:.3} | **{:.2}** | {:.2} |\n",
             r.model,
             r.patches,
             r.pixels,
             r.depth_range,
             r.px_triangles,
             r.px_ms,
+            r.px_gpu_ms,
             r.px_max_error_px,
             r.px_unmet,
             r.culled_patches,
@@ -175,5 +212,344 @@ pub fn run(assets: &Path, out_dir: &Path, quick: bool) {
             r.time_ratio
         );
     }
-    crate::write_results(out_dir, "catmull_clark_view", &rows, s);
+    if let Some(m) = &motion {
+        s += &format!(
+            "\nCamera motion on {} ({} patches, p = {} px, midpoint splits): {} views along a path from far to close and past, each written with `set_view` and run (the GPU stage), against the CPU reference in the same views; medians per frame:\n\n| frames | triangles (min–max) | culled patches (min–max) | **GPU ms per frame** | CPU ms per frame | GPU / CPU |\n|---|---|---|---|---|---|\n| {} | {}–{} | {}–{} | **{:.1}** | {:.0} | {:.2} |\n",
+            m.model,
+            m.patches,
+            m.pixels,
+            m.frames,
+            m.frames,
+            m.triangles.0,
+            m.triangles.1,
+            m.culled_patches.0,
+            m.culled_patches.1,
+            m.gpu_ms,
+            m.cpu_ms,
+            m.gpu_ms / m.cpu_ms
+        );
+    }
+    if let Some(sc) = &scene {
+        s += &format!(
+            "\nA scene: {} copies of the car in an {}×{} grid, one control mesh ({} patches), seen from ground level off one corner, looking across it to the far corner ({}×{} pixels, p = {} px, midpoint splits, depth range {:.0}:1), against the same view culled at the world tolerance that guarantees the same pixel error ({:.2e}); CPU reference, medians of {}:\n\n| | triangles | culled patches | CPU ms |\n|---|---|---|---|\n| pixels | {} | {} | {:.0} |\n| world ε | {} | {} | {:.0} |\n| **ratio** | **{:.3}** | | **{:.3}** |\n\nThe GPU stage in the pixels' view: {}.\n",
+            sc.copies,
+            sc.side,
+            sc.side,
+            sc.patches,
+            VIEWPORT.0,
+            VIEWPORT.1,
+            sc.pixels,
+            sc.depth_range,
+            sc.world_tolerance,
+            sc.repeats,
+            sc.px_triangles,
+            sc.px_culled_patches,
+            sc.px_ms,
+            sc.world_triangles,
+            sc.world_culled_patches,
+            sc.world_ms,
+            sc.px_triangles as f64 / sc.world_triangles.max(1) as f64,
+            sc.px_ms / sc.world_ms,
+            match &sc.px_gpu {
+                Ok(ms) => format!("{ms:.0} ms per run"),
+                Err(e) => format!("not run, the device cannot hold the scene ({e})"),
+            }
+        );
+    }
+    let json = Results {
+        adapter: gpu.adapter_name(),
+        close_ups: rows,
+        camera_motion: motion,
+        scene,
+    };
+    crate::write_results(out_dir, "catmull_clark_view", &json, s);
+}
+
+#[derive(Serialize)]
+struct Results {
+    /// The GPU stage's adapter.
+    adapter: String,
+    close_ups: Vec<Row>,
+    camera_motion: Option<Motion>,
+    scene: Option<Scene>,
+}
+
+/// The GPU stage of `model` in `view`: the median run (ms) and its triangles, or why the
+/// device cannot hold it.
+fn gpu_in_view(
+    gpu: &Gpu,
+    kernels: &Kernels,
+    model: &SurfaceModel,
+    view: &ViewTolerance,
+    repeats: usize,
+) -> Result<(f64, u32), String> {
+    let params = CcParams {
+        tolerance: Tolerance::Relative(1.0),
+        max_depth: MAX_DEPTH,
+        first_split: FirstSplit::Midpoint,
+        leaf_bound: Default::default(),
+    };
+    let mut stage = CcStage::new(&gpu.device, &gpu.queue, kernels, model, &params)
+        .map_err(|e| e.to_string())?;
+    stage.set_view(&gpu.queue, Some(view)).expect("view");
+    let status = stage
+        .run_blocking(&gpu.device, &gpu.queue)
+        .map_err(|e| e.to_string())?;
+    let ms = gpu_median_ms(gpu, repeats, |e| {
+        stage.prepare(&gpu.device, &gpu.queue, e).expect("prepare")
+    });
+    gpu.check().expect("no wgpu errors");
+    Ok((ms, status.indices / 3))
+}
+
+#[derive(Serialize)]
+struct Motion {
+    model: String,
+    patches: usize,
+    pixels: f64,
+    frames: usize,
+    triangles: (u32, u32),
+    culled_patches: (u32, u32),
+    gpu_ms: f64,
+    cpu_ms: f64,
+}
+
+/// Views along a path past `model`: from far in front, in close along its side, and
+/// out past its end.
+fn path(model: &SurfaceModel, frames: usize) -> Vec<View> {
+    let samples = surface_samples(model, 2);
+    let lo = samples.iter().fold(DVec3::INFINITY, |a, &p| a.min(p));
+    let hi = samples.iter().fold(DVec3::NEG_INFINITY, |a, &p| a.max(p));
+    let (c, d) = ((lo + hi) / 2.0, (hi - lo).length());
+    (0..frames)
+        .map(|k| {
+            let t = k as f64 / (frames - 1) as f64;
+            // Around the model at a shrinking then growing distance.
+            let angle = -1.2 + 2.4 * t;
+            let distance = d * (0.45 + 1.6 * (2.0 * t - 1.0).powi(2));
+            let eye = c + DVec3::new(angle.sin(), -angle.cos(), 0.25) * distance;
+            View::look_at(eye, c, DVec3::Z, FOVY_DEG.to_radians(), VIEWPORT, 0.01 * d)
+                .expect("view")
+        })
+        .collect()
+}
+
+/// [`Motion`] of `model`: one stage, its view written per frame.
+fn camera_motion(
+    gpu: &Gpu,
+    kernels: &Kernels,
+    name: &str,
+    model: &SurfaceModel,
+    repeats: usize,
+) -> Motion {
+    const PIXELS: f64 = 1.0;
+    let frames = 12;
+    let views = path(model, frames);
+    let params = CcParams {
+        tolerance: Tolerance::Relative(1.0),
+        max_depth: MAX_DEPTH,
+        first_split: FirstSplit::Midpoint,
+        leaf_bound: Default::default(),
+    };
+    let at = |v: &View| ViewTolerance {
+        view: *v,
+        pixels: Some(PIXELS),
+        cull: true,
+        max_triangles: None,
+    };
+    let mut stage = CcStage::new(&gpu.device, &gpu.queue, kernels, model, &params).expect("stage");
+    // Every view once to completion: the buffers grown for the largest.
+    let (mut triangles, mut culled) = ((u32::MAX, 0), (u32::MAX, 0));
+    for v in &views {
+        stage.set_view(&gpu.queue, Some(&at(v))).expect("view");
+        let status = stage.run_blocking(&gpu.device, &gpu.queue).expect("run");
+        let t = status.indices / 3;
+        triangles = (triangles.0.min(t), triangles.1.max(t));
+        let c = status.state.culled_patches;
+        culled = (culled.0.min(c), culled.1.max(c));
+    }
+    let mut k = 0;
+    let gpu_ms = gpu_median_ms(gpu, repeats * frames, |e| {
+        stage
+            .set_view(&gpu.queue, Some(&at(&views[k % frames])))
+            .expect("view");
+        k += 1;
+        stage.prepare(&gpu.device, &gpu.queue, e).expect("prepare")
+    });
+    gpu.check().expect("no wgpu errors");
+    let cpu_ms = median(
+        views
+            .iter()
+            .map(|v| {
+                median_time(1, || {
+                    tessellate_adaptive_in_view(model, &params, &at(v)).expect("tessellate")
+                })
+                .0
+            })
+            .collect(),
+    );
+    eprintln!("cc view motion {name}: GPU {gpu_ms:.1} ms, CPU {cpu_ms:.0} ms per frame");
+    Motion {
+        model: name.to_string(),
+        patches: model.mesh.surface_patches().count(),
+        pixels: PIXELS,
+        frames,
+        triangles,
+        culled_patches: culled,
+        gpu_ms,
+        cpu_ms,
+    }
+}
+
+#[derive(Serialize)]
+struct Scene {
+    copies: usize,
+    side: usize,
+    patches: usize,
+    pixels: f64,
+    depth_range: f64,
+    world_tolerance: f64,
+    repeats: usize,
+    px_triangles: usize,
+    px_culled_patches: usize,
+    px_ms: f64,
+    /// The GPU stage in the pixels' view, ms, or why the device cannot hold the scene.
+    px_gpu: Result<f64, String>,
+    world_triangles: usize,
+    world_culled_patches: usize,
+    world_ms: f64,
+}
+
+/// 64 cars in an 8 × 8 grid, one control mesh, from ground level off one corner,
+/// looking across the grid to the far corner.
+fn scene(gpu: &Gpu, kernels: &Kernels, assets: &Path) -> Scene {
+    const SIDE: usize = 8;
+    const PIXELS: f64 = 1.0;
+    let started = std::time::Instant::now();
+    let car = load_control_mesh(&assets.join("opensubdiv/catmark_car.obj")).expect("mesh");
+    let lo = car.positions.iter().fold(DVec3::INFINITY, |a, &p| a.min(p));
+    let hi = car
+        .positions
+        .iter()
+        .fold(DVec3::NEG_INFINITY, |a, &p| a.max(p));
+    let size = hi - lo;
+    // Rows along x (the car's length), 1.6 lengths apart; columns 2 widths apart.
+    let step = DVec3::new(1.6 * size.x, 2.0 * size.y, 0.0);
+    let mut control = car.clone();
+    control.positions.clear();
+    control.faces.clear();
+    control.face_lines.clear();
+    control.holes.clear();
+    control.creases.clear();
+    control.corners.clear();
+    let n = car.positions.len() as u32;
+    for k in 0..SIDE * SIDE {
+        let base = k as u32 * n;
+        let offset = DVec3::new((k / SIDE) as f64 * step.x, (k % SIDE) as f64 * step.y, 0.0);
+        control
+            .positions
+            .extend(car.positions.iter().map(|&p| p + offset));
+        control.faces.extend(
+            car.faces
+                .iter()
+                .map(|f| f.iter().map(|&v| v + base).collect()),
+        );
+        control.face_lines.extend(&car.face_lines);
+        control.holes.extend(&car.holes);
+        control.creases.extend(
+            car.creases
+                .iter()
+                .map(|&([a, b], s)| ([a + base, b + base], s)),
+        );
+        control
+            .corners
+            .extend(car.corners.iter().map(|&(v, s)| (v + base, s)));
+    }
+    let model = SurfaceModel::new(PatchMesh::new(&control).expect("valid"), TREE_DEPTH);
+    // At the height of a car's middle, off one corner of the lot, looking across it
+    // to the far corner.
+    let far_corner = lo + step * (SIDE - 1) as f64 + size;
+    let eye = DVec3::new(
+        lo.x - 0.3 * size.x,
+        lo.y - 0.3 * size.x,
+        lo.z + 0.5 * size.z,
+    );
+    let target = DVec3::new(far_corner.x, far_corner.y, eye.z);
+    let view = View::look_at(
+        eye,
+        target,
+        DVec3::Z,
+        FOVY_DEG.to_radians(),
+        VIEWPORT,
+        0.01 * size.x,
+    )
+    .expect("view");
+    let samples = surface_samples(&model, 2);
+    let depths: Vec<f64> = samples
+        .iter()
+        .filter(|&&p| view.contains(p))
+        .map(|&p| view.clip_of(p).w)
+        .collect();
+    let nearest = depths.iter().copied().fold(f64::INFINITY, f64::min);
+    let farthest = depths.iter().copied().fold(0.0, f64::max);
+    let focal = 0.5 * VIEWPORT.1 as f64 / (0.5 * FOVY_DEG.to_radians()).tan();
+    let world_tolerance = PIXELS * nearest / focal;
+    let repeats = 1;
+    let run = |tolerance: Tolerance, px: Option<f64>| {
+        let params = CcParams {
+            tolerance,
+            max_depth: MAX_DEPTH,
+            first_split: FirstSplit::Midpoint,
+            leaf_bound: Default::default(),
+        };
+        let vt = ViewTolerance {
+            view,
+            pixels: px,
+            cull: true,
+            max_triangles: None,
+        };
+        median_time(repeats, || {
+            tessellate_adaptive_in_view(&model, &params, &vt).expect("tessellate")
+        })
+    };
+    eprintln!(
+        "cc view scene: built and sampled in {:.0} s",
+        started.elapsed().as_secs_f64()
+    );
+    let (px_ms, px) = run(Tolerance::Relative(1.0), Some(PIXELS));
+    eprintln!("cc view scene: pixels {px_ms:.0} ms");
+    let px_gpu = gpu_in_view(
+        gpu,
+        kernels,
+        &model,
+        &ViewTolerance {
+            view,
+            pixels: Some(PIXELS),
+            cull: true,
+            max_triangles: None,
+        },
+        repeats,
+    );
+    let (world_ms, world) = run(Tolerance::Absolute(world_tolerance), None);
+    eprintln!(
+        "cc view scene: {} tris ({px_ms:.0} ms, GPU {px_gpu:?}) against {} ({world_ms:.0} ms)",
+        px.mesh.triangle_count(),
+        world.mesh.triangle_count()
+    );
+    Scene {
+        copies: SIDE * SIDE,
+        side: SIDE,
+        patches: model.mesh.surface_patches().count(),
+        pixels: PIXELS,
+        depth_range: farthest / nearest,
+        world_tolerance,
+        repeats,
+        px_triangles: px.mesh.triangle_count(),
+        px_culled_patches: px.culled_patches,
+        px_ms,
+        px_gpu: px_gpu.map(|(ms, _)| ms),
+        world_triangles: world.mesh.triangle_count(),
+        world_culled_patches: world.culled_patches,
+        world_ms,
+    }
 }

@@ -81,7 +81,8 @@ impl LocalMesh {
                 }
             }
         }
-        Self::compact(points, faces.iter().map(|&q| quads[q as usize]), sharp)
+        let sharp = ring_sharpness(sharp, quads, point_quads, &faces);
+        Self::compact(points, faces.iter().map(|&q| quads[q as usize]), &sharp)
     }
 
     /// The same one-ring in an order that depends on the local topology alone, with the
@@ -147,7 +148,9 @@ impl LocalMesh {
                 }
             }
         }
-        (Self::compact(points, rotated.into_iter(), sharp), ids)
+        let faces: Vec<u32> = order.iter().map(|&(q, _)| q).collect();
+        let sharp = ring_sharpness(sharp, quads, point_quads, &faces);
+        (Self::compact(points, rotated.into_iter(), &sharp), ids)
     }
 
     /// Renumbers the points the given quads use; the first quad becomes the target.
@@ -522,4 +525,46 @@ impl LocalMesh {
         }
         normal
     }
+}
+/// The entries of the mesh's `sharp` between points of the quads `faces`, found from
+/// the quads around those points: what [`LocalMesh::compact`] keeps of it, without a
+/// pass over every sharp edge of the mesh per patch (quadratic in a creased mesh).
+fn ring_sharpness(
+    sharp: &Sharpness,
+    quads: &[[u32; 4]],
+    point_quads: &[Vec<u32>],
+    faces: &[u32],
+) -> Sharpness {
+    let mut out = Sharpness::default();
+    if sharp.is_empty() {
+        return out;
+    }
+    let mut ring: Vec<u32> = faces.iter().flat_map(|&q| quads[q as usize]).collect();
+    ring.sort_unstable();
+    ring.dedup();
+    let local = |v: u32| ring.binary_search(&v).is_ok();
+    for &a in &ring {
+        if let Some(&s) = sharp.vertices.get(&a) {
+            out.vertices.insert(a, s);
+        }
+        // Every edge from `a` is a side of a quad around it.
+        for &q in &point_quads[a as usize] {
+            let quad = quads[q as usize];
+            let Some(k) = quad.iter().position(|&v| v == a) else {
+                continue;
+            };
+            for b in [quad[(k + 1) % 4], quad[(k + 3) % 4]] {
+                if !local(b) {
+                    continue;
+                }
+                if let Some(&s) = sharp.edges.get(&edge_key(a, b)) {
+                    out.edges.insert(edge_key(a, b), s);
+                }
+                if let Some(&s) = sharp.next.get(&(a, b)) {
+                    out.next.insert((a, b), s);
+                }
+            }
+        }
+    }
+    out
 }
