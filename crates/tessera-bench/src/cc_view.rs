@@ -110,32 +110,9 @@ pub fn run(assets: &Path, out_dir: &Path, quick: bool) {
             .to_string();
         let view = close_up(&model);
         let samples = surface_samples(&model, SAMPLES);
-        let depths: Vec<f64> = samples
-            .iter()
-            .filter(|&&p| view.contains(p))
-            .map(|&p| view.clip_of(p).w)
-            .collect();
-        let nearest = depths.iter().copied().fold(f64::INFINITY, f64::min);
-        let farthest = depths.iter().copied().fold(0.0, f64::max);
-        let focal = 0.5 * VIEWPORT.1 as f64 / (0.5 * FOVY_DEG.to_radians()).tan();
+        let (nearest, farthest) = depth_range(&view, &samples);
         for pixels in [1.0, 0.5] {
-            let run = |tolerance: Tolerance, px: Option<f64>| {
-                let params = CcParams {
-                    tolerance,
-                    max_depth: MAX_DEPTH,
-                    first_split: FirstSplit::Midpoint,
-                    leaf_bound: Default::default(),
-                };
-                let vt = ViewTolerance {
-                    view,
-                    pixels: px,
-                    cull: true,
-                    max_triangles: None,
-                };
-                median_time(repeats, || {
-                    tessellate_adaptive_in_view(&model, &params, &vt).expect("tessellate")
-                })
-            };
+            let run = |tolerance, px| cpu_in_view(&model, view, tolerance, px, repeats);
             let (px_ms, px) = run(Tolerance::Relative(1.0), Some(pixels));
             let (px_gpu_ms, px_gpu_triangles) = gpu_in_view(
                 &gpu,
@@ -150,7 +127,7 @@ pub fn run(assets: &Path, out_dir: &Path, quick: bool) {
                 repeats,
             )
             .expect("the close-up fits the device");
-            let world_tolerance = pixels * nearest / focal;
+            let world_tolerance = pixels * nearest / focal();
             let (world_ms, world) = run(Tolerance::Absolute(world_tolerance), None);
             let err = |m| max_error_px(&samples, m, &view).unwrap_or(0.0);
             let row = Row {
@@ -263,6 +240,49 @@ pub fn run(assets: &Path, out_dir: &Path, quick: bool) {
         scene,
     };
     crate::write_results(out_dir, "catmull_clark_view", &json, s);
+}
+
+/// The nearest and farthest clip `w` of the samples inside the view's frustum.
+fn depth_range(view: &View, samples: &[DVec3]) -> (f64, f64) {
+    let depths: Vec<f64> = samples
+        .iter()
+        .filter(|&&p| view.contains(p))
+        .map(|&p| view.clip_of(p).w)
+        .collect();
+    let nearest = depths.iter().copied().fold(f64::INFINITY, f64::min);
+    let farthest = depths.iter().copied().fold(0.0, f64::max);
+    (nearest, farthest)
+}
+
+/// The focal length in pixels of the bench's views.
+fn focal() -> f64 {
+    0.5 * VIEWPORT.1 as f64 / (0.5 * FOVY_DEG.to_radians()).tan()
+}
+
+/// The CPU reference in `view`, culled, at `tolerance` and (if given) `pixels`: the
+/// median time (ms) and the tessellation.
+fn cpu_in_view(
+    model: &SurfaceModel,
+    view: View,
+    tolerance: Tolerance,
+    pixels: Option<f64>,
+    repeats: usize,
+) -> (f64, tessera_core::catmull_clark::CcTessellation) {
+    let params = CcParams {
+        tolerance,
+        max_depth: MAX_DEPTH,
+        first_split: FirstSplit::Midpoint,
+        leaf_bound: Default::default(),
+    };
+    let vt = ViewTolerance {
+        view,
+        pixels,
+        cull: true,
+        max_triangles: None,
+    };
+    median_time(repeats, || {
+        tessellate_adaptive_in_view(model, &params, &vt).expect("tessellate")
+    })
 }
 
 #[derive(Serialize)]
@@ -484,34 +504,10 @@ fn scene(gpu: &Gpu, kernels: &Kernels, assets: &Path) -> Scene {
         0.01 * size.x,
     )
     .expect("view");
-    let samples = surface_samples(&model, 2);
-    let depths: Vec<f64> = samples
-        .iter()
-        .filter(|&&p| view.contains(p))
-        .map(|&p| view.clip_of(p).w)
-        .collect();
-    let nearest = depths.iter().copied().fold(f64::INFINITY, f64::min);
-    let farthest = depths.iter().copied().fold(0.0, f64::max);
-    let focal = 0.5 * VIEWPORT.1 as f64 / (0.5 * FOVY_DEG.to_radians()).tan();
-    let world_tolerance = PIXELS * nearest / focal;
+    let (nearest, farthest) = depth_range(&view, &surface_samples(&model, 2));
+    let world_tolerance = PIXELS * nearest / focal();
     let repeats = 1;
-    let run = |tolerance: Tolerance, px: Option<f64>| {
-        let params = CcParams {
-            tolerance,
-            max_depth: MAX_DEPTH,
-            first_split: FirstSplit::Midpoint,
-            leaf_bound: Default::default(),
-        };
-        let vt = ViewTolerance {
-            view,
-            pixels: px,
-            cull: true,
-            max_triangles: None,
-        };
-        median_time(repeats, || {
-            tessellate_adaptive_in_view(&model, &params, &vt).expect("tessellate")
-        })
-    };
+    let run = |tolerance, px| cpu_in_view(&model, view, tolerance, px, repeats);
     eprintln!(
         "cc view scene: built and sampled in {:.0} s",
         started.elapsed().as_secs_f64()
