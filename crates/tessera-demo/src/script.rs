@@ -342,6 +342,8 @@ mod tests {
             }
         );
         assert_eq!(s.at(6).count(), 2);
+        let px = parse("3 set tolerance-px 0.5\n").expect("parses");
+        assert_eq!(px.steps[0].action, Action::Set(Setting::TolerancePx(0.5)));
     }
 
     #[test]
@@ -357,6 +359,10 @@ mod tests {
             (
                 "1 set tolerance-rel 0",
                 "s.txt:1: tolerance-rel 0 must be a positive number",
+            ),
+            (
+                "1 set tolerance-px -1",
+                "s.txt:1: tolerance-px -1 must be a positive number",
             ),
             (
                 "1 set threshold nan",
