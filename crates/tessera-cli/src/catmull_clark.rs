@@ -505,7 +505,7 @@ pub fn run_gpu(
         triangle_bounds: 0,
         culled_leaves: status.state.culled_leaves as usize,
         culled_patches: status.state.culled_patches as usize,
-        tolerance_px: view.and_then(|v| v.pixels),
+        tolerance_px: stage.tolerance_px(),
     };
     Ok((tessellation, stage.dispatches(), stage.upload_bytes()))
 }

@@ -130,14 +130,12 @@ fn views_refuse_what_they_do_not_take_yet_with_one_line() {
             vec![
                 "tessellate",
                 &torus,
-                "--tolerance-px",
-                "1",
                 "--backend",
                 "gpu",
                 "--max-triangles",
                 "100",
             ],
-            "triangle cap",
+            "--tolerance-px",
         ),
         (
             vec![
@@ -253,4 +251,21 @@ fn max_triangles_coarsens_the_pixels_and_reports_what_it_achieved() {
         "{capped}"
     );
     assert_eq!(free["achieved_tolerance_px"], 0.25);
+    // The GPU stage stops at the same step.
+    let on_gpu = stats_of(
+        &[
+            "tessellate",
+            &torus,
+            "--tolerance-px",
+            "0.25",
+            "--max-triangles",
+            &cap.to_string(),
+            "--backend",
+            "gpu",
+        ],
+        "capped_gpu.json",
+    );
+    for key in ["triangles", "achieved_tolerance_px"] {
+        assert_eq!(on_gpu[key], capped[key], "{key}");
+    }
 }

@@ -758,7 +758,7 @@ impl Running {
             tolerance_px: self
                 .params
                 .follows_view(self.tess.model.kind())
-                .then_some(self.params.pixels)
+                .then_some(counts.tolerance_px)
                 .flatten(),
             culled_patches: self
                 .params

@@ -257,7 +257,12 @@ fn stats(ui: &mut egui::Ui, shown: &Shown, params: &Params) {
                 row("tolerance ε", format!("{eps:.3e}"));
             }
             (_, Some(px)) => {
-                row("tolerance", format!("{px:.2} px"));
+                match params.pixels {
+                    Some(asked) if asked < px => {
+                        row("tolerance", format!("{px:.2} px (cap; {asked:.2} asked)"))
+                    }
+                    _ => row("tolerance", format!("{px:.2} px")),
+                }
                 if let Some(c) = s.culled_patches {
                     row("culled patches", c.to_string());
                 }

@@ -127,6 +127,9 @@ pub const DEFAULT_THRESHOLD_REL: f32 = 0.002;
 pub const DEFAULT_TOLERANCE_REL: f64 = 1e-3;
 /// The demo's default for Catmull-Clark surfaces: one pixel in the view drawn.
 pub const DEFAULT_PIXELS: f64 = 1.0;
+/// In pixels, at most this many triangles: zoomed in close, the pixels coarsen instead
+/// (the panel shows those reached), so that no view exhausts memory.
+pub const TRIANGLE_CAP: usize = 4_000_000;
 
 impl Params {
     /// The defaults for `model`.
@@ -193,7 +196,7 @@ impl Params {
                 view: *view,
                 pixels: Some(px),
                 cull: true,
-                max_triangles: None,
+                max_triangles: Some(TRIANGLE_CAP),
             })
     }
 
@@ -338,6 +341,7 @@ struct CpuOutput {
     vertices: u32,
     bound: Option<f64>,
     culled_patches: Option<u32>,
+    tolerance_px: Option<f64>,
 }
 
 /// What a run reported: counts of the drawn output, as they have arrived.
@@ -349,6 +353,9 @@ pub struct Counts {
     pub guaranteed_bound: Option<f64>,
     /// Catmull-Clark adaptive in a view: patches wholly out of view.
     pub culled_patches: Option<u32>,
+    /// Catmull-Clark adaptive in pixels: the pixels reached (coarser than asked where
+    /// the triangle cap needed it).
+    pub tolerance_px: Option<f64>,
     /// Reallocations of the drawn stage's buffers.
     pub growths: u32,
     /// The newest status says the run overflowed (nothing drawn until the rerun).
@@ -446,6 +453,7 @@ impl Tessellator {
                     vertices: if drawn { status.vertices } else { 0 },
                     guaranteed_bound: None,
                     culled_patches: None,
+                    tolerance_px: None,
                     growths: s.growths(),
                     overflowed: !drawn,
                 })
@@ -459,6 +467,7 @@ impl Tessellator {
                     vertices: if drawn { status.vertices() } else { 0 },
                     guaranteed_bound: drawn.then_some(status.max_bound() as f64),
                     culled_patches: drawn.then_some(status.state.culled_patches),
+                    tolerance_px: s.tolerance_px(),
                     growths: s.growths(),
                     overflowed: !drawn,
                 })
@@ -478,6 +487,7 @@ impl Tessellator {
                     vertices: c.vertices,
                     guaranteed_bound: c.bound,
                     culled_patches: c.culled_patches,
+                    tolerance_px: c.tolerance_px,
                     ..Counts::default()
                 })
             }
@@ -673,7 +683,7 @@ impl Tessellator {
     ) -> Result<f64, String> {
         let start = Instant::now();
         let e = |e: tessera_core::Error| e.to_string();
-        let (mesh, bound, culled_patches) = match self.model.kind() {
+        let (mesh, bound, culled_patches, tolerance_px) = match self.model.kind() {
             Kind::Bezier => {
                 self.bezier_now();
                 let Some((_, model, prepared)) = &self.bezier_at else {
@@ -687,7 +697,7 @@ impl Tessellator {
                             .mesh
                     }
                 };
-                (mesh, None, None)
+                (mesh, None, None, None)
             }
             Kind::CatmullClark => {
                 self.cc_now().map_err(e)?;
@@ -704,12 +714,13 @@ impl Tessellator {
                             None => catmull_clark::tessellate_adaptive(model, &p).map_err(e)?,
                         };
                         let culled = params.pixels.map(|_| out.culled_patches as u32);
-                        (out.mesh, Some(out.max_bound), culled)
+                        (out.mesh, Some(out.max_bound), culled, out.tolerance_px)
                     }
                     _ => (
                         catmull_clark::tessellate_uniform(model, params.segments)
                             .map_err(e)?
                             .mesh,
+                        None,
                         None,
                         None,
                     ),
@@ -723,6 +734,7 @@ impl Tessellator {
             vertices: mesh.vertices.len() as u32,
             bound,
             culled_patches,
+            tolerance_px,
         });
         self.drawn = Drawn::Cpu;
         Ok(ms)

@@ -1538,3 +1538,97 @@ fn the_view_moves_through_the_queue_and_a_view_looking_away_draws_nothing() {
     );
     gpu.check().expect("no wgpu errors");
 }
+
+#[test]
+fn a_triangle_cap_coarsens_the_pixels_as_the_cpu_reference_does() {
+    // Under a cap, `run_blocking` climbs the same ladder of √2 from the pixels asked for
+    // and stops at the same step as `tessellate_adaptive_in_view`: the same mesh and the
+    // same achieved pixels, within the cap. A frame loop gets there too, a step per
+    // status, and comes back down once the cap is lifted.
+    use tessera_core::catmull_clark::{tessellate_adaptive_in_view, ViewTolerance};
+    use tessera_tests::{view, Stand};
+    let gpu = gpu();
+    let model = tessera_tests::cc_model("opensubdiv/catmark_torus.obj");
+    let params = CcParams {
+        tolerance: Tolerance::Relative(1.0),
+        max_depth: 8,
+        first_split: FirstSplit::Search,
+        leaf_bound: Default::default(),
+    };
+    let free = ViewTolerance {
+        view: view(&model, Stand::Close),
+        pixels: Some(0.05),
+        cull: true,
+        max_triangles: None,
+    };
+    let all = tessellate_adaptive_in_view(&model, &params, &free).expect("cpu");
+    let cap = all.mesh.triangle_count() / 5;
+    eprintln!(
+        "{} triangles at 0.05 px, cap {cap}",
+        all.mesh.triangle_count()
+    );
+    let capped = ViewTolerance {
+        max_triangles: Some(cap),
+        ..free
+    };
+    let cpu = tessellate_adaptive_in_view(&model, &params, &capped).expect("cpu");
+    let achieved = cpu.tolerance_px.expect("pixels");
+    assert!(achieved > 0.05, "{achieved}");
+    let mut stage =
+        CcStage::new(&gpu.device, &gpu.queue, &kernels(&gpu), &model, &params).expect("stage");
+    let first_guess = stage.capacities().indices as usize;
+    stage.set_view(&gpu.queue, Some(&capped)).expect("view");
+    let status = stage.run_blocking(&gpu.device, &gpu.queue).expect("run");
+    assert_eq!(stage.tolerance_px(), Some(achieved));
+    assert!(
+        status.indices as usize / 3 <= cap,
+        "{} > {cap}",
+        status.indices / 3
+    );
+    let (mesh, _) = without_unused_vertices(
+        &stage
+            .read_mesh(&gpu.device, &gpu.queue, &status)
+            .expect("read"),
+    );
+    same_mesh(&mesh, &cpu.mesh, size(&model)).expect("the CPU reference's mesh");
+    assert!(
+        stage.capacities().indices as usize <= first_guess.max(2 * 3 * cap),
+        "the buffers grew past the cap: {:?}",
+        stage.capacities()
+    );
+
+    // Without the cap the same view grows them past that bound: the check can fail.
+    let mut uncapped =
+        CcStage::new(&gpu.device, &gpu.queue, &kernels(&gpu), &model, &params).expect("stage");
+    uncapped.set_view(&gpu.queue, Some(&free)).expect("view");
+    uncapped.run_blocking(&gpu.device, &gpu.queue).expect("run");
+    assert!(uncapped.capacities().indices as usize > first_guess.max(2 * 3 * cap));
+
+    // A frame loop: one prepare per frame, statuses a frame late.
+    let mut looped =
+        CcStage::new(&gpu.device, &gpu.queue, &kernels(&gpu), &model, &params).expect("stage");
+    looped.set_view(&gpu.queue, Some(&capped)).expect("view");
+    let frame = |stage: &mut CcStage| {
+        let mut encoder = gpu.device.create_command_encoder(&Default::default());
+        stage
+            .prepare(&gpu.device, &gpu.queue, &mut encoder)
+            .expect("prepare");
+        gpu.queue.submit([encoder.finish()]);
+        gpu.wait().expect("gpu");
+        stage.poll_status(&gpu.device)
+    };
+    for _ in 0..40 {
+        frame(&mut looped);
+    }
+    let last = frame(&mut looped).expect("a status");
+    assert_eq!(
+        looped.tolerance_px(),
+        Some(achieved),
+        "the loop settles where run_blocking did"
+    );
+    assert_eq!(last.indices, status.indices);
+    // The cap lifted (a new view): back to the pixels asked for.
+    looped.set_view(&gpu.queue, Some(&free)).expect("view");
+    assert_eq!(looped.tolerance_px(), Some(0.05));
+    gpu.check().expect("no wgpu errors");
+}

@@ -304,6 +304,11 @@ pub struct CcStage {
     params: CcParams,
     /// The view of the runs, as the kernels read it (all zero for none).
     view: CcView,
+    /// The view as set, and the pixels the runs use now: the ones asked for, or coarser
+    /// by powers of √2 where the view's triangle cap needs it.
+    view_set: Option<(ViewTolerance, f64)>,
+    /// The parameters changed since they were last written (the pixels, by the cap).
+    params_dirty: bool,
     topo: wgpu::Buffer,
     homes: wgpu::Buffer,
     state: wgpu::Buffer,
@@ -450,6 +455,8 @@ impl CcStage {
             point_count,
             params: *params,
             view,
+            view_set: None,
+            params_dirty: false,
             topo,
             homes,
             state,
@@ -487,15 +494,93 @@ impl CcStage {
     /// `view.pixels`, and with `view.cull` the cells wholly outside the frustum emit
     /// nothing: the mesh of
     /// [`tessellate_adaptive_in_view`](tessera_core::catmull_clark::tessellate_adaptive_in_view),
-    /// in the same dispatches. A triangle cap is the CPU reference's alone (an error
-    /// here).
+    /// in the same dispatches.
+    ///
+    /// With `view.max_triangles`, a run that needs more triangles does not grow the
+    /// buffers: the pixels are coarsened by √2 for the next run (the `prepare` after
+    /// its status arrives, or at once in [`run_blocking`](Self::run_blocking), which
+    /// starts from the pixels asked for and so gives the CPU reference's mesh), and a run
+    /// with room for twice its triangles refines them by √2 again, down to those asked
+    /// for. [`tolerance_px`](Self::tolerance_px) is what the runs use. The same view with
+    /// the same pixels and cap keeps the coarsening reached.
     pub fn set_view(&mut self, queue: &wgpu::Queue, view: Option<&ViewTolerance>) -> Result<()> {
-        self.view = match view {
-            None => CcView::default(),
-            Some(v) => gpu_view(v)?,
+        let (gpu, set) = match view {
+            None => (CcView::default(), None),
+            Some(v) => {
+                let kept = self.view_set.filter(|(old, _)| {
+                    (old.pixels, old.max_triangles) == (v.pixels, v.max_triangles)
+                });
+                let px = kept.map_or(v.pixels.unwrap_or(0.0), |(_, px)| px);
+                if v.max_triangles.is_some() && v.pixels.is_none() {
+                    return Err(tessera_core::Error::Param(
+                        "a triangle cap needs a pixel tolerance to coarsen".into(),
+                    )
+                    .into());
+                }
+                let at = ViewTolerance {
+                    pixels: v.pixels.map(|_| px),
+                    ..*v
+                };
+                (gpu_view(&at)?, Some((*v, px)))
+            }
         };
+        self.view = gpu;
+        self.view_set = set;
         self.write_params(queue);
         Ok(())
+    }
+
+    /// The pixel tolerance of the runs: the view's, or coarser where its triangle cap
+    /// needed it; `None` without a view in pixels.
+    pub fn tolerance_px(&self) -> Option<f64> {
+        self.view_set.and_then(|(v, px)| v.pixels.map(|_| px))
+    }
+
+    /// Where the view has a triangle cap: the pixels of the next run after `status`,
+    /// if they change (coarser when the run needed more than the cap, finer when it had
+    /// room for twice its triangles); an error when even the coarsest does not fit.
+    fn capped_pixels(&self, status: &CcStatus) -> Result<Option<f64>> {
+        let Some((v, px)) = self.view_set else {
+            return Ok(None);
+        };
+        let (Some(cap), Some(asked)) = (v.max_triangles, v.pixels) else {
+            return Ok(None);
+        };
+        let s = &status.state;
+        // Leaves cut at their capacity leave the triangles unknown: grow first, up to
+        // twice the cap (a leaf in view has two triangles at least; the culled ones
+        // have none, and past that many the run counts as over the cap all the same).
+        let cut = s.leaves > self.buffers.caps.leaves;
+        if cut && s.leaves as u64 <= 2 * cap as u64 {
+            return Ok(None);
+        }
+        let triangles = s.need_indices as u64 / 3;
+        if cut || triangles > cap as u64 {
+            // Past the viewport's diagonal, coarser pixels change little.
+            if px > v.view.viewport().length() {
+                return Err(tessera_core::Error::Param(format!(
+                    "at most {cap} triangles: not met even at {px:.0} pixels ({asked} asked): the patches in view need more"
+                ))
+                .into());
+            }
+            return Ok(Some(px * std::f64::consts::SQRT_2));
+        }
+        if px > asked && 2 * triangles <= cap as u64 && !status.overflowed() {
+            return Ok(Some((px / std::f64::consts::SQRT_2).max(asked)));
+        }
+        Ok(None)
+    }
+
+    /// Moves the next runs to `px` pixels (written by the next `prepare`); statuses of
+    /// earlier runs no longer count.
+    fn set_pixels(&mut self, px: f64) {
+        if let Some((v, _)) = self.view_set {
+            self.view_set = Some((v, px));
+            self.view.pixels = px as f32;
+            self.params_dirty = true;
+            self.readback.new_generation();
+            self.latest = None;
+        }
     }
 
     fn write_params(&self, queue: &wgpu::Queue) {
@@ -570,10 +655,11 @@ impl CcStage {
     pub fn prepare(
         &mut self,
         device: &wgpu::Device,
-        _queue: &wgpu::Queue,
+        queue: &wgpu::Queue,
         encoder: &mut wgpu::CommandEncoder,
     ) -> Result<()> {
         self.grow_from_readback(device, encoder)?;
+        self.write_params_if_dirty(queue);
         self.record_run(device, encoder, None, None);
         Ok(())
     }
@@ -583,11 +669,12 @@ impl CcStage {
     pub fn prepare_timed(
         &mut self,
         device: &wgpu::Device,
-        _queue: &wgpu::Queue,
+        queue: &wgpu::Queue,
         encoder: &mut wgpu::CommandEncoder,
         timestamps: RunTimestamps<'_>,
     ) -> Result<()> {
         self.grow_from_readback(device, encoder)?;
+        self.write_params_if_dirty(queue);
         self.record_run(device, encoder, None, Some(timestamps));
         Ok(())
     }
@@ -609,12 +696,27 @@ impl CcStage {
         names
     }
 
+    fn write_params_if_dirty(&mut self, queue: &wgpu::Queue) {
+        if self.params_dirty {
+            self.write_params(queue);
+            self.params_dirty = false;
+        }
+    }
+
     fn grow_from_readback(
         &mut self,
         device: &wgpu::Device,
         encoder: &mut wgpu::CommandEncoder,
     ) -> Result<()> {
         self.poll_status(device);
+        // Over the view's triangle cap (or with room to refine): other pixels, not
+        // larger buffers.
+        if let Some((status, _)) = self.latest {
+            if let Some(px) = self.capped_pixels(&status)? {
+                self.set_pixels(px);
+                return Ok(());
+            }
+        }
         if let Some((status, true)) = self.latest {
             let old = self.grow(device, &status)?;
             // The mesh drawn until a run fits the new buffers.
@@ -647,7 +749,12 @@ impl CcStage {
     /// one more run (its `prepare` grows first). False again once that `prepare` has
     /// grown, so a status that arrives late from before the growth does not ask twice.
     pub fn grow_pending(&self) -> bool {
-        matches!(self.latest, Some((_, true)))
+        match self.latest {
+            Some((_, true)) => true,
+            // The view's triangle cap asks for other pixels.
+            Some((status, false)) => matches!(self.capped_pixels(&status), Ok(Some(_)) | Err(_)),
+            None => false,
+        }
     }
 
     fn record_run(
@@ -801,6 +908,17 @@ impl CcStage {
             indices: grow(scaled(s.need_indices), old.indices),
             hash_slots: old.hash_slots,
         };
+        // Under the view's triangle cap, nothing grows past what a mesh within it needs
+        // (a run that needs more coarsens the pixels instead): polygons of `m` points
+        // make `m − 2` triangles, so at most the cap plus two per leaf.
+        if let Some(cap) = self.view_set.and_then(|(v, _)| v.max_triangles) {
+            let cap = (cap as u64 + cap as u64 / 4).min(u32::MAX as u64 / 8) as u32;
+            let bound = |grown: u32, had: u32, most: u32| grown.min(had.max(most));
+            caps.leaves = bound(caps.leaves, old.leaves, 2 * cap);
+            caps.indices = bound(caps.indices, old.indices, 3 * cap);
+            caps.poly = bound(caps.poly, old.poly, 5 * cap);
+            caps.vertices = bound(caps.vertices, old.vertices, 5 * cap);
+        }
         // The hash's items are eight per leaf, about half of them without a key, and
         // the keys distinct are fewer still: a table of eight slots per leaf keeps it
         // at most half full.
@@ -838,6 +956,14 @@ impl CcStage {
     /// Runs to completion on its own submission, growing and rerunning until everything
     /// fits. For loading, tools and tests; a renderer records [`prepare`](Self::prepare).
     pub fn run_blocking(&mut self, device: &wgpu::Device, queue: &wgpu::Queue) -> Result<CcStatus> {
+        // Under a triangle cap, from the pixels asked for: the CPU reference's ladder.
+        if let Some((v, px)) = self.view_set {
+            if let (Some(_), Some(asked)) = (v.max_triangles, v.pixels) {
+                if px != asked {
+                    self.set_pixels(asked);
+                }
+            }
+        }
         crate::stage::run_blocking(self, device, queue)
     }
 
@@ -931,7 +1057,8 @@ impl CcStage {
 
 impl GrowingStage for CcStage {
     type Status = CcStatus;
-    const MAX_GROWTHS: u32 = 8;
+    // Growths, and the triangle cap's steps of √2 up to the viewport's diagonal.
+    const MAX_GROWTHS: u32 = 40;
     fn record(
         &mut self,
         device: &wgpu::Device,
@@ -944,6 +1071,14 @@ impl GrowingStage for CcStage {
         self.read_status(device)
     }
     fn grow_to(&mut self, device: &wgpu::Device, status: &CcStatus) -> Result<bool> {
+        // Coarser pixels for a run over the view's triangle cap, never finer: the ladder
+        // climbs from the pixels asked for, as the CPU reference's does.
+        if let Some(px) = self.capped_pixels(status)? {
+            if self.tolerance_px().is_some_and(|now| px > now) {
+                self.set_pixels(px);
+                return Ok(true);
+            }
+        }
         Ok(self.grow(device, status)?.is_some())
     }
 }
@@ -1017,12 +1152,6 @@ fn tess_params(
 
 /// A view as the kernels read it: in single precision, the pixels 0 for none.
 fn gpu_view(v: &ViewTolerance) -> Result<CcView> {
-    if v.max_triangles.is_some() {
-        return Err(tessera_core::Error::Param(
-            "the GPU stage has no triangle cap: that is the CPU reference's (`tessellate_adaptive_in_view`)".into(),
-        )
-        .into());
-    }
     let pixels = match v.pixels {
         None => 0.0,
         Some(px) if px.is_finite() && px > 0.0 => px as f32,
