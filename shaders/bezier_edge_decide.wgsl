@@ -57,7 +57,7 @@ fn main(@builtin(global_invocation_id) gid: vec3u, @builtin(num_workgroups) grou
         // measures every piece itself.
         var whole = false;
         if EDGE_TEST != TEST_FLAT {
-            whole = segment_test(EDGE_TEST, ends.patch_id, params.threshold,
+            whole = segment_test(EDGE_TEST, ends.patch_id, patch_threshold(ends.patch_id),
                 lerp_uv(ends.uv0, ends.uv1, 0u), lerp_uv(ends.uv0, ends.uv1, DYADIC_SCALE));
         }
         // Depth-first over the dyadic pieces [lo, lo + width] without a stack (twin of
@@ -71,7 +71,7 @@ fn main(@builtin(global_invocation_id) gid: vec3u, @builtin(num_workgroups) grou
             let mid = lo + width / 2u;
             var split: bool;
             if EDGE_TEST == TEST_FLAT {
-                split = segment_test(EDGE_TEST, ends.patch_id, params.threshold,
+                split = segment_test(EDGE_TEST, ends.patch_id, patch_threshold(ends.patch_id),
                     lerp_uv(ends.uv0, ends.uv1, lo), lerp_uv(ends.uv0, ends.uv1, hi));
             } else {
                 split = level == 0u && whole;

@@ -7,6 +7,14 @@
 // would make every decision pay for all four.
 override EDGE_TEST: u32;
 
+// Each patch's edge-test threshold (`tessera_core::bezier::patch_thresholds`): the world
+// threshold, or scaled to a view's pixels.
+@group(0) @binding(18) var<storage, read> patch_thresholds: array<f32>;
+
+fn patch_threshold(p: u32) -> f32 {
+    return patch_thresholds[min(p, arrayLength(&patch_thresholds) - 1u)];
+}
+
 fn canonical_order(l: Lattice, a: vec2u, b: vec2u) -> array<vec2u, 2> {
     let pa = patch_coords(l, a);
     let pb = patch_coords(l, b);
@@ -18,7 +26,7 @@ fn canonical_order(l: Lattice, a: vec2u, b: vec2u) -> array<vec2u, 2> {
 
 fn lattice_edge_test(l: Lattice, a: vec2u, b: vec2u) -> bool {
     let ab = canonical_order(l, a, b);
-    return segment_test(EDGE_TEST, l.patch_id, params.threshold, lattice_uv(l, ab[0]), lattice_uv(l, ab[1]));
+    return segment_test(EDGE_TEST, l.patch_id, patch_threshold(l.patch_id), lattice_uv(l, ab[0]), lattice_uv(l, ab[1]));
 }
 
 // One segment of `interior_need` with the displacements at its ends, in canonical order.
@@ -28,7 +36,7 @@ fn segment_need(l: Lattice, pl: TrianglePlane, a: vec2u, b: vec2u, ua: vec2f, ub
     let keep = pa.x < pb.x || (pa.x == pb.x && pa.y <= pb.y);
     let d1 = MaybeF32(select(db.valid, da.valid, keep), select(db.value, da.value, keep));
     let d2 = MaybeF32(select(da.valid, db.valid, keep), select(da.value, db.value, keep));
-    return map_test_with(EDGE_TEST, params.threshold, select(ub, ua, keep), select(ua, ub, keep), d1, d2, pl, true, one_inside);
+    return map_test_with(EDGE_TEST, patch_threshold(l.patch_id), select(ub, ua, keep), select(ua, ub, keep), d1, d2, pl, true, one_inside);
 }
 
 // Whether right triangle t asks to be bisected (twin of `interior_need`). The map is

@@ -104,9 +104,21 @@ pub fn render(args: RenderArgs) -> Result<(), Error> {
         ))
         .into());
     }
-    if args.view.given() && (!cc || uniform) {
+    if args.view.given() && uniform {
         return Err(CoreError::Param(
-            "a view (--eye, --tolerance-px, ...) is for Catmull-Clark meshes with --method adaptive".into(),
+            "a view (--eye, --tolerance-px, ...) is for the adaptive methods".into(),
+        )
+        .into());
+    }
+    if !cc && args.view.given() && args.view.tolerance_px.is_none() {
+        return Err(CoreError::Param(
+            "a view of a Bézier surface sets its threshold in pixels: give --tolerance-px".into(),
+        )
+        .into());
+    }
+    if !cc && (args.view.no_cull || args.view.max_triangles.is_some()) {
+        return Err(CoreError::Param(
+            "--no-cull and --max-triangles are for Catmull-Clark meshes; a Bézier view only scales the threshold".into(),
         )
         .into());
     }
@@ -215,16 +227,34 @@ pub fn render(args: RenderArgs) -> Result<(), Error> {
         let model = crate::tessellate::load(&args.input)?;
         let prep = PreparedBezier::new(&model);
         let (lo, hi) = model.bounds();
+        // In pixels, the threshold in model units only caps them; the view drawn is the
+        // one tessellated for.
+        let view = if args.view.given() {
+            let v = crate::catmull_clark::view_tolerance(&args.view, args.size, args.up, (lo, hi))?;
+            drawn_view = Some(v.view);
+            Some(tessera_core::bezier::BezierView {
+                view: v.view,
+                pixels: v.pixels.expect("checked"),
+            })
+        } else {
+            None
+        };
+        let default_threshold = match view {
+            Some(_) => (hi - lo).length(),
+            None => 0.002 * (hi - lo).length(),
+        };
         let params = AdaptiveParams {
             test,
-            threshold: args.threshold.unwrap_or(0.002 * (hi - lo).length()),
+            threshold: args.threshold.unwrap_or(default_threshold),
             max_depth: args.max_depth.unwrap_or(6),
         };
         params.validate()?;
         let gpu = crate::gpu::open(&mut timings)?;
         let kernels = Kernels::new(&gpu.device);
         let (stage, status) = crate::gpu::run(&gpu, &mut timings, || {
-            BezierStage::new(&gpu.device, &gpu.queue, &kernels, &prep, &params)
+            let mut stage = BezierStage::new(&gpu.device, &gpu.queue, &kernels, &prep, &params)?;
+            stage.set_view(&gpu.queue, view.as_ref())?;
+            Ok(stage)
         })?;
         let counts = (status.indices / 3, status.vertices);
         (

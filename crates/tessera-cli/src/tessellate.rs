@@ -6,8 +6,8 @@ use std::time::Instant;
 use serde::Serialize;
 use tessera_core::bezier::search::{segments_for_triangles, threshold_for_triangles};
 use tessera_core::bezier::{
-    tessellate_adaptive, tessellate_uniform, AdaptiveParams, BezierModel, EdgeTest, PreparedBezier,
-    Tessellation,
+    tessellate_adaptive, tessellate_adaptive_in_view, tessellate_uniform, AdaptiveParams,
+    BezierModel, BezierView, EdgeTest, PreparedBezier, Tessellation,
 };
 use tessera_core::io::export::{commit_all, stage, stage_mesh, MeshFormat, StagedFile};
 use tessera_core::measure::{bezier_surface_samples, measure_error, ErrorStats};
@@ -46,6 +46,13 @@ struct Stats {
     #[serde(skip_serializing_if = "Option::is_none")]
     adapter: Option<String>,
     threshold: Option<f32>,
+    /// In a view: the threshold in pixels each patch's is scaled to.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    tolerance_px: Option<f64>,
+    /// In a view, with `--measure`: over the samples in the frustum, the largest
+    /// distance in pixels from a sample's projection to its nearest mesh point's.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    max_error_px: Option<f64>,
     max_depth: Option<u32>,
     segments: Option<u32>,
     target_triangles: Option<usize>,
@@ -195,9 +202,22 @@ fn tessellate(args: TessellateArgs) -> Result<(), Error> {
     if tessera_core::io::is_control_mesh(&args.input) {
         return crate::catmull_clark::tessellate(args);
     }
-    if args.view.given() || args.size.is_some() || args.up.is_some() {
+    let in_view = args.view.given() || args.size.is_some() || args.up.is_some();
+    if in_view && args.view.tolerance_px.is_none() {
         return Err(CoreError::Param(
-            "--eye, --target, --fov, --near, --size, --up, --tolerance-px and --no-cull set a view for Catmull-Clark meshes; Bézier inputs do not take one yet".into(),
+            "a view of a Bézier surface sets its threshold in pixels: give --tolerance-px".into(),
+        )
+        .into());
+    }
+    if args.view.no_cull || args.view.max_triangles.is_some() {
+        return Err(CoreError::Param(
+            "--no-cull and --max-triangles are for Catmull-Clark meshes; a Bézier view only scales the threshold".into(),
+        )
+        .into());
+    }
+    if in_view && (args.target_triangles.is_some() || args.method == Some(Method::Uniform)) {
+        return Err(CoreError::Param(
+            "--tolerance-px is for the adaptive methods, without --target-triangles".into(),
         )
         .into());
     }
@@ -269,10 +289,27 @@ fn tessellate(args: TessellateArgs) -> Result<(), Error> {
     let (lo, hi) = model.bounds();
     let diag = (hi - lo).length();
     check_measure_args(&args, measure_samples, model.patches.len())?;
-    // Parameters are checked before a device is opened.
+    // Parameters are checked before a device is opened. In pixels, the threshold in
+    // model units only caps them.
+    let view = match in_view {
+        true => {
+            let size = args.size.unwrap_or((800, 600));
+            let up = args.up.unwrap_or(crate::cli::Axis::Z);
+            let v = crate::catmull_clark::view_tolerance(&args.view, size, up, (lo, hi))?;
+            Some(BezierView {
+                view: v.view,
+                pixels: v.pixels.expect("checked"),
+            })
+        }
+        false => None,
+    };
+    let default_threshold = match view {
+        Some(_) => diag,
+        None => DEFAULT_THRESHOLD_REL * diag,
+    };
     let adaptive = test.map(|test| AdaptiveParams {
         test,
-        threshold: args.threshold.unwrap_or(DEFAULT_THRESHOLD_REL * diag),
+        threshold: args.threshold.unwrap_or(default_threshold),
         max_depth,
     });
     if let Some(a) = &adaptive {
@@ -325,7 +362,10 @@ fn tessellate(args: TessellateArgs) -> Result<(), Error> {
             }
             let kernels = tessera_wgpu::Kernels::new(&gpu.device);
             let (stage, status) = crate::gpu::run(gpu, &mut gpu_timings, || {
-                BezierStage::new(&gpu.device, &gpu.queue, &kernels, &prep, &params)
+                let mut stage =
+                    BezierStage::new(&gpu.device, &gpu.queue, &kernels, &prep, &params)?;
+                stage.set_view(&gpu.queue, view.as_ref())?;
+                Ok(stage)
             })?;
             let t = Instant::now();
             let mesh = stage.read_mesh(&gpu.device, &gpu.queue, &status)?;
@@ -352,7 +392,10 @@ fn tessellate(args: TessellateArgs) -> Result<(), Error> {
                     (r.tessellation, Some(r.threshold), None)
                 }
                 None => (
-                    tessellate_adaptive(&prep, &base)?,
+                    match &view {
+                        Some(v) => tessellate_adaptive_in_view(&prep, &base, v)?,
+                        None => tessellate_adaptive(&prep, &base)?,
+                    },
                     Some(base.threshold),
                     None,
                 ),
@@ -395,7 +438,7 @@ fn tessellate(args: TessellateArgs) -> Result<(), Error> {
     };
     timings.gpu = gpu.as_ref().map(|_| gpu_timings);
 
-    let (error, staged_mesh, _) = measure_and_write(
+    let (error, staged_mesh, samples) = measure_and_write(
         &out.mesh,
         args.measure,
         || bezier_surface_samples(&model, measure_samples),
@@ -403,6 +446,13 @@ fn tessellate(args: TessellateArgs) -> Result<(), Error> {
         args.output.as_deref(),
         &mut timings,
     )?;
+    // Measured, not guaranteed: the Bézier tests are heuristics.
+    let max_error_px = match &view {
+        Some(v) if args.measure => {
+            tessera_core::measure::max_error_px(&samples, &out.mesh, &v.view)
+        }
+        _ => None,
+    };
     timings.total = ms(t_total);
 
     let upload = match test {
@@ -419,6 +469,8 @@ fn tessellate(args: TessellateArgs) -> Result<(), Error> {
         backend: if gpu.is_some() { "gpu" } else { "cpu" },
         adapter,
         threshold,
+        tolerance_px: view.map(|v| v.pixels),
+        max_error_px,
         max_depth: test.map(|_| max_depth),
         segments,
         target_triangles: args.target_triangles,

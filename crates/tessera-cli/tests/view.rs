@@ -148,7 +148,21 @@ fn views_refuse_what_they_do_not_take_yet_with_one_line() {
             ],
             "--method adaptive",
         ),
-        (vec!["tessellate", &teapot, "--tolerance-px", "1"], "Bézier"),
+        (
+            vec![
+                "tessellate",
+                &teapot,
+                "--eye",
+                "9,-12,5",
+                "--target",
+                "0,0,1",
+            ],
+            "give --tolerance-px",
+        ),
+        (
+            vec!["tessellate", &teapot, "--tolerance-px", "1", "--no-cull"],
+            "Catmull-Clark",
+        ),
         (vec!["tessellate", &torus, "--tolerance-px=-1"], "positive"),
         (
             vec!["tessellate", &torus, "--eye", "-1,2", "--target", "0,0,0"],
@@ -268,4 +282,38 @@ fn max_triangles_coarsens_the_pixels_and_reports_what_it_achieved() {
     for key in ["triangles", "achieved_tolerance_px"] {
         assert_eq!(on_gpu[key], capped[key], "{key}");
     }
+}
+
+#[test]
+fn a_bezier_view_scales_the_threshold_on_either_backend() {
+    // The teapot from close by: the threshold in pixels of that view, each patch's scaled
+    // from its control points. Both backends give the same triangles, coarser pixels give
+    // fewer, and the stats carry the pixels and the measured pixel error.
+    let teapot = asset("teaset/teapot");
+    let view = [
+        "--eye", "4,-6,3", "--target", "0,0,1.5", "--size", "320x240",
+    ];
+    let run = |px: &str, backend: &str, name: &str| {
+        let mut args = vec![
+            "tessellate",
+            &teapot,
+            "--tolerance-px",
+            px,
+            "--backend",
+            backend,
+            "--measure",
+        ];
+        args.extend(view);
+        stats_of(&args, name)
+    };
+    let cpu = run("1", "cpu", "bezier_cpu.json");
+    let gpu = run("1", "gpu", "bezier_gpu.json");
+    assert_eq!(cpu["triangles"], gpu["triangles"]);
+    assert_eq!(cpu["tolerance_px"], 1.0);
+    assert!(cpu["max_error_px"].as_f64().is_some(), "{cpu}");
+    let coarse = run("4", "cpu", "bezier_coarse.json");
+    assert!(
+        coarse["triangles"].as_u64() < cpu["triangles"].as_u64(),
+        "{coarse} against {cpu}"
+    );
 }

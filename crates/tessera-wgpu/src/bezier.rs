@@ -46,8 +46,11 @@
 
 use std::sync::{Arc, OnceLock};
 
+use glam::Vec3;
 use tessera_core::bezier::lattice::{inv_lattice, Lattice};
-use tessera_core::bezier::{AdaptiveParams, EdgeTest, PreparedBezier};
+use tessera_core::bezier::{
+    patch_thresholds, AdaptiveParams, BezierView, EdgeTest, PreparedBezier,
+};
 use tessera_core::gpu_types::{
     tally, BezierParams, BezierStatus, MapAtlas, MapHalves, NetTexture, OutVertex, TopologyTexture,
     VertexRecord, EDGE_BIT_WORDS, MAP_CELLS, MAX_DEPTH_LIMIT,
@@ -94,6 +97,7 @@ mod slot {
     pub const TALLY: u32 = 14;
     pub const MAP_HALVES: u32 = 16;
     pub const MAP_ATLAS_STORE: u32 = 17;
+    pub const THRESHOLDS: u32 = 18;
 }
 
 /// The compiled Bézier kernels of one device (part of [`Kernels`]). The kernels that run
@@ -259,6 +263,7 @@ impl BindGroups {
             (DRAW_ARGS, b.output.indirect()),
             (STATUS, &b.status),
             (TALLY, &b.tally),
+            (THRESHOLDS, &b.thresholds),
         ];
         let textures = [
             (NETS, &b.nets),
@@ -297,6 +302,10 @@ pub struct BezierStage {
     growths: u32,
     prepared_layout: tessera_core::bezier::prepare::CoarseLayout,
     params: AdaptiveParams,
+    /// The control points, which the view's thresholds are scaled from.
+    control_points: Vec<[Vec3; 16]>,
+    /// The view the thresholds are in, if any.
+    view: Option<BezierView>,
     buffers: Buffers,
     pipelines: BezierKernels,
     /// The test-specific kernels of `params.test`.
@@ -325,6 +334,8 @@ struct Buffers {
     /// Atomic counters, zeroed each run: the flat test's evaluations, the emit order's
     /// buckets and the mark kernel's list length ([`tally`]).
     tally: wgpu::Buffer,
+    /// Each patch's edge-test threshold ([`tessera_core::bezier::patch_thresholds`]).
+    thresholds: wgpu::Buffer,
     output: MeshBuffers,
 }
 
@@ -623,6 +634,12 @@ impl BezierStage {
             status,
             map_halves,
             tally: storage(device, "tessera tally", 4 * tally::WORDS as u64),
+            thresholds: device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("tessera bezier thresholds"),
+                size: 4 * l.patches.max(1) as u64,
+                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            }),
             output,
         };
         let mut stage = BezierStage {
@@ -637,13 +654,45 @@ impl BezierStage {
             ),
             prepared_layout: l,
             params: *params,
+            control_points: (0..l.patches).map(|p| prepared.control_points(p)).collect(),
+            view: None,
             bind_groups: BindGroups::new(device, &pipelines.0, &test_kernels, &buffers),
             test_kernels,
             buffers,
             pipelines,
         };
         stage.write_params(queue);
+        stage.write_thresholds(queue)?;
         Ok(stage)
+    }
+
+    /// The view of the next runs, or `None`: each patch's threshold becomes the smaller
+    /// of the world threshold and the view's pixels over the pixels per model unit of the
+    /// box of its control points ([`tessera_core::bezier::patch_thresholds`]), written
+    /// through `queue` (four bytes per patch). The paper's heuristic scaled by distance,
+    /// not a guarantee in pixels; crack-free as without a view.
+    pub fn set_view(&mut self, queue: &wgpu::Queue, view: Option<&BezierView>) -> Result<()> {
+        let old = self.view;
+        self.view = view.copied();
+        if let Err(e) = self.write_thresholds(queue) {
+            self.view = old;
+            return Err(e);
+        }
+        Ok(())
+    }
+
+    fn write_thresholds(&mut self, queue: &wgpu::Queue) -> Result<()> {
+        let thresholds = patch_thresholds(
+            &self.control_points,
+            self.params.threshold,
+            self.view.as_ref(),
+        )?;
+        queue.write_buffer(
+            &self.buffers.thresholds,
+            0,
+            bytemuck::cast_slice(&thresholds),
+        );
+        Ok(())
     }
 
     /// Changes the test, threshold or depth, written through `queue`; takes effect at the
@@ -674,7 +723,7 @@ impl BezierStage {
             self.rebind(device);
         }
         self.write_params(queue);
-        Ok(())
+        self.write_thresholds(queue)
     }
 
     /// New control nets and maps for the same patches (animation): the CPU prepares the
@@ -724,7 +773,10 @@ impl BezierStage {
         );
         self.map_scale = prepared.map_scale;
         self.write_params(queue);
-        Ok(())
+        // A view's thresholds follow the moved control points.
+        let l = self.prepared_layout;
+        self.control_points = (0..l.patches).map(|p| prepared.control_points(p)).collect();
+        self.write_thresholds(queue)
     }
 
     /// The test, threshold and depth of the next runs.

@@ -778,3 +778,117 @@ fn a_loop_that_tessellates_on_change_reruns_once_after_an_overflow() {
     assert_eq!(got.triangle_count(), want.triangle_count());
     gpu.check().expect("no wgpu validation errors");
 }
+
+#[test]
+fn in_a_view_the_thresholds_follow_the_distance_crack_free_and_as_on_the_cpu() {
+    // Each patch's threshold in pixels of a close view of the teapot, scaled from its
+    // control points' box: the GPU gives the CPU reference's mesh, the mesh stays
+    // watertight, the near patches get more triangles than at the far patches'
+    // threshold everywhere and fewer than at the near ones', and the thresholds move
+    // with the view.
+    use tessera_core::bezier::{patch_thresholds, tessellate_adaptive_in_view, BezierView};
+    use tessera_core::watertight::{bezier_open_boundary, check_watertight};
+    use tessera_core::View;
+    let gpu = gpu();
+    let model = load("teapot");
+    let prep = PreparedBezier::new(&model);
+    let (lo, hi) = model.bounds();
+    let diag = (hi - lo).length() as f64;
+    let centre = ((lo + hi) / 2.0).as_dvec3();
+    let close = View::look_at(
+        centre + glam::DVec3::new(0.35, -0.6, 0.25) * diag,
+        centre,
+        glam::DVec3::Z,
+        40f64.to_radians(),
+        (640, 480),
+        0.01 * diag,
+    )
+    .expect("view");
+    let view = BezierView {
+        view: close,
+        pixels: 1.0,
+    };
+    for test in [EdgeTest::Map4p, EdgeTest::Flat] {
+        let params = AdaptiveParams {
+            test,
+            threshold: 0.05 * diag as f32,
+            max_depth: 6,
+        };
+        let cpu = tessellate_adaptive_in_view(&prep, &params, &view).expect("cpu");
+        let mut stage = BezierStage::new(
+            &gpu.device,
+            &gpu.queue,
+            &Kernels::new(&gpu.device),
+            &prep,
+            &params,
+        )
+        .expect("stage");
+        stage.set_view(&gpu.queue, Some(&view)).expect("view");
+        let status = stage.run_blocking(&gpu.device, &gpu.queue).expect("run");
+        let mesh = stage
+            .read_mesh(&gpu.device, &gpu.queue, &status)
+            .expect("mesh");
+        assert_eq!(mesh.indices, cpu.mesh.indices, "{}: topology", test.name());
+        let positions: Vec<Vec3> = mesh.positions().collect();
+        let report = check_watertight(
+            &positions,
+            &mesh.indices,
+            &bezier_open_boundary(&model, 4096),
+            1e-6 * diag,
+        );
+        assert!(report.is_watertight(), "{}: {report:?}", test.name());
+        // Between the one threshold of its farthest patch and that of its nearest.
+        let cps: Vec<_> = (0..prep.layout.patches)
+            .map(|p| prep.control_points(p))
+            .collect();
+        let th = patch_thresholds(&cps, params.threshold, Some(&view)).expect("thresholds");
+        let (near, far) = th
+            .iter()
+            .fold((f32::INFINITY, 0f32), |(a, b), &t| (a.min(t), b.max(t)));
+        assert!(far > 2.0 * near, "{near} {far}");
+        let at = |threshold| {
+            tessellate_adaptive(
+                &prep,
+                &AdaptiveParams {
+                    threshold,
+                    ..params
+                },
+            )
+            .expect("cpu")
+            .mesh
+            .triangle_count()
+        };
+        let n = mesh.triangle_count();
+        eprintln!(
+            "{}: {n} triangles in the view, {} at its far threshold, {} at its near one",
+            test.name(),
+            at(far),
+            at(near)
+        );
+        assert!(at(far) < n && n < at(near), "{}", test.name());
+    }
+    // Without the view the world threshold's mesh comes back.
+    let params = AdaptiveParams {
+        test: EdgeTest::Map4p,
+        threshold: 0.05 * diag as f32,
+        max_depth: 6,
+    };
+    let (world, _) = gpu_and_cpu_meshes(&gpu, &prep, &params);
+    let mut stage = BezierStage::new(
+        &gpu.device,
+        &gpu.queue,
+        &Kernels::new(&gpu.device),
+        &prep,
+        &params,
+    )
+    .expect("stage");
+    stage.set_view(&gpu.queue, Some(&view)).expect("view");
+    stage.run_blocking(&gpu.device, &gpu.queue).expect("run");
+    stage.set_view(&gpu.queue, None).expect("no view");
+    let status = stage.run_blocking(&gpu.device, &gpu.queue).expect("run");
+    let back = stage
+        .read_mesh(&gpu.device, &gpu.queue, &status)
+        .expect("mesh");
+    assert_eq!(back.indices, world.indices);
+    gpu.check().expect("no wgpu validation errors");
+}

@@ -22,7 +22,10 @@ pub use edge_tests::EdgeTest;
 pub use model::BezierModel;
 pub use patch::BezierPatch;
 pub use prepare::PreparedBezier;
-pub use tessellate::{tessellate_adaptive, AdaptiveParams, Tessellation};
+pub use tessellate::{
+    patch_thresholds, tessellate_adaptive, tessellate_adaptive_in_view, AdaptiveParams, BezierView,
+    Tessellation,
+};
 pub use uniform::tessellate_uniform;
 
 #[cfg(test)]

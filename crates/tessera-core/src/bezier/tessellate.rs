@@ -12,7 +12,7 @@
 //! | [`coarse_vertex_records`](PreparedBezier::coarse_vertex_records) (uploaded), [`edge_emit`], [`tri_emit`], [`tri_emit_plain`] | `bezier_*_emit*.wgsl` | edge / triangle (in the emit order) |
 //! | [`vertex_eval`] | `bezier_vertex_eval.wgsl` | output vertex |
 
-use glam::Vec3;
+use glam::{DVec3, Vec3};
 
 use bytemuck::Zeroable;
 
@@ -32,6 +32,7 @@ use crate::error::{Error, Result};
 use crate::gpu_types::{tally, OutVertex, VertexRecord, EDGE_BIT_WORDS, MAX_DEPTH_LIMIT};
 use crate::mesh::Mesh;
 pub use crate::scan::exclusive_scan;
+use crate::view::View;
 
 /// Parameters of the adaptive (map or flat) tessellator.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -76,6 +77,65 @@ pub struct Tessellation {
     pub evaluations: u64,
 }
 
+/// A view for the Bézier path: each patch's edge-test threshold in `pixels` of it
+/// ([`patch_thresholds`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BezierView {
+    /// The camera, with the model's placement ([`View::with_model`]).
+    pub view: View,
+    /// The threshold in pixels.
+    pub pixels: f64,
+}
+
+/// Each patch's edge-test threshold, model units: `world`, or in `view` the smaller of
+/// it and the view's pixels over the pixels per model unit of the box of the patch's
+/// control points ([`View::gain`]; the patch lies in their hull). Known before any
+/// evaluation and one per patch, so both stages and both triangles beside an edge use
+/// the same, and the mesh stays crack-free. The paper's heuristic scaled by distance, not
+/// a guarantee in pixels.
+pub fn patch_thresholds(
+    cps: &[[Vec3; 16]],
+    world: f32,
+    view: Option<&BezierView>,
+) -> Result<Vec<f32>> {
+    let Some(v) = view else {
+        return Ok(vec![world; cps.len()]);
+    };
+    if !(v.pixels.is_finite() && v.pixels > 0.0) {
+        return Err(Error::Param(format!(
+            "pixel threshold must be a positive number, got {}",
+            v.pixels
+        )));
+    }
+    Ok(cps
+        .iter()
+        .map(|net| {
+            let lo = net.iter().fold(DVec3::INFINITY, |a, p| a.min(p.as_dvec3()));
+            let hi = net
+                .iter()
+                .fold(DVec3::NEG_INFINITY, |a, p| a.max(p.as_dvec3()));
+            let th = v.pixels / v.view.gain(lo, hi, 0.0);
+            // A positive single-precision number at least.
+            (th.min(world as f64) as f32).max(f32::MIN_POSITIVE)
+        })
+        .collect())
+}
+
+/// Inputs of the tests on patch `p`, with its threshold from `thresholds` (one per
+/// patch, [`patch_thresholds`]).
+pub fn test_inputs_at<'a>(
+    prep: &'a PreparedBezier,
+    cps: &'a [[Vec3; 16]],
+    params: &AdaptiveParams,
+    thresholds: &[f32],
+    p: u32,
+) -> TestInputs<'a> {
+    TestInputs {
+        threshold: thresholds[p as usize],
+        ..test_inputs(prep, cps, params, p)
+    }
+}
+
 /// Inputs of the tests on patch `p`.
 pub fn test_inputs<'a>(
     prep: &'a PreparedBezier,
@@ -105,6 +165,18 @@ pub fn edge_decide(
     params: &AdaptiveParams,
     e: u32,
 ) -> (EdgeBits, u32) {
+    let world = vec![params.threshold; cps.len()];
+    edge_decide_at(prep, cps, params, &world, e)
+}
+
+/// [`edge_decide`] with each patch's threshold from `thresholds`.
+pub fn edge_decide_at(
+    prep: &PreparedBezier,
+    cps: &[[Vec3; 16]],
+    params: &AdaptiveParams,
+    thresholds: &[f32],
+    e: u32,
+) -> (EdgeBits, u32) {
     if edge_collapsed(prep, e) {
         return ([0; EDGE_BIT_WORDS], 0);
     }
@@ -114,7 +186,12 @@ pub fn edge_decide(
         .iter()
         .map(|&(t, k, fwd)| {
             let l = Lattice::new(t, params.max_depth);
-            (l, test_inputs(prep, cps, params, l.patch), k, fwd)
+            (
+                l,
+                test_inputs_at(prep, cps, params, thresholds, l.patch),
+                k,
+                fwd,
+            )
         })
         .collect();
     let own_test_levels = if params.test == EdgeTest::Flat {
@@ -122,7 +199,7 @@ pub fn edge_decide(
     } else {
         1
     };
-    let owner = test_inputs(prep, cps, params, p);
+    let owner = test_inputs_at(prep, cps, params, thresholds, p);
     subdivide_segment_with(&owner, uv0, uv1, own_test_levels, |lo, hi| {
         let mut evals = 0;
         for (l, inputs, k, fwd) in &lattices {
@@ -154,6 +231,24 @@ pub fn tri_context<'a>(
 ) -> TriContext<'a> {
     let p = t / crate::gpu_types::COARSE_TRIANGLES_PER_PATCH as u32;
     TriContext::new(prep, test_inputs(prep, cps, params, p), bits, t)
+}
+
+/// [`tri_context`] with each patch's threshold from `thresholds`.
+pub fn tri_context_at<'a>(
+    prep: &'a PreparedBezier,
+    cps: &'a [[Vec3; 16]],
+    bits: &'a [EdgeBits],
+    params: &AdaptiveParams,
+    thresholds: &[f32],
+    t: u32,
+) -> TriContext<'a> {
+    let p = t / crate::gpu_types::COARSE_TRIANGLES_PER_PATCH as u32;
+    TriContext::new(
+        prep,
+        test_inputs_at(prep, cps, params, thresholds, p),
+        bits,
+        t,
+    )
 }
 
 struct CountSink(u32);
@@ -403,6 +498,16 @@ pub fn tessellate_adaptive(prep: &PreparedBezier, params: &AdaptiveParams) -> Re
     tessellate_adaptive_timed(prep, params).map(|(t, _)| t)
 }
 
+/// [`tessellate_adaptive`] in a view: each patch's threshold scaled to the view's pixels
+/// ([`patch_thresholds`]), capped by `params.threshold`.
+pub fn tessellate_adaptive_in_view(
+    prep: &PreparedBezier,
+    params: &AdaptiveParams,
+    view: &BezierView,
+) -> Result<Tessellation> {
+    run_adaptive(prep, params, Some(view)).map(|(t, _)| t)
+}
+
 /// Wall time of each stage of a CPU run (ms), to set beside the kernels' own times.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct StageTimes {
@@ -421,18 +526,27 @@ pub fn tessellate_adaptive_timed(
     prep: &PreparedBezier,
     params: &AdaptiveParams,
 ) -> Result<(Tessellation, StageTimes)> {
+    run_adaptive(prep, params, None)
+}
+
+fn run_adaptive(
+    prep: &PreparedBezier,
+    params: &AdaptiveParams,
+    view: Option<&BezierView>,
+) -> Result<(Tessellation, StageTimes)> {
     params.validate()?;
     let mut times = StageTimes::default();
     let ms = |t: std::time::Instant| t.elapsed().as_secs_f64() * 1e3;
     let start = std::time::Instant::now();
     let l = prep.layout;
     let cps: Vec<[Vec3; 16]> = (0..l.patches).map(|p| prep.control_points(p)).collect();
+    let thresholds = patch_thresholds(&cps, params.threshold, view)?;
     let mut evaluations = 0u64;
 
     // 1. Edge decisions.
     let mut bits = Vec::with_capacity(l.coarse_edges as usize);
     for e in 0..l.coarse_edges {
-        let (b, ev) = edge_decide(prep, &cps, params, e);
+        let (b, ev) = edge_decide_at(prep, &cps, params, &thresholds, e);
         evaluations += ev as u64;
         bits.push(b);
     }
@@ -448,7 +562,7 @@ pub fn tessellate_adaptive_timed(
     let mut buckets = Vec::with_capacity(l.coarse_triangles as usize);
     let mut plain = Vec::with_capacity(l.coarse_triangles as usize);
     for t in 0..l.coarse_triangles {
-        let ctx = tri_context(prep, &cps, &bits, params, t);
+        let ctx = tri_context_at(prep, &cps, &bits, params, &thresholds, t);
         let mut s = TriScratch::new(params.max_depth);
         // The root kernel's triangles, then the mark kernel's.
         let known = root_known_leaf(&ctx)
@@ -490,7 +604,7 @@ pub fn tessellate_adaptive_timed(
     }
     let mut indices = vec![0u32; 3 * triangles as usize];
     for t in order {
-        let ctx = tri_context(prep, &cps, &bits, params, t);
+        let ctx = tri_context_at(prep, &cps, &bits, params, &thresholds, t);
         if plain[t as usize] {
             tri_emit_plain(&ctx, 3 * tri_offsets[t as usize], &mut indices);
             continue;
@@ -522,6 +636,50 @@ pub fn tessellate_adaptive_timed(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_patchs_threshold_grows_with_its_distance_and_the_world_one_caps_it() {
+        // Two unit patches in a plane facing the eye, one twice as far as the other.
+        let net = |depth: f32| -> [Vec3; 16] {
+            std::array::from_fn(|k| Vec3::new((k % 4) as f32 / 3.0, (k / 4) as f32 / 3.0, -depth))
+        };
+        let cps = [net(5.0), net(10.0)];
+        let view = BezierView {
+            view: View::look_at(
+                DVec3::ZERO,
+                DVec3::new(0.0, 0.0, -1.0),
+                DVec3::Y,
+                40f64.to_radians(),
+                (800, 600),
+                0.1,
+            )
+            .expect("view"),
+            pixels: 1.0,
+        };
+        let th = patch_thresholds(&cps, 1.0, Some(&view)).expect("thresholds");
+        assert!(
+            th[0] > 0.0 && th[1] > 1.8 * th[0] && th[1] < 2.5 * th[0],
+            "{th:?}"
+        );
+        // At most a pixel's width at the near patch's depth (the gain counts the
+        // off-axis stretch too), and not much less.
+        let pixel = 5.0 / (300.0 / (20f64.to_radians()).tan());
+        assert!(
+            th[0] as f64 <= pixel && th[0] as f64 > 0.7 * pixel,
+            "{th:?} {pixel}"
+        );
+        let capped = patch_thresholds(&cps, 0.5 * th[1], Some(&view)).expect("thresholds");
+        assert_eq!(capped, vec![th[0], 0.5 * th[1]]);
+        assert_eq!(
+            patch_thresholds(&cps, 0.3, None).expect("world"),
+            vec![0.3, 0.3]
+        );
+        let bad = BezierView {
+            pixels: 0.0,
+            ..view
+        };
+        assert!(patch_thresholds(&cps, 1.0, Some(&bad)).is_err());
+    }
 
     #[test]
     fn emit_order_puts_the_heaviest_first_the_plain_last_and_keeps_index_order_within_a_bucket() {
