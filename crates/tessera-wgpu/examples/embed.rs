@@ -17,7 +17,7 @@ use tessera_wgpu::bezier::BezierStage;
 use tessera_wgpu::catmull_clark::CcStage;
 use tessera_wgpu::glam::{Mat4, Vec3};
 use tessera_wgpu::tessera_core::bezier::{AdaptiveParams, BezierModel, EdgeTest, PreparedBezier};
-use tessera_wgpu::tessera_core::catmull_clark::{load_surface, CcParams};
+use tessera_wgpu::tessera_core::catmull_clark::{load_surface, CcParams, ViewTolerance};
 use tessera_wgpu::tessera_core::{io::load_control_mesh, Tolerance};
 use tessera_wgpu::{wgpu, Kernels, MeshBuffers, View};
 
@@ -129,8 +129,9 @@ pub fn run(assets: &Path, frames: u32) -> Result<tessera_wgpu::image::RgbaImage,
 
     // The renderer's own pipeline and targets.
     let renderer = Renderer::new(&device);
-    let teapot_view = view(&teapot.bounds(), Vec3::Z);
-    let torus_view = view(&bounds(&rest), Vec3::Z);
+    let teapot_view = view(&teapot.bounds(), Vec3::Z).clip_matrix().as_mat4();
+    let torus_camera = view(&bounds(&rest), Vec3::Z);
+    let torus_view = torus_camera.clip_matrix().as_mat4();
 
     for frame in 0..frames {
         // A breathing torus: only its control points go up.
@@ -140,6 +141,18 @@ pub fn run(assets: &Path, frames: u32) -> Result<tessera_wgpu::image::RgbaImage,
             .map(|p| *p * (1.0 + 0.15 * (t + 2.0 * p.z).sin()))
             .collect();
         cc.update_points(&queue, &moved)?;
+        // The camera of this frame: detail within a pixel of it, at most 2e-3 of the
+        // model's size, patches out of view culled (a camera that moves writes its view
+        // the same way).
+        cc.set_view(
+            &queue,
+            Some(&ViewTolerance {
+                view: torus_camera,
+                pixels: Some(1.0),
+                cull: true,
+                max_triangles: Some(500_000),
+            }),
+        )?;
 
         let mut encoder = device.create_command_encoder(&Default::default());
         // The teapot is still: tessellated once, drawn every frame.
@@ -168,13 +181,11 @@ pub fn run(assets: &Path, frames: u32) -> Result<tessera_wgpu::image::RgbaImage,
     Ok(image)
 }
 
-/// View-projection of a camera framing `bounds` in one half of the frame.
-fn view(bounds: &(Vec3, Vec3), up: Vec3) -> Mat4 {
+/// A camera framing `bounds` in one half of the frame.
+fn view(bounds: &(Vec3, Vec3), up: Vec3) -> View {
     let half = (SIZE.0 / 2, SIZE.1);
     let (lo, hi) = (bounds.0.as_dvec3(), bounds.1.as_dvec3());
     View::framing_along(lo, hi, half, View::FRAMING_DIRECTION, up.as_dvec3())
-        .clip_matrix()
-        .as_mat4()
 }
 
 fn bounds(points: &[Vec3]) -> (Vec3, Vec3) {
