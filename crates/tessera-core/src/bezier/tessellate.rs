@@ -121,17 +121,16 @@ pub fn patch_thresholds(
         .collect())
 }
 
-/// Inputs of the tests on patch `p`, with its threshold from `thresholds` (one per
-/// patch, [`patch_thresholds`]).
+/// Inputs of the tests on patch `p`, with its own `threshold` ([`patch_thresholds`]).
 pub fn test_inputs_at<'a>(
     prep: &'a PreparedBezier,
     cps: &'a [[Vec3; 16]],
     params: &AdaptiveParams,
-    thresholds: &[f32],
+    threshold: f32,
     p: u32,
 ) -> TestInputs<'a> {
     TestInputs {
-        threshold: thresholds[p as usize],
+        threshold,
         ..test_inputs(prep, cps, params, p)
     }
 }
@@ -165,8 +164,7 @@ pub fn edge_decide(
     params: &AdaptiveParams,
     e: u32,
 ) -> (EdgeBits, u32) {
-    let world = vec![params.threshold; cps.len()];
-    edge_decide_at(prep, cps, params, &world, e)
+    edge_decide_by(prep, cps, params, |_| params.threshold, e)
 }
 
 /// [`edge_decide`] with each patch's threshold from `thresholds`.
@@ -175,6 +173,16 @@ pub fn edge_decide_at(
     cps: &[[Vec3; 16]],
     params: &AdaptiveParams,
     thresholds: &[f32],
+    e: u32,
+) -> (EdgeBits, u32) {
+    edge_decide_by(prep, cps, params, |p| thresholds[p as usize], e)
+}
+
+fn edge_decide_by(
+    prep: &PreparedBezier,
+    cps: &[[Vec3; 16]],
+    params: &AdaptiveParams,
+    threshold_of: impl Fn(u32) -> f32,
     e: u32,
 ) -> (EdgeBits, u32) {
     if edge_collapsed(prep, e) {
@@ -188,7 +196,7 @@ pub fn edge_decide_at(
             let l = Lattice::new(t, params.max_depth);
             (
                 l,
-                test_inputs_at(prep, cps, params, thresholds, l.patch),
+                test_inputs_at(prep, cps, params, threshold_of(l.patch), l.patch),
                 k,
                 fwd,
             )
@@ -199,7 +207,7 @@ pub fn edge_decide_at(
     } else {
         1
     };
-    let owner = test_inputs_at(prep, cps, params, thresholds, p);
+    let owner = test_inputs_at(prep, cps, params, threshold_of(p), p);
     subdivide_segment_with(&owner, uv0, uv1, own_test_levels, |lo, hi| {
         let mut evals = 0;
         for (l, inputs, k, fwd) in &lattices {
@@ -245,7 +253,7 @@ pub fn tri_context_at<'a>(
     let p = t / crate::gpu_types::COARSE_TRIANGLES_PER_PATCH as u32;
     TriContext::new(
         prep,
-        test_inputs_at(prep, cps, params, thresholds, p),
+        test_inputs_at(prep, cps, params, thresholds[p as usize], p),
         bits,
         t,
     )
