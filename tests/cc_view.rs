@@ -27,6 +27,7 @@ fn run(model: &SurfaceModel, view: View, pixels: Option<f64>, cull: bool) -> CcT
         view,
         pixels,
         cull,
+        cull_backfaces: false,
         max_triangles: None,
     };
     tessellate_adaptive_in_view(model, &params(), &vt).unwrap()
@@ -176,6 +177,7 @@ fn a_triangle_cap_coarsens_the_pixels_until_the_mesh_fits() {
             view: v,
             pixels: Some(0.5),
             cull: true,
+            cull_backfaces: false,
             max_triangles: Some(cap),
         },
     )
@@ -197,6 +199,7 @@ fn a_triangle_cap_coarsens_the_pixels_until_the_mesh_fits() {
         view: v,
         pixels: Some(0.5),
         cull: true,
+        cull_backfaces: false,
         max_triangles: Some(free.mesh.triangle_count()),
     };
     let same = tessellate_adaptive_in_view(&model, &params(), &roomy).unwrap();

@@ -122,6 +122,7 @@ pub fn run(assets: &Path, out_dir: &Path, quick: bool) {
                     view,
                     pixels: Some(pixels),
                     cull: true,
+                    cull_backfaces: false,
                     max_triangles: None,
                 },
                 repeats,
@@ -278,6 +279,7 @@ fn cpu_in_view(
         view,
         pixels,
         cull: true,
+        cull_backfaces: false,
         max_triangles: None,
     };
     median_time(repeats, || {
@@ -375,6 +377,7 @@ fn camera_motion(
         view: *v,
         pixels: Some(PIXELS),
         cull: true,
+        cull_backfaces: false,
         max_triangles: None,
     };
     let mut stage = CcStage::new(&gpu.device, &gpu.queue, kernels, model, &params).expect("stage");
@@ -522,6 +525,7 @@ fn scene(gpu: &Gpu, kernels: &Kernels, assets: &Path) -> Scene {
             view,
             pixels: Some(PIXELS),
             cull: true,
+            cull_backfaces: false,
             max_triangles: None,
         },
         repeats,

@@ -239,6 +239,37 @@ impl View {
             || outside(&|c| c.w - c.z)
     }
 
+    /// The facing field `f(X)`: a small piece of surface at `X` with normal `n = a × b`
+    /// (tangents `a`, `b` in the triangles' winding) turns counter-clockwise on screen,
+    /// front-facing as wgpu's default `FrontFace::Ccw`, where `w · f(X)·n > 0`.
+    ///
+    /// With `r_x`, `r_y`, `r_w` the linear parts of the clip rows and `c = (x, y, w)` the
+    /// point's clip coordinates, the screen image of the tangents has determinant
+    /// `det[c, A a, A b] / w³` (expand `d(x/w)` and `d(y/w)`), and
+    /// `det[c, A a, A b] = c · (A a × A b) = (adj(A) c) · (a × b)`. So
+    /// `f(X) = x (r_y × r_w) + y (r_w × r_x) + w (r_x × r_y)`: affine in `X`, orthographic
+    /// projections (`r_w = 0`) included. For a usual perspective it is a negative multiple
+    /// of `X − eye`.
+    pub fn facing(&self, x: DVec3) -> DVec3 {
+        let [r_x, r_y, r_w] = [0, 1, 3].map(|r| self.clip.row(r).truncate());
+        let c = self.clip_of(x);
+        c.x * r_y.cross(r_w) + c.y * r_w.cross(r_x) + c.w * r_x.cross(r_y)
+    }
+
+    /// Whether every surface of the box `[lo, hi]` whose normals lie in the cone spanned
+    /// by `normals` faces away from the eye: `f(X)·n < 0` for every point `X` of the box
+    /// and every normal `n` of the cone ([`facing`](Self::facing)). The product is affine
+    /// in `X` and linear in `n`, so the box's eight corners and the cone's generators
+    /// decide it. Where `w ≤ 0` nothing is drawn, so the sign of `w` does not matter.
+    /// Zero generators span nothing and are passed over.
+    pub fn box_back_facing(&self, lo: DVec3, hi: DVec3, normals: impl IntoIterator<Item = DVec3>) -> bool {
+        let f = box_corners(lo, hi).map(|x| self.facing(x));
+        normals
+            .into_iter()
+            .filter(|n| *n != DVec3::ZERO)
+            .all(|n| f.iter().all(|f| f.dot(n) < 0.0))
+    }
+
     /// `K`, the pixels that a model-space distance can become on a segment inside the box
     /// `[lo, hi]` one of whose ends lies in the frustum and which is at most `reach` long
     /// (see the module docs); infinite where no positive `w` bounds it.

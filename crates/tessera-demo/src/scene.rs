@@ -196,6 +196,7 @@ impl Params {
                 view: *view,
                 pixels: Some(px),
                 cull: true,
+                cull_backfaces: false,
                 max_triangles: Some(TRIANGLE_CAP),
             })
     }

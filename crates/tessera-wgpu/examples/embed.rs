@@ -150,6 +150,7 @@ pub fn run(assets: &Path, frames: u32) -> Result<tessera_wgpu::image::RgbaImage,
                 view: torus_camera,
                 pixels: Some(1.0),
                 cull: true,
+                cull_backfaces: false,
                 max_triangles: Some(500_000),
             }),
         )?;

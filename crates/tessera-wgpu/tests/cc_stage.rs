@@ -1385,6 +1385,7 @@ fn in_a_view_the_gpu_gives_the_cpu_references_mesh_within_the_pixels() {
                 view: view(&model, stand),
                 pixels: Some(px),
                 cull: true,
+                cull_backfaces: false,
                 max_triangles: None,
             };
             // From among the model, the cells at the near plane split to full depth: with
@@ -1503,6 +1504,7 @@ fn the_view_moves_through_the_queue_and_a_view_looking_away_draws_nothing() {
         view: view(&model, stand),
         pixels,
         cull: true,
+        cull_backfaces: false,
         max_triangles: None,
     };
     for pixels in [Some(1.0), None] {
@@ -1570,6 +1572,7 @@ fn a_triangle_cap_coarsens_the_pixels_as_the_cpu_reference_does() {
         view: view(&model, Stand::Close),
         pixels: Some(0.05),
         cull: true,
+        cull_backfaces: false,
         max_triangles: None,
     };
     let all = tessellate_adaptive_in_view(&model, &params, &free).expect("cpu");

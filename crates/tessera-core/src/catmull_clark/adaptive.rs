@@ -55,6 +55,7 @@ use glam::DVec3;
 use serde::Serialize;
 
 use super::bound::{box_bound, split_proof, WALK_ONE};
+use super::facing::patch_back_facing;
 use super::keys::{chart_key, key_place, point_key, point_of, vertex_face_uv, KeyPlace};
 use super::patch::{SurfaceModel, SurfacePoint};
 use super::topology::PatchMesh;
@@ -224,6 +225,10 @@ pub struct ViewTolerance {
     pub pixels: Option<f64>,
     /// Cells whose bounds lie wholly outside the frustum emit nothing.
     pub cull: bool,
+    /// Patches whose every normal faces away from the eye over their whole box emit
+    /// nothing ([`super::facing`]): outside the pixel guarantee, which speaks of every
+    /// point in the frustum, back-facing or not.
+    pub cull_backfaces: bool,
     /// At most this many triangles: where the pixels would need more, they are coarsened
     /// by √2 at a time until the mesh fits (the achieved pixels are reported in
     /// [`CcTessellation::tolerance_px`]). A run that cannot fit stops marking as soon as
@@ -249,7 +254,8 @@ pub struct CcTessellation {
     pub max_bound: f64,
     /// Leaves outside the view's frustum, which emit nothing, in patches partly in view.
     pub culled_leaves: usize,
-    /// Patches all of whose leaves lie outside the view's frustum.
+    /// Patches that emit nothing: all of whose leaves lie outside the view's frustum, or,
+    /// culling back faces, that face away from the eye.
     pub culled_patches: usize,
     /// The pixel tolerance the output meets in its view: the one asked for, or coarser
     /// where a triangle cap made it so.
@@ -325,6 +331,23 @@ impl<'a> Evaluator<'a> {
             }) if bound.is_finite() => {
                 let (lo, hi) = corner_box(corners);
                 view.box_outside(lo - DVec3::splat(bound), hi + DVec3::splat(bound))
+            }
+            _ => false,
+        }
+    }
+
+    /// Whether patch `p`, whose whole box has these corners and this bound, faces away
+    /// from the eye of a view culling back faces.
+    fn back_facing(&self, p: usize, corners: &[DVec3; 4], bound: f64) -> bool {
+        match self.view {
+            Some(ViewTolerance {
+                view,
+                cull_backfaces: true,
+                ..
+            }) if bound.is_finite() => {
+                let (lo, hi) = corner_box(corners);
+                let b = DVec3::splat(bound);
+                patch_back_facing(&view, &self.model.patches[p], lo - b, hi + b)
             }
             _ => false,
         }
@@ -712,8 +735,9 @@ fn mark_patches(
         over_cap: false,
     };
     for p in mesh.surface_patches() {
-        // A patch wholly outside a culling view costs one bound and no search.
-        if eval.view.is_some_and(|v| v.cull) {
+        // A patch wholly outside a culling view, or facing away, costs one bound and no
+        // search.
+        if eval.view.is_some_and(|v| v.cull || v.cull_backfaces) {
             let root = Cell {
                 i: 0,
                 j: 0,
@@ -726,7 +750,7 @@ fn mark_patches(
             eval.bounds += 1;
             let bound = box_bound(&model.patches[p], bx, corners);
             eval.root_bound = Some((p, bound));
-            if eval.outside(&corners, bound) {
+            if eval.outside(&corners, bound) || eval.back_facing(p, &corners, bound) {
                 out.culled_patches += 1;
                 continue;
             }

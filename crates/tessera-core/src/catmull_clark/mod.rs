@@ -32,6 +32,7 @@ pub mod bicubic;
 pub mod bound;
 pub mod control_mesh;
 pub mod faces;
+pub mod facing;
 pub mod gpu_model;
 pub mod gpu_uniform;
 pub mod keys;
