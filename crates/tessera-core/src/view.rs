@@ -262,7 +262,12 @@ impl View {
     /// in `X` and linear in `n`, so the box's eight corners and the cone's generators
     /// decide it. Where `w ≤ 0` nothing is drawn, so the sign of `w` does not matter.
     /// Zero generators span nothing and are passed over.
-    pub fn box_back_facing(&self, lo: DVec3, hi: DVec3, normals: impl IntoIterator<Item = DVec3>) -> bool {
+    pub fn box_back_facing(
+        &self,
+        lo: DVec3,
+        hi: DVec3,
+        normals: impl IntoIterator<Item = DVec3>,
+    ) -> bool {
         let f = box_corners(lo, hi).map(|x| self.facing(x));
         normals
             .into_iter()

@@ -29,12 +29,15 @@ pub fn net_normals(net: &Net) -> impl Iterator<Item = DVec3> + '_ {
 /// Whether patch `surface`, whose surface lies in the box `[lo, hi]`, faces away from
 /// the eye of `view` everywhere.
 pub fn patch_back_facing(view: &View, surface: &PatchSurface, lo: DVec3, hi: DVec3) -> bool {
-    let normals = surface.nodes.iter().flat_map(|node| -> Box<dyn Iterator<Item = DVec3> + '_> {
-        match node {
-            Node::Bezier(net) => Box::new(net_normals(net)),
-            Node::Corner(c) => Box::new(std::iter::once(c.normal)),
-            Node::Split(_) => Box::new(std::iter::empty()),
-        }
-    });
+    let normals = surface
+        .nodes
+        .iter()
+        .flat_map(|node| -> Box<dyn Iterator<Item = DVec3> + '_> {
+            match node {
+                Node::Bezier(net) => Box::new(net_normals(net)),
+                Node::Corner(c) => Box::new(std::iter::once(c.normal)),
+                Node::Split(_) => Box::new(std::iter::empty()),
+            }
+        });
     view.box_back_facing(lo, hi, normals)
 }
