@@ -2,12 +2,12 @@
 //! (every sampled surface point inside the frustum projects within p pixels of its
 //! nearest mesh point), culling, and no T-junction whatever the level of detail.
 
-use glam::Vec3;
+use glam::{DVec3, Vec3};
 use tessera_core::catmull_clark::{
     surface_samples, tessellate_adaptive_in_view, CcParams, CcTessellation, SurfaceModel,
     ViewTolerance,
 };
-use tessera_core::measure::max_error_px;
+use tessera_core::measure::{max_error_px, measure_error};
 use tessera_core::watertight::check_watertight;
 use tessera_core::{Tolerance, View};
 use tessera_tests::{cc_model, open_boundary, view, Stand};
@@ -212,4 +212,97 @@ fn a_triangle_cap_coarsens_the_pixels_until_the_mesh_fits() {
     };
     let err = tessellate_adaptive_in_view(&model, &params(), &tight).unwrap_err();
     assert!(err.to_string().contains("triangles"), "{err}");
+}
+
+/// Surface samples of every patch with their limit normals.
+fn samples_with_normals(model: &SurfaceModel, n: usize) -> Vec<(DVec3, DVec3)> {
+    let mut out = Vec::new();
+    for p in model.mesh.surface_patches() {
+        for j in 0..n {
+            for i in 0..n {
+                let (u, v) = (i as f64 / (n - 1) as f64, j as f64 / (n - 1) as f64);
+                let s = model.eval(p, u, v);
+                out.push((s.position, s.normal));
+            }
+        }
+    }
+    out
+}
+
+#[test]
+fn back_face_culling_drops_only_what_faces_away() {
+    for (name, stand) in [
+        ("catmull_clark/spot_control_mesh.obj", Stand::Close),
+        ("opensubdiv/catmark_car.obj", Stand::Far),
+        ("opensubdiv/catmark_cube_creases1.obj", Stand::Far),
+    ] {
+        let model = cc_model(name);
+        let v = view(&model, stand);
+        let px = 1.0;
+        let front = run(&model, v, Some(px), true);
+        let culled = tessellate_adaptive_in_view(
+            &model,
+            &params(),
+            &ViewTolerance {
+                view: v,
+                pixels: Some(px),
+                cull: true,
+                cull_backfaces: true,
+                max_triangles: None,
+            },
+        )
+        .unwrap();
+        assert!(
+            culled.culled_patches > front.culled_patches,
+            "{name}: {} patches culled, {} without back faces",
+            culled.culled_patches,
+            front.culled_patches
+        );
+        assert!(
+            culled.mesh.triangle_count() < front.mesh.triangle_count(),
+            "{name}"
+        );
+        // The triangles wind counter-clockwise about the surface's normal, the winding
+        // the cull takes as the front.
+        let m = &front.mesh;
+        let wound = m
+            .triangles()
+            .filter(|t| {
+                let [a, b, c] = t.map(|i| Vec3::from(m.vertices[i as usize].position));
+                let n = t.map(|i| Vec3::from(m.vertices[i as usize].normal));
+                (b - a).cross(c - a).dot(n[0] + n[1] + n[2]) > 0.0
+            })
+            .count();
+        assert!(
+            wound * 100 >= m.triangle_count() * 99,
+            "{name}: {wound} of {}",
+            m.triangle_count()
+        );
+        // Samples facing the eye keep the pixel guarantee; samples facing away lost
+        // their triangles, so the cull did remove surface.
+        let eye = v.eye();
+        let samples = samples_with_normals(&model, 8);
+        let facing: Vec<DVec3> = samples
+            .iter()
+            .filter(|(x, n)| (eye - *x).dot(*n) > 0.0)
+            .map(|s| s.0)
+            .collect();
+        let away: Vec<DVec3> = samples
+            .iter()
+            .filter(|(x, n)| v.contains(*x) && (eye - *x).dot(*n) < -0.5 * (eye - *x).length())
+            .map(|s| s.0)
+            .collect();
+        let err = max_error_px(&facing, &culled.mesh, &v).unwrap();
+        assert!(err <= px, "{name}: front-facing {err} px > {px}");
+        // In projection other surface may lie near a culled point, so the loss is
+        // measured in world units: a culled point lies far from what is left, and close
+        // to the mesh that kept it.
+        let diag = model.mesh.bbox_diag();
+        let kept = measure_error(&away, &front.mesh, diag).max_error;
+        let lost = measure_error(&away, &culled.mesh, diag).max_error;
+        assert!(
+            lost > 10.0 * kept && lost > 0.01 * diag,
+            "{name}: back-facing samples within {lost} of the culled mesh, {kept} of the whole"
+        );
+    }
 }
