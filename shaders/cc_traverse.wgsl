@@ -24,6 +24,7 @@
 #include "shared/cc_tess.wgsl"
 #include "shared/cc_bound.wgsl"
 #include "shared/cc_view.wgsl"
+#include "shared/cc_facing.wgsl"
 #include "shared/lane_order.wgsl"
 
 @group(0) @binding(55) var<storage, read_write> leaves: array<CcCell>;
@@ -51,7 +52,7 @@ struct CcDecision {
 // Whether a cell with these corners and this bound lies wholly outside the frustum of a
 // culling view: its surface is within `bound` of its corners' hull.
 fn cc_outside(corners: array<vec3f, 4>, bound: f32) -> bool {
-    if cc_params.view.cull == 0u {
+    if (cc_params.view.cull & CC_VIEW_CULL_FRUSTUM) == 0u {
         return false;
     }
     let b = vec3f(bound);
@@ -79,12 +80,18 @@ fn cc_decide(cell: CcCell) -> CcDecision {
     let walk_box = vec4u(cell.i, i1, cell.j, j1) * scale;
     var bound = CC_INFINITY;
     var bounds = 0u;
-    // A whole patch outside a culling view costs one bound and no search: trial 0's
-    // root (1 × 1) is culled before the proof, and its bound serves the decision.
+    // A whole patch outside a culling view, or facing away from the eye, costs one bound
+    // and no search: trial 0's root (1 × 1) is culled before the proof, and its bound
+    // serves the decision.
     if cc_params.view.cull != 0u && (cell.trial_depth & 0xffu) == 0u && depth == 0u {
         bound = cc_box_bound(p, walk_box, corners);
         bounds = 1u;
-        if cc_outside(corners, bound) {
+        var culled = cc_outside(corners, bound);
+        if !culled && (cc_params.view.cull & CC_VIEW_CULL_BACKFACES) != 0u && bound < CC_INFINITY {
+            let b = vec3f(bound);
+            culled = cc_patch_back_facing(p, cc_corners_lo(corners) - b, cc_corners_hi(corners) + b);
+        }
+        if culled {
             return CcDecision(false, bound, false, true, tolerance, bounds);
         }
     }

@@ -275,7 +275,7 @@ struct CcTessParams {
 }
 
 // `tessera_core::gpu_types::CcView`: a view for tolerances in pixels (`pixels` > 0)
-// and culling (`cull` = 1), all zero for none.
+// and culling (`cull`: bits `CC_VIEW_CULL_*`), all zero for none.
 struct CcView {
     clip: mat4x4f,
     viewport: vec2f,
@@ -286,6 +286,10 @@ struct CcView {
     pad1: u32,
     pad2: u32,
 }
+
+// `tessera_core::gpu_types::{CC_VIEW_CULL_FRUSTUM, CC_VIEW_CULL_BACKFACES}`.
+const CC_VIEW_CULL_FRUSTUM: u32 = 1u;
+const CC_VIEW_CULL_BACKFACES: u32 = 2u;
 
 // `tessera_core::gpu_types::{CC_CELL_CULLED, CC_CELL_PATCH_CULLED}`: a leaf outside the
 // view, which emits no triangles (its corners still mark its neighbours' sides), and one

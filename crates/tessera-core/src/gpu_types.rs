@@ -991,11 +991,18 @@ pub struct CcView {
     pub pixels: f32,
     /// The least clip `w` of a point in the frustum.
     pub near_w: f32,
-    /// 1: cells wholly outside the frustum emit nothing.
+    /// What is culled: [`CC_VIEW_CULL_FRUSTUM`] and [`CC_VIEW_CULL_BACKFACES`], or 0.
     pub cull: u32,
     /// Padding to a multiple of 16 bytes (`pad0`..`pad2` in WGSL).
     pub pad: [u32; 3],
 }
+
+/// Bit of [`CcView::cull`]: cells wholly outside the frustum emit nothing.
+pub const CC_VIEW_CULL_FRUSTUM: u32 = 1;
+
+/// Bit of [`CcView::cull`]: patches facing away from the eye everywhere emit nothing
+/// (`shaders/shared/cc_facing.wgsl`).
+pub const CC_VIEW_CULL_BACKFACES: u32 = 2;
 
 /// Bit of [`CcCell::trial_depth`] that marks a leaf outside the view's frustum: it keeps
 /// its place in the leaf list, as its trial counted it, and emits no triangles. Its

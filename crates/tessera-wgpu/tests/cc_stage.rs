@@ -1646,3 +1646,75 @@ fn a_triangle_cap_coarsens_the_pixels_as_the_cpu_reference_does() {
     assert_eq!(looped.tolerance_px(), Some(0.05));
     gpu.check().expect("no wgpu errors");
 }
+
+#[test]
+fn culling_back_faces_the_gpu_culls_the_patches_the_cpu_reference_culls() {
+    // With and without the frustum: the same culled patches as
+    // `tessellate_adaptive_in_view`, more than the frustum alone culls, and the same
+    // triangles. Spot's extraordinary vertices make deep quadtrees to walk; the cube's
+    // creases make corner nodes.
+    use tessera_core::catmull_clark::{tessellate_adaptive_in_view, ViewTolerance};
+    use tessera_tests::{view, Stand};
+    let gpu = gpu();
+    for (name, stand, frustum) in [
+        ("catmull_clark/spot_control_mesh.obj", Stand::Close, true),
+        ("opensubdiv/catmark_cube_creases1.obj", Stand::Far, false),
+    ] {
+        let model = tessera_tests::cc_model(name);
+        let params = CcParams {
+            tolerance: Tolerance::Relative(1.0),
+            max_depth: 8,
+            first_split: FirstSplit::Search,
+            leaf_bound: Default::default(),
+        };
+        let v = ViewTolerance {
+            view: view(&model, stand),
+            pixels: Some(1.0),
+            cull: frustum,
+            cull_backfaces: true,
+            max_triangles: None,
+        };
+        let what = format!("{name} {stand:?}");
+        let cpu = tessellate_adaptive_in_view(&model, &params, &v).expect("cpu");
+        let front = tessellate_adaptive_in_view(
+            &model,
+            &params,
+            &ViewTolerance {
+                cull_backfaces: false,
+                ..v
+            },
+        )
+        .expect("cpu");
+        assert!(
+            cpu.culled_patches > front.culled_patches,
+            "{what}: {} culled facing away, {} without",
+            cpu.culled_patches,
+            front.culled_patches
+        );
+        let (mesh, status) = run_in_view(&gpu, &model, &params, &v);
+        let s = &status.state;
+        eprintln!(
+            "{what}: gpu {} tris, {} culled patches; cpu {} tris, {} culled patches",
+            mesh.triangle_count(),
+            s.culled_patches,
+            cpu.mesh.triangle_count(),
+            cpu.culled_patches
+        );
+        assert_eq!(
+            s.culled_patches as usize, cpu.culled_patches,
+            "{what}: culled patches"
+        );
+        assert_eq!(
+            s.culled_leaves as usize, cpu.culled_leaves,
+            "{what}: culled leaves"
+        );
+        let (used, _) = without_unused_vertices(&mesh);
+        let ties = same_mesh_up_to_ties(&used, &cpu.mesh, size(&model))
+            .unwrap_or_else(|e| panic!("{what}: {e}"));
+        assert!(ties * 50 < used.triangle_count(), "{what}: {ties} ties");
+        assert!(
+            same_mesh_up_to_ties(&used, &front.mesh, size(&model)).is_err(),
+            "{what}: the comparison misses the mesh without back faces culled"
+        );
+    }
+}

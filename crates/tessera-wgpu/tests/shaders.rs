@@ -356,6 +356,18 @@ fn catmull_clark_parameters_and_counters_match_their_rust_twins() {
         .map(|(n, o)| (n.as_str(), *o as usize))
         .collect();
     assert_eq!(members, rust, "CcTessParams");
+    for (name, rust) in [
+        ("CC_VIEW_CULL_FRUSTUM", CC_VIEW_CULL_FRUSTUM),
+        ("CC_VIEW_CULL_BACKFACES", CC_VIEW_CULL_BACKFACES),
+        ("CC_CELL_CULLED", CC_CELL_CULLED),
+        ("CC_CELL_PATCH_CULLED", CC_CELL_PATCH_CULLED),
+        (
+            "CC_FACING_STACK",
+            tessera_core::catmull_clark::facing::FACING_STACK as u32,
+        ),
+    ] {
+        assert_eq!(wgsl_u32(&module, name), rust, "{name}");
+    }
     let (size, members) = layout(&module, "CcCounters");
     assert_eq!(size as usize, size_of::<CcState>());
     let rust = [

@@ -26,18 +26,33 @@ pub fn net_normals(net: &Net) -> impl Iterator<Item = DVec3> + '_ {
     du.flat_map(move |a| (0..12).map(move |k| a.cross(net[k + 4] - net[k])))
 }
 
+/// Nodes the walk keeps pending at most, as the kernel's stack: past it the patch is
+/// taken as facing the eye.
+pub const FACING_STACK: usize = 128;
+
 /// Whether patch `surface`, whose surface lies in the box `[lo, hi]`, faces away from
-/// the eye of `view` everywhere.
+/// the eye of `view` everywhere. Its quadtree is walked depth first from the root, in
+/// the kernel's order.
 pub fn patch_back_facing(view: &View, surface: &PatchSurface, lo: DVec3, hi: DVec3) -> bool {
-    let normals = surface
-        .nodes
-        .iter()
-        .flat_map(|node| -> Box<dyn Iterator<Item = DVec3> + '_> {
-            match node {
-                Node::Bezier(net) => Box::new(net_normals(net)),
-                Node::Corner(c) => Box::new(std::iter::once(c.normal)),
-                Node::Split(_) => Box::new(std::iter::empty()),
+    if surface.nodes.is_empty() {
+        return false;
+    }
+    let mut stack = vec![0u32];
+    while let Some(k) = stack.pop() {
+        let away = match &surface.nodes[k as usize] {
+            Node::Split(children) => {
+                if stack.len() + 4 > FACING_STACK {
+                    return false;
+                }
+                stack.extend(children);
+                continue;
             }
-        });
-    view.box_back_facing(lo, hi, normals)
+            Node::Bezier(net) => view.box_back_facing(lo, hi, net_normals(net)),
+            Node::Corner(c) => view.box_back_facing(lo, hi, [c.normal]),
+        };
+        if !away {
+            return false;
+        }
+    }
+    true
 }

@@ -76,6 +76,7 @@ use glam::Vec3;
 use tessera_core::catmull_clark::{CcParams, LeafBound, PatchMesh, SurfaceModel, ViewTolerance};
 use tessera_core::gpu_types::{
     CcCell, CcHashStatus, CcState, CcTessParams, CcVertexPoint, CcView, OutVertex, CC_TRIALS,
+    CC_VIEW_CULL_BACKFACES, CC_VIEW_CULL_FRUSTUM,
 };
 use tessera_core::Mesh;
 use wgpu::util::DeviceExt;
@@ -1175,7 +1176,12 @@ fn gpu_view(v: &ViewTolerance) -> Result<CcView> {
         viewport: view.viewport().as_vec2().to_array(),
         pixels,
         near_w: view.near_w() as f32,
-        cull: u32::from(v.cull),
+        cull: if v.cull { CC_VIEW_CULL_FRUSTUM } else { 0 }
+            | if v.cull_backfaces {
+                CC_VIEW_CULL_BACKFACES
+            } else {
+                0
+            },
         pad: [0; 3],
     })
 }

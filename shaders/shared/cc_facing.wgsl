@@ -1,0 +1,96 @@
+// Back-facing patches, for a view that culls them (`CC_VIEW_CULL_BACKFACES`): twin of
+// `tessera_core::catmull_clark::facing` and `View::{facing, box_back_facing}`, whose docs
+// prove the test. A patch faces away when `f(X)·n < 0` at the eight corners of its box
+// for every generator `n` of the cone of its normals: the 144 products of each net's u-
+// and v-differences, and the limit normal of each corner node.
+
+#include "shared/cc_patch.wgsl"
+#include "shared/cc_view.wgsl"
+
+// `facing::FACING_STACK`: nodes the walk keeps pending at most; past it the patch is
+// taken as facing the eye.
+const CC_FACING_STACK: u32 = 128u;
+
+// `View::facing` at a point whose clip coordinates are `c`.
+fn cc_facing_at(c: vec4f) -> vec3f {
+    let r_x = cc_view_row(0u);
+    let r_y = cc_view_row(1u);
+    let r_w = cc_view_row(3u);
+    return c.x * cross(r_y, r_w) + c.y * cross(r_w, r_x) + c.w * cross(r_x, r_y);
+}
+
+// Whether the generator `n` faces away at every corner of the box (`f` at them); a zero
+// one spans nothing. Without short circuits: a CPU device runs every branch anyway.
+fn cc_faces_away(f: array<vec3f, 8>, n: vec3f) -> bool {
+    let away = (dot(f[0], n) < 0.0) & (dot(f[1], n) < 0.0) & (dot(f[2], n) < 0.0)
+        & (dot(f[3], n) < 0.0) & (dot(f[4], n) < 0.0) & (dot(f[5], n) < 0.0)
+        & (dot(f[6], n) < 0.0) & (dot(f[7], n) < 0.0);
+    return away | all(n == vec3f(0.0));
+}
+
+// The twelve products of one u-difference `a` with the net's v-differences `b`.
+fn cc_row_faces_away(f: array<vec3f, 8>, a: vec3f, b: array<vec3f, 12>) -> bool {
+    return cc_faces_away(f, cross(a, b[0])) & cc_faces_away(f, cross(a, b[1]))
+        & cc_faces_away(f, cross(a, b[2])) & cc_faces_away(f, cross(a, b[3]))
+        & cc_faces_away(f, cross(a, b[4])) & cc_faces_away(f, cross(a, b[5]))
+        & cc_faces_away(f, cross(a, b[6])) & cc_faces_away(f, cross(a, b[7]))
+        & cc_faces_away(f, cross(a, b[8])) & cc_faces_away(f, cross(a, b[9]))
+        & cc_faces_away(f, cross(a, b[10])) & cc_faces_away(f, cross(a, b[11]));
+}
+
+// `facing::net_normals` of net k, tested: point 0 is absolute and the rest offsets from
+// it, so point 0 is taken as the origin (differences do not change). Written out, so
+// that every index is a constant.
+fn cc_net_faces_away(f: array<vec3f, 8>, k: u32) -> bool {
+    var q = cc_net_points(k);
+    q[0] = vec3f(0.0);
+    let dv = array<vec3f, 12>(
+        q[4] - q[0], q[5] - q[1], q[6] - q[2], q[7] - q[3],
+        q[8] - q[4], q[9] - q[5], q[10] - q[6], q[11] - q[7],
+        q[12] - q[8], q[13] - q[9], q[14] - q[10], q[15] - q[11],
+    );
+    return cc_row_faces_away(f, q[1] - q[0], dv) & cc_row_faces_away(f, q[2] - q[1], dv)
+        & cc_row_faces_away(f, q[3] - q[2], dv) & cc_row_faces_away(f, q[5] - q[4], dv)
+        & cc_row_faces_away(f, q[6] - q[5], dv) & cc_row_faces_away(f, q[7] - q[6], dv)
+        & cc_row_faces_away(f, q[9] - q[8], dv) & cc_row_faces_away(f, q[10] - q[9], dv)
+        & cc_row_faces_away(f, q[11] - q[10], dv) & cc_row_faces_away(f, q[13] - q[12], dv)
+        & cc_row_faces_away(f, q[14] - q[13], dv) & cc_row_faces_away(f, q[15] - q[14], dv);
+}
+
+// `facing::patch_back_facing`: whether patch p, whose surface lies in the box [lo, hi],
+// faces away from the eye everywhere. Its quadtree is walked depth first from the root;
+// the cap on steps only guards against a corrupt upload.
+fn cc_patch_back_facing(p: u32, lo: vec3f, hi: vec3f) -> bool {
+    let c = cc_view_corners(lo, hi);
+    var f: array<vec3f, 8>;
+    for (var k = 0u; k < 8u; k++) {
+        f[k] = cc_facing_at(c[k]);
+    }
+    let root = cc_roots[p];
+    var stack: array<u32, CC_FACING_STACK>;
+    stack[0] = root.node;
+    var top = 1u;
+    var away = true;
+    for (var steps = 0u; top > 0u && away && steps < 4096u; steps++) {
+        top -= 1u;
+        let nd = cc_nodes[stack[top]];
+        let kind = nd.kind & CC_NODE_KIND_MASK;
+        if kind == CC_NODE_SPLIT {
+            if top + 4u > CC_FACING_STACK {
+                return false;
+            }
+            let s = cc_splits[nd.index];
+            stack[top] = s[0];
+            stack[top + 1u] = s[1];
+            stack[top + 2u] = s[2];
+            stack[top + 3u] = s[3];
+            top += 4u;
+        } else if kind == CC_NODE_BEZIER {
+            away = cc_net_faces_away(f, root.nets + nd.index);
+        } else if kind == CC_NODE_CORNER {
+            let n = cc_corners[root.corners + nd.index].normal;
+            away = cc_faces_away(f, vec3f(n[0], n[1], n[2]));
+        }
+    }
+    return away && top == 0u;
+}
