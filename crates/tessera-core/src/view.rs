@@ -809,4 +809,65 @@ mod tests {
         assert!(m.up().dot(v.eye().normalize()).abs() < 1e-9, "{}", m.up());
         assert_eq!(m.clip_matrix(), v.clip_matrix());
     }
+
+    #[test]
+    fn facing_gives_the_winding_on_screen_and_back_facing_boxes_face_away_everywhere() {
+        let ortho = View::from_matrices(
+            DMat4::look_at_rh(DVec3::new(3.0, -4.0, 1.5), DVec3::ZERO, DVec3::Z),
+            DMat4::orthographic_rh(-4.0, 4.0, -3.0, 3.0, 0.1, 100.0),
+            (800, 600),
+        )
+        .unwrap();
+        let mut rng = Lcg(7);
+        for view in [car_view(), ortho] {
+            // A triangle winds counter-clockwise on screen exactly where f·n > 0.
+            let (mut front, mut back) = (0, 0);
+            for _ in 0..2000 {
+                let a = rng.vec(-2.0, 2.0);
+                let (b, c) = (a + rng.vec(-0.3, 0.3), a + rng.vec(-0.3, 0.3));
+                let (Some(pa), Some(pb), Some(pc)) = (view.pixel(a), view.pixel(b), view.pixel(c))
+                else {
+                    continue;
+                };
+                let area = (pb - pa).perp_dot(pc - pa);
+                let f = view.facing((a + b + c) / 3.0).dot((b - a).cross(c - a));
+                if area.abs() < 1e-6 {
+                    continue;
+                }
+                assert_eq!(area > 0.0, f > 0.0, "{a} {b} {c}: area {area}, f·n {f}");
+                if area > 0.0 {
+                    front += 1;
+                } else {
+                    back += 1;
+                }
+            }
+            assert!(front > 500 && back > 500, "{front} {back}");
+            // A box called back-facing faces away at every point, for every normal of its
+            // cone.
+            let mut called = 0;
+            for _ in 0..500 {
+                let c = rng.vec(-3.0, 3.0);
+                let h = rng.vec(0.0, 0.3);
+                let axis = rng.vec(-1.0, 1.0);
+                let normals = [axis, axis + rng.vec(-0.2, 0.2), axis + rng.vec(-0.2, 0.2)];
+                if !view.box_back_facing(c - h, c + h, normals) {
+                    continue;
+                }
+                called += 1;
+                for _ in 0..8 {
+                    let x = c - h + 2.0 * h * DVec3::new(rng.next(), rng.next(), rng.next());
+                    let n =
+                        normals[0] * rng.next() + normals[1] * rng.next() + normals[2] * rng.next();
+                    assert!(view.facing(x).dot(n) < 0.0, "{x} {n}");
+                }
+            }
+            assert!(called > 50, "{called} boxes back-facing");
+            // A plane's facing flips with its normal.
+            let n = view.eye() - DVec3::ZERO;
+            let s = DVec3::splat(0.1);
+            assert!(view.box_back_facing(-s, s, [-n]));
+            assert!(!view.box_back_facing(-s, s, [n]));
+            assert!(!view.box_back_facing(-s, s, [-n, n]));
+        }
+    }
 }
