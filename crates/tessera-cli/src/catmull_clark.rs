@@ -427,7 +427,7 @@ pub(crate) fn view_tolerance(
         view: pose.view(size)?,
         pixels: args.tolerance_px,
         cull: !args.no_cull,
-        cull_backfaces: false,
+        cull_backfaces: args.cull_backfaces,
         max_triangles: args.max_triangles,
     })
 }

@@ -199,6 +199,10 @@ pub struct ViewArgs {
     /// Keep the patches outside the view frustum (culled by default with a view).
     #[arg(long)]
     pub no_cull: bool,
+    /// Drop the patches that face away from the eye everywhere (Catmull-Clark; a closed
+    /// surface looks the same, an open one loses its inside).
+    #[arg(long)]
+    pub cull_backfaces: bool,
     /// At most this many triangles (with --tolerance-px): the pixel tolerance is coarsened
     /// by √2 at a time until the mesh fits, and the stats report the one achieved
     /// (`achieved_tolerance_px`).
@@ -214,6 +218,7 @@ impl ViewArgs {
             || self.fov.is_some()
             || self.near.is_some()
             || self.no_cull
+            || self.cull_backfaces
             || self.max_triangles.is_some()
     }
 }

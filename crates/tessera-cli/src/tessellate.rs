@@ -209,9 +209,9 @@ fn tessellate(args: TessellateArgs) -> Result<(), Error> {
         )
         .into());
     }
-    if args.view.no_cull || args.view.max_triangles.is_some() {
+    if args.view.no_cull || args.view.cull_backfaces || args.view.max_triangles.is_some() {
         return Err(CoreError::Param(
-            "--no-cull and --max-triangles are for Catmull-Clark meshes; a Bézier view only scales the threshold".into(),
+            "--no-cull, --cull-backfaces and --max-triangles are for Catmull-Clark meshes; a Bézier view only scales the threshold".into(),
         )
         .into());
     }

@@ -94,6 +94,29 @@ fn a_pixel_tolerance_holds_when_measured_and_culling_drops_what_is_out_of_view()
     assert!(culled["culled_patches"].as_u64().unwrap() > 0, "{culled}");
     assert!(culled["triangles"].as_u64() < kept["triangles"].as_u64());
     assert_eq!(kept["culled_patches"], 0);
+    // Spot, framed: the patches facing away go too, with the frustum's or alone.
+    let spot = asset("catmull_clark/spot_control_mesh.obj");
+    let framed = [
+        "tessellate",
+        &spot,
+        "--size",
+        "320x240",
+        "--tolerance-px",
+        "1",
+    ];
+    let whole = stats_of(&framed, "spot.json");
+    let mut backs_args = framed.to_vec();
+    backs_args.push("--cull-backfaces");
+    let backs = stats_of(&backs_args, "backs.json");
+    assert!(backs["culled_patches"].as_u64() > whole["culled_patches"].as_u64());
+    assert!(backs["triangles"].as_u64() < whole["triangles"].as_u64());
+    backs_args.push("--no-cull");
+    let backs_only = stats_of(&backs_args, "backs_only.json");
+    assert!(
+        backs_only["culled_patches"].as_u64().unwrap() > 0,
+        "{backs_only}"
+    );
+    assert!(backs_only["triangles"].as_u64() < whole["triangles"].as_u64());
 }
 
 #[test]
@@ -161,6 +184,16 @@ fn views_refuse_what_they_do_not_take_yet_with_one_line() {
         ),
         (
             vec!["tessellate", &teapot, "--tolerance-px", "1", "--no-cull"],
+            "Catmull-Clark",
+        ),
+        (
+            vec![
+                "tessellate",
+                &teapot,
+                "--tolerance-px",
+                "1",
+                "--cull-backfaces",
+            ],
             "Catmull-Clark",
         ),
         (vec!["tessellate", &torus, "--tolerance-px=-1"], "positive"),
