@@ -34,11 +34,17 @@ fn side_need(side: EdgeSide, lo: u32, hi: u32) -> bool {
     return interior_need(l, triangle_on_side(l, side.k, f0, f1));
 }
 
+// Whether side k of the edge is there and its patch is not culled: the triangles of a
+// culled patch emit nothing and ask for no points.
+fn side_alive(sides: EdgeSides, k: u32) -> bool {
+    return sides.count > k && !patch_culled(sides.s[k].tri / COARSE_TRIANGLES_PER_PATCH);
+}
+
 // Unrolled over the (at most two) sides: an array indexed by a loop counter is a memory
 // access per lane on a CPU device.
 fn sides_need(sides: EdgeSides, lo: u32, hi: u32) -> bool {
-    return (sides.count > 0u && side_need(sides.s[0], lo, hi))
-        || (sides.count > 1u && side_need(sides.s[1], lo, hi));
+    return (side_alive(sides, 0u) && side_need(sides.s[0], lo, hi))
+        || (side_alive(sides, 1u) && side_need(sides.s[1], lo, hi));
 }
 
 @compute @workgroup_size(64)
@@ -49,9 +55,11 @@ fn main(@builtin(global_invocation_id) gid: vec3u, @builtin(num_workgroups) grou
     }
     var bits = EdgeSet(vec4u(0u), vec4u(0u));
     let depth = min(params.max_depth, MAX_DEPTH_LIMIT);
-    if !edge_collapsed(e) && depth > 0u {
+    let sides = coarse_edge_sides(e);
+    // An edge between culled patches gets no points.
+    let alive = sides.count == 0u || side_alive(sides, 0u) || side_alive(sides, 1u);
+    if !edge_collapsed(e) && depth > 0u && alive {
         let ends = edge_endpoints(e);
-        let sides = coarse_edge_sides(e);
         // A map test asks the owner's map about the whole coarse edge only (see
         // `edge_decide`): asked once here, not masked on every piece. The flat test
         // measures every piece itself.

@@ -40,7 +40,10 @@ fn main() {
     status.indices = indices;
     status.overflow = overflow;
     status.edge_vertices = edge_vertices;
-    status.evaluations = tally[TALLY_EVALUATIONS] + vertices;
+    // The vertices inside culled patches are not evaluated.
+    let culled = tally[TALLY_CULLED];
+    status.culled_patches = culled;
+    status.evaluations = tally[TALLY_EVALUATIONS] + vertices - culled * INTERIOR_COARSE_VERTICES_PER_PATCH;
     let vertex_dispatch = dispatch_of(vertices, overflow);
     status.dispatch_x = vertex_dispatch.x;
     status.dispatch_y = vertex_dispatch.y;

@@ -70,6 +70,9 @@ fn main(@builtin(global_invocation_id) gid: vec3u, @builtin(num_workgroups) grou
     // The coarse triangles in `tri_order`'s order: lanes side by side do alike work.
     let t = counts[order_base() + slot];
     let c = tri_ctx(t);
+    if patch_culled(c.l.patch_id) {
+        return;
+    }
     let e = params.coarse_edges;
     let tris = params.coarse_triangles;
     inner_base = params.coarse_vertices + counts[e + t];

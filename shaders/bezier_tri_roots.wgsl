@@ -42,7 +42,14 @@ fn main(@builtin(global_invocation_id) gid: vec3u, @builtin(num_workgroups) grou
     }
     let c = tri_ctx(t);
     var made = NO_COUNT;
-    if root_known_leaf(c) {
+    let culled = patch_culled(c.l.patch_id);
+    if culled {
+        // A culled patch's triangles make nothing; its first one counts it.
+        made = 0u;
+        if t % COARSE_TRIANGLES_PER_PATCH == 0u {
+            atomicAdd(&tally[TALLY_CULLED], 1u);
+        }
+    } else if root_known_leaf(c) {
         made = euler_count(c, 0u);
     }
     if made == NO_COUNT {

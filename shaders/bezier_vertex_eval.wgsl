@@ -5,6 +5,7 @@
 #include "shared/types.wgsl"
 #include "shared/patch.wgsl"
 #include "shared/topo.wgsl"
+#include "shared/thresholds.wgsl"
 
 @group(0) @binding(1) var nets: texture_storage_2d<rgba32float, read>;
 @group(0) @binding(3) var topology: texture_storage_2d<rgba32uint, read>;
@@ -19,6 +20,12 @@ fn main(@builtin(global_invocation_id) gid: vec3u, @builtin(num_workgroups) grou
         return;
     }
     let r = records[v];
+    // Inside a culled patch no triangle uses the vertex (`vertex_eval_at`).
+    if patch_culled(r.patch_id) && inside_patch(r.u, r.v) {
+        out_vertices[v] = OutVertex(array<f32, 3>(0.0, 0.0, 0.0), array<f32, 3>(0.0, 0.0, 0.0),
+            array<f32, 2>(r.u, r.v), r.patch_id);
+        return;
+    }
     let f = eval_frame(r.patch_id, r.u, r.v);
     var n = frame_normal(f, r.u, r.v);
     if patch_flipped(r.patch_id) {

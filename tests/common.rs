@@ -236,3 +236,24 @@ pub fn view(model: &tessera_core::catmull_clark::SurfaceModel, stand: Stand) -> 
     )
     .unwrap()
 }
+
+/// Close to the spout and looking along the body: the handle and part of the lid are
+/// out of view.
+pub fn bezier_close_view(model: &BezierModel, cull: bool) -> tessera_core::bezier::BezierView {
+    let (lo, hi) = model.bounds();
+    let (lo, hi) = (lo.as_dvec3(), hi.as_dvec3());
+    let (c, d) = ((lo + hi) / 2.0, (hi - lo).length());
+    tessera_core::bezier::BezierView {
+        view: tessera_core::View::look_at(
+            c + glam::DVec3::new(0.5, -0.45, 0.1) * d,
+            c + glam::DVec3::new(0.3, 0.0, 0.0) * d,
+            glam::DVec3::Z,
+            30f64.to_radians(),
+            (640, 480),
+            0.01 * d,
+        )
+        .expect("view"),
+        pixels: 1.0,
+        cull,
+    }
+}

@@ -7,13 +7,7 @@
 // would make every decision pay for all four.
 override EDGE_TEST: u32;
 
-// Each patch's edge-test threshold (`tessera_core::bezier::patch_thresholds`): the world
-// threshold, or scaled to a view's pixels.
-@group(0) @binding(18) var<storage, read> patch_thresholds: array<f32>;
-
-fn patch_threshold(p: u32) -> f32 {
-    return patch_thresholds[min(p, arrayLength(&patch_thresholds) - 1u)];
-}
+#include "shared/thresholds.wgsl"
 
 fn canonical_order(l: Lattice, a: vec2u, b: vec2u) -> array<vec2u, 2> {
     let pa = patch_coords(l, a);

@@ -113,6 +113,8 @@ struct BezierStatus {
     mark_dispatch_x: u32,
     mark_dispatch_y: u32,
     mark_dispatch_z: u32,
+    // Patches wholly outside a culling view's frustum.
+    culled_patches: u32,
 }
 
 const STATUS_MARK_DISPATCH: u32 = 15u;
@@ -132,6 +134,8 @@ const TALLY_ORDER: u32 = 1u;
 const ORDER_BUCKETS: u32 = 256u;
 // Coarse triangles the mark kernel walks, listed by the root kernel.
 const TALLY_MARKED: u32 = TALLY_ORDER + ORDER_BUCKETS;
+// Patches culled by the view, counted by the root kernel.
+const TALLY_CULLED: u32 = TALLY_MARKED + 1u;
 
 const PLAIN_BUCKET: u32 = ORDER_BUCKETS - 1u;
 

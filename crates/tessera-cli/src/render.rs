@@ -116,9 +116,9 @@ pub fn render(args: RenderArgs) -> Result<(), Error> {
         )
         .into());
     }
-    if !cc && (args.view.no_cull || args.view.cull_backfaces || args.view.max_triangles.is_some()) {
+    if !cc && (args.view.cull_backfaces || args.view.max_triangles.is_some()) {
         return Err(CoreError::Param(
-            "--no-cull, --cull-backfaces and --max-triangles are for Catmull-Clark meshes; a Bézier view only scales the threshold".into(),
+            "--cull-backfaces and --max-triangles are for Catmull-Clark meshes".into(),
         )
         .into());
     }
@@ -235,6 +235,7 @@ pub fn render(args: RenderArgs) -> Result<(), Error> {
             Some(tessera_core::bezier::BezierView {
                 view: v.view,
                 pixels: v.pixels.expect("checked"),
+                cull: v.cull,
             })
         } else {
             None

@@ -49,6 +49,10 @@ struct Stats {
     /// In a view: the threshold in pixels each patch's is scaled to.
     #[serde(skip_serializing_if = "Option::is_none")]
     tolerance_px: Option<f64>,
+    /// In a view: patches whose control points lie wholly outside the frustum (nothing
+    /// emitted).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    culled_patches: Option<usize>,
     /// In a view, with `--measure`: over the samples in the frustum, the largest
     /// distance in pixels from a sample's projection to its nearest mesh point's.
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -209,9 +213,9 @@ fn tessellate(args: TessellateArgs) -> Result<(), Error> {
         )
         .into());
     }
-    if args.view.no_cull || args.view.cull_backfaces || args.view.max_triangles.is_some() {
+    if args.view.cull_backfaces || args.view.max_triangles.is_some() {
         return Err(CoreError::Param(
-            "--no-cull, --cull-backfaces and --max-triangles are for Catmull-Clark meshes; a Bézier view only scales the threshold".into(),
+            "--cull-backfaces and --max-triangles are for Catmull-Clark meshes".into(),
         )
         .into());
     }
@@ -299,6 +303,7 @@ fn tessellate(args: TessellateArgs) -> Result<(), Error> {
             Some(BezierView {
                 view: v.view,
                 pixels: v.pixels.expect("checked"),
+                cull: v.cull,
             })
         }
         false => None,
@@ -372,7 +377,11 @@ fn tessellate(args: TessellateArgs) -> Result<(), Error> {
             gpu_timings.readback = ms(t);
             let evaluations = status.evaluations as u64;
             (
-                Tessellation { mesh, evaluations },
+                Tessellation {
+                    mesh,
+                    evaluations,
+                    culled_patches: status.culled_patches as usize,
+                },
                 Some(params.threshold),
                 None,
             )
@@ -470,6 +479,7 @@ fn tessellate(args: TessellateArgs) -> Result<(), Error> {
         adapter,
         threshold,
         tolerance_px: view.map(|v| v.pixels),
+        culled_patches: view.map(|_| out.culled_patches),
         max_error_px,
         max_depth: test.map(|_| max_depth),
         segments,
@@ -510,6 +520,9 @@ fn print_summary(s: &Stats) {
     }
     if let Some(n) = s.segments {
         line += &format!(", segments {n}");
+    }
+    if let Some(n) = s.culled_patches {
+        line += &format!(", {n} patches culled");
     }
     println!("{line}");
     if let Some(a) = &s.adapter {

@@ -37,8 +37,10 @@ pub mod tally {
     /// Coarse triangles whose bisection the mark kernel walks (the root kernel decides
     /// the others).
     pub const MARKED: usize = ORDER + ORDER_BUCKETS as usize;
+    /// Patches culled by the view (counted by each one's first coarse triangle).
+    pub const CULLED: usize = MARKED + 1;
     /// Words in the buffer.
-    pub const WORDS: usize = MARKED + 1;
+    pub const WORDS: usize = CULLED + 1;
 }
 
 /// Control points of one bicubic patch, row-major, `x y z` per point.
@@ -520,6 +522,9 @@ pub struct BezierStatus {
     /// The mark kernel's indirect dispatch, over the coarse triangles whose root the
     /// root kernel could not decide alone (zeroed before each run).
     pub mark_dispatch: [u32; 3],
+    /// Patches wholly outside a culling view's frustum
+    /// ([`Tessellation::culled_patches`](crate::bezier::Tessellation::culled_patches)).
+    pub culled_patches: u32,
 }
 
 /// Bytes uploaded per patch and once per model for the map-based tessellator: the

@@ -60,6 +60,10 @@ pub const SOURCES: &[(&str, &str)] = &[
         include_str!("../../../shaders/shared/cc_view.wgsl"),
     ),
     (
+        "shared/thresholds.wgsl",
+        include_str!("../../../shaders/shared/thresholds.wgsl"),
+    ),
+    (
         "shared/cc_facing.wgsl",
         include_str!("../../../shaders/shared/cc_facing.wgsl"),
     ),

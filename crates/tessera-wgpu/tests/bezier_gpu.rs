@@ -807,6 +807,7 @@ fn in_a_view_the_thresholds_follow_the_distance_crack_free_and_as_on_the_cpu() {
     let view = BezierView {
         view: close,
         pixels: 1.0,
+        cull: false,
     };
     for test in [EdgeTest::Map4p, EdgeTest::Flat] {
         let params = AdaptiveParams {
@@ -874,6 +875,79 @@ fn in_a_view_the_thresholds_follow_the_distance_crack_free_and_as_on_the_cpu() {
             .read_mesh(&gpu.device, &gpu.queue, &status)
             .expect("mesh");
         assert_eq!(back.indices, world.indices, "{}", test.name());
+    }
+    gpu.check().expect("no wgpu validation errors");
+}
+
+#[test]
+fn in_a_culling_view_the_gpu_culls_the_cpu_references_patches() {
+    // The teapot close up with its handle out of view: the same triangles, the same
+    // culled patches and evaluations, the same vertices (those inside culled patches
+    // left unevaluated on both), and looking away nothing at all.
+    use tessera_core::bezier::{tessellate_adaptive_in_view, BezierView};
+    let gpu = gpu();
+    let model = load("teapot");
+    let prep = PreparedBezier::new(&model);
+    let (lo, hi) = model.bounds();
+    let diag = (hi - lo).length();
+    let view = tessera_tests::bezier_close_view(&model, true);
+    for test in [EdgeTest::Map4p, EdgeTest::Flat] {
+        let what = test.name();
+        let params = AdaptiveParams {
+            test,
+            threshold: 0.05 * diag,
+            max_depth: 6,
+        };
+        let cpu = tessellate_adaptive_in_view(&prep, &params, &view).expect("cpu");
+        assert!(cpu.culled_patches > 0, "{what}");
+        let mut stage = BezierStage::new(
+            &gpu.device,
+            &gpu.queue,
+            &Kernels::new(&gpu.device),
+            &prep,
+            &params,
+        )
+        .expect("stage");
+        stage.set_view(&gpu.queue, Some(&view)).expect("view");
+        let status = stage.run_blocking(&gpu.device, &gpu.queue).expect("run");
+        let mesh = stage
+            .read_mesh(&gpu.device, &gpu.queue, &status)
+            .expect("mesh");
+        assert_eq!(
+            status.culled_patches as usize, cpu.culled_patches,
+            "{what}: culled patches"
+        );
+        assert_eq!(
+            status.evaluations as u64, cpu.evaluations,
+            "{what}: evaluations"
+        );
+        assert_eq!(mesh.indices, cpu.mesh.indices, "{what}: topology");
+        assert_eq!(mesh.vertices.len(), cpu.mesh.vertices.len(), "{what}");
+        for (g, c) in mesh.vertices.iter().zip(&cpu.mesh.vertices) {
+            let d = (Vec3::from(g.position) - Vec3::from(c.position)).length();
+            assert!(d <= 1e-5 * diag, "{what}: {g:?} against {c:?}");
+            assert_eq!(g.face, c.face, "{what}");
+        }
+        let away = BezierView {
+            view: tessera_core::View::look_at(
+                glam::DVec3::new(0.0, -2.0 * diag as f64, 0.0),
+                glam::DVec3::new(0.0, -3.0 * diag as f64, 0.0),
+                glam::DVec3::Z,
+                30f64.to_radians(),
+                (640, 480),
+                0.01,
+            )
+            .expect("view"),
+            ..view
+        };
+        stage.set_view(&gpu.queue, Some(&away)).expect("view");
+        let status = stage.run_blocking(&gpu.device, &gpu.queue).expect("run");
+        assert_eq!(status.indices, 0, "{what}: nothing drawn");
+        assert_eq!(
+            status.culled_patches as usize,
+            model.patches.len(),
+            "{what}"
+        );
     }
     gpu.check().expect("no wgpu validation errors");
 }

@@ -320,6 +320,7 @@ fn shared_structs_match_their_rust_twins() {
         ("emit_dispatch_x", offset_of!(BezierStatus, emit_dispatch)),
         ("plain_dispatch_x", offset_of!(BezierStatus, plain_dispatch)),
         ("mark_dispatch_x", offset_of!(BezierStatus, mark_dispatch)),
+        ("culled_patches", offset_of!(BezierStatus, culled_patches)),
     ] {
         let member = members.iter().find(|(n, _)| n == name).expect(name);
         assert_eq!(member.1 as usize, offset, "{name}");
@@ -489,6 +490,7 @@ fn bezier_constants_match_their_rust_twins() {
         ("TALLY_ORDER", tally::ORDER as u32),
         ("ORDER_BUCKETS", tally::ORDER_BUCKETS),
         ("TALLY_MARKED", tally::MARKED as u32),
+        ("TALLY_CULLED", tally::CULLED as u32),
         (
             "STATUS_MARK_DISPATCH",
             (offset_of!(BezierStatus, mark_dispatch) / 4) as u32,

@@ -73,8 +73,11 @@ impl AdaptiveParams {
 pub struct Tessellation {
     /// The triangles and their vertices.
     pub mesh: Mesh,
-    /// Surface evaluations: one per output vertex, plus the flat test's candidates.
+    /// Surface evaluations: one per output vertex (but those inside culled patches), plus
+    /// the flat test's candidates.
     pub evaluations: u64,
+    /// Patches wholly outside the view's frustum: no triangles, and no evaluation inside.
+    pub culled_patches: usize,
 }
 
 /// A view for the Bézier path: each patch's edge-test threshold in `pixels` of it
@@ -85,6 +88,9 @@ pub struct BezierView {
     pub view: View,
     /// The threshold in pixels.
     pub pixels: f64,
+    /// Patches whose control points' box lies wholly outside the frustum (the patch lies
+    /// in their hull) emit nothing.
+    pub cull: bool,
 }
 
 /// Each patch's edge-test threshold, model units: `world`, or in `view` the smaller of
@@ -92,7 +98,9 @@ pub struct BezierView {
 /// control points ([`View::gain`]; the patch lies in their hull). Known before any
 /// evaluation and one per patch, so both stages and both triangles beside an edge use
 /// the same, and the mesh stays crack-free. The paper's heuristic scaled by distance, not
-/// a guarantee in pixels.
+/// a guarantee in pixels. A patch a culling view culls gets its threshold negated
+/// ([`culled`]; the tests take [`test_threshold`]), so the kernels read both from one
+/// buffer.
 pub fn patch_thresholds(
     cps: &[[Vec3; 16]],
     world: f32,
@@ -116,9 +124,30 @@ pub fn patch_thresholds(
                 .fold(DVec3::NEG_INFINITY, |a, p| a.max(p.as_dvec3()));
             let th = v.pixels / v.view.gain(lo, hi, 0.0);
             // A positive single-precision number at least.
-            (th.min(world as f64) as f32).max(f32::MIN_POSITIVE)
+            let th = (th.min(world as f64) as f32).max(f32::MIN_POSITIVE);
+            if v.cull && v.view.box_outside(lo, hi) {
+                -th
+            } else {
+                th
+            }
         })
         .collect())
+}
+
+/// Whether [`patch_thresholds`] culled the patch whose threshold is `signed`.
+pub fn culled(signed: f32) -> bool {
+    signed < 0.0
+}
+
+/// The threshold the edge tests take from [`patch_thresholds`]'s `signed` one.
+pub fn test_threshold(signed: f32) -> f32 {
+    signed.abs()
+}
+
+/// Whether a vertex at `(u, v)` of a patch lies inside it, off its sides: no other patch
+/// shares it, so it is not evaluated when its patch is culled.
+pub fn inside_patch(u: f32, v: f32) -> bool {
+    u > 0.0 && u < 1.0 && v > 0.0 && v < 1.0
 }
 
 /// Inputs of the tests on patch `p`, with its own `threshold` ([`patch_thresholds`]).
@@ -130,7 +159,7 @@ pub fn test_inputs_at<'a>(
     p: u32,
 ) -> TestInputs<'a> {
     TestInputs {
-        threshold,
+        threshold: test_threshold(threshold),
         ..test_inputs(prep, cps, params, p)
     }
 }
@@ -190,10 +219,13 @@ fn edge_decide_by(
     }
     let (p, uv0, uv1) = edge_endpoints(prep, e);
     let sides = coarse_edge_sides(prep, e);
+    // The triangles of culled patches emit nothing: they ask for no points, and an edge
+    // between two of them gets none.
     let lattices: Vec<(Lattice, TestInputs, usize, bool)> = sides
         .iter()
-        .map(|&(t, k, fwd)| {
-            let l = Lattice::new(t, params.max_depth);
+        .map(|&(t, k, fwd)| (Lattice::new(t, params.max_depth), k, fwd))
+        .filter(|(l, _, _)| !culled(threshold_of(l.patch)))
+        .map(|(l, k, fwd)| {
             (
                 l,
                 test_inputs_at(prep, cps, params, threshold_of(l.patch), l.patch),
@@ -202,6 +234,9 @@ fn edge_decide_by(
             )
         })
         .collect();
+    if lattices.is_empty() && !sides.is_empty() {
+        return ([0; EDGE_BIT_WORDS], 0);
+    }
     let own_test_levels = if params.test == EdgeTest::Flat {
         u32::MAX
     } else {
@@ -501,6 +536,31 @@ pub fn vertex_eval(prep: &PreparedBezier, cps: &[[Vec3; 16]], r: &VertexRecord) 
     }
 }
 
+/// Whether the vertex of record `r` is left unevaluated: it lies inside a culled patch
+/// ([`inside_patch`]), where no triangle uses it.
+pub fn skips_evaluation(thresholds: &[f32], r: &VertexRecord) -> bool {
+    culled(thresholds[r.patch as usize]) && inside_patch(r.u, r.v)
+}
+
+/// [`vertex_eval`] with each patch's signed threshold: a vertex inside a culled patch
+/// ([`skips_evaluation`]) keeps its parameter and patch, at the origin with no normal.
+pub fn vertex_eval_at(
+    prep: &PreparedBezier,
+    cps: &[[Vec3; 16]],
+    thresholds: &[f32],
+    r: &VertexRecord,
+) -> OutVertex {
+    if skips_evaluation(thresholds, r) {
+        return OutVertex {
+            position: [0.0; 3],
+            normal: [0.0; 3],
+            uv: [r.u, r.v],
+            face: r.patch,
+        };
+    }
+    vertex_eval(prep, cps, r)
+}
+
 /// Runs the whole pipeline on the CPU.
 pub fn tessellate_adaptive(prep: &PreparedBezier, params: &AdaptiveParams) -> Result<Tessellation> {
     tessellate_adaptive_timed(prep, params).map(|(t, _)| t)
@@ -569,9 +629,19 @@ fn run_adaptive(
     let mut tri_offsets = Vec::with_capacity(l.coarse_triangles as usize);
     let mut buckets = Vec::with_capacity(l.coarse_triangles as usize);
     let mut plain = Vec::with_capacity(l.coarse_triangles as usize);
+    let patch_of = |t: u32| t / crate::gpu_types::COARSE_TRIANGLES_PER_PATCH as u32;
     for t in 0..l.coarse_triangles {
-        let ctx = tri_context_at(prep, &cps, &bits, params, &thresholds, t);
         let mut s = TriScratch::new(params.max_depth);
+        // A culled patch's triangles make nothing (the root kernel's).
+        if culled(thresholds[patch_of(t) as usize]) {
+            plain.push(false);
+            buckets.push(order_bucket(0, false));
+            inner_offsets.push(0);
+            tri_offsets.push(0);
+            scratch.push(s);
+            continue;
+        }
+        let ctx = tri_context_at(prep, &cps, &bits, params, &thresholds, t);
         // The root kernel's triangles, then the mark kernel's.
         let known = root_known_leaf(&ctx)
             .then(|| euler_count(&ctx, &s))
@@ -612,6 +682,9 @@ fn run_adaptive(
     }
     let mut indices = vec![0u32; 3 * triangles as usize];
     for t in order {
+        if culled(thresholds[patch_of(t) as usize]) {
+            continue;
+        }
         let ctx = tri_context_at(prep, &cps, &bits, params, &thresholds, t);
         if plain[t as usize] {
             tri_emit_plain(&ctx, 3 * tri_offsets[t as usize], &mut indices);
@@ -631,12 +704,20 @@ fn run_adaptive(
     times.emit = ms(start);
     let start = std::time::Instant::now();
     // 6. Evaluate each vertex once.
-    let vertices: Vec<OutVertex> = records.iter().map(|r| vertex_eval(prep, &cps, r)).collect();
-    evaluations += vertices.len() as u64;
+    let vertices: Vec<OutVertex> = records
+        .iter()
+        .map(|r| vertex_eval_at(prep, &cps, &thresholds, r))
+        .collect();
+    let skipped = records
+        .iter()
+        .filter(|r| skips_evaluation(&thresholds, r))
+        .count();
+    evaluations += (vertices.len() - skipped) as u64;
     times.vertex_eval = ms(start);
     let out = Tessellation {
         mesh: Mesh { vertices, indices },
         evaluations,
+        culled_patches: thresholds.iter().filter(|&&th| culled(th)).count(),
     };
     Ok((out, times))
 }
@@ -663,6 +744,7 @@ mod tests {
             )
             .expect("view"),
             pixels: 1.0,
+            cull: false,
         };
         let th = patch_thresholds(&cps, 1.0, Some(&view)).expect("thresholds");
         assert!(

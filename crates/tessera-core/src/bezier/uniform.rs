@@ -131,5 +131,6 @@ pub fn tessellate_uniform(
     Ok(Tessellation {
         mesh: Mesh { vertices, indices },
         evaluations,
+        culled_patches: 0,
     })
 }

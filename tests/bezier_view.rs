@@ -1,0 +1,152 @@
+//! The Bézier path in a culling view: the patches out of view emit nothing and are not
+//! evaluated inside, the rest keeps its shape, and the mesh stays free of T-junctions.
+
+use glam::{DVec3, Vec3};
+use tessera_core::bezier::tessellate::{culled, patch_thresholds};
+use tessera_core::bezier::{
+    tessellate_adaptive_in_view, AdaptiveParams, BezierModel, BezierView, EdgeTest, PreparedBezier,
+    Tessellation,
+};
+use tessera_core::measure::{bezier_surface_samples, measure_error};
+use tessera_core::watertight::check_watertight;
+use tessera_core::View;
+use tessera_tests::{bezier_close_view as close_view, teaset};
+
+fn teapot() -> BezierModel {
+    teaset()
+        .into_iter()
+        .find(|(n, _)| *n == "teapot")
+        .expect("teapot")
+        .1
+}
+
+fn diag(model: &BezierModel) -> f32 {
+    let (lo, hi) = model.bounds();
+    (hi - lo).length()
+}
+
+fn run(
+    model: &BezierModel,
+    prep: &PreparedBezier,
+    test: EdgeTest,
+    view: &BezierView,
+) -> Tessellation {
+    let params = AdaptiveParams {
+        test,
+        threshold: 0.05 * diag(model),
+        max_depth: 6,
+    };
+    tessellate_adaptive_in_view(prep, &params, view).expect("tessellate")
+}
+
+#[test]
+fn culled_patches_emit_nothing_and_the_rest_stays_whole() {
+    let model = teapot();
+    let prep = PreparedBezier::new(&model);
+    let (near, far) = (close_view(&model, true), close_view(&model, false));
+    let cps: Vec<[Vec3; 16]> = (0..prep.layout.patches)
+        .map(|p| prep.control_points(p))
+        .collect();
+    let th = patch_thresholds(&cps, diag(&model), Some(&near)).expect("thresholds");
+    let is_culled: Vec<bool> = th.iter().map(|&t| culled(t)).collect();
+    let n_culled = is_culled.iter().filter(|&&c| c).count();
+    assert!(
+        n_culled > 0 && n_culled < model.patches.len(),
+        "{n_culled} of {} patches culled",
+        model.patches.len()
+    );
+    // Conservative: no sample of a culled patch lies in the frustum.
+    let n = 12;
+    let samples = bezier_surface_samples(&model, n);
+    for (k, x) in samples.iter().enumerate() {
+        if is_culled[k / (n * n)] {
+            assert!(
+                !near.view.contains(*x),
+                "patch {} in view at {x}",
+                k / (n * n)
+            );
+        }
+    }
+    for test in [EdgeTest::Map4p, EdgeTest::Flat] {
+        let what = test.name();
+        let out = run(&model, &prep, test, &near);
+        let whole = run(&model, &prep, test, &far);
+        eprintln!(
+            "{what}: {n_culled} of {} patches culled, {} triangles against {}, {} evaluations against {}",
+            model.patches.len(),
+            out.mesh.triangle_count(),
+            whole.mesh.triangle_count(),
+            out.evaluations,
+            whole.evaluations
+        );
+        assert_eq!(out.culled_patches, n_culled, "{what}");
+        assert_eq!(whole.culled_patches, 0, "{what}");
+        assert!(
+            out.mesh.triangle_count() < whole.mesh.triangle_count(),
+            "{what}"
+        );
+        // No triangle of a culled patch, and fewer evaluations: none inside the culled
+        // patches.
+        let faces = |t: [u32; 3]| t.map(|i| out.mesh.vertices[i as usize].face);
+        assert!(
+            out.mesh
+                .triangles()
+                .all(|t| faces(t).iter().any(|&f| !is_culled[f as usize])),
+            "{what}: a culled patch's triangle"
+        );
+        assert!(out.evaluations < whole.evaluations, "{what}");
+        let positions: Vec<Vec3> = out.mesh.positions().collect();
+        let report = check_watertight(
+            &positions,
+            &out.mesh.indices,
+            &[],
+            1e-6 * diag(&model) as f64,
+        );
+        assert_eq!(
+            (
+                report.t_junctions,
+                report.degenerate_triangles,
+                report.non_manifold_edges
+            ),
+            (0, 0, 0),
+            "{what}: {report:?}"
+        );
+        // What is in view is still covered: its samples lie as near the culled mesh as
+        // the whole one.
+        let inside: Vec<DVec3> = samples
+            .iter()
+            .copied()
+            .filter(|&x| near.view.contains(x))
+            .collect();
+        let d = diag(&model) as f64;
+        let (e_out, e_whole) = (
+            measure_error(&inside, &out.mesh, d).max_error,
+            measure_error(&inside, &whole.mesh, d).max_error,
+        );
+        assert!(
+            e_out <= 1.5 * e_whole + 1e-6 * d,
+            "{what}: {e_out} against {e_whole}"
+        );
+    }
+}
+
+#[test]
+fn a_bezier_view_looking_away_draws_nothing() {
+    let model = teapot();
+    let prep = PreparedBezier::new(&model);
+    let mut v = close_view(&model, true);
+    let (lo, hi) = model.bounds();
+    let c = ((lo + hi) / 2.0).as_dvec3();
+    v.view = View::look_at(
+        c + DVec3::new(0.0, -2.0, 0.0) * diag(&model) as f64,
+        c + DVec3::new(0.0, -3.0, 0.0) * diag(&model) as f64,
+        DVec3::Z,
+        30f64.to_radians(),
+        (640, 480),
+        0.01,
+    )
+    .expect("view");
+    let out = run(&model, &prep, EdgeTest::Map4p, &v);
+    assert_eq!(out.mesh.triangle_count(), 0);
+    assert_eq!(out.culled_patches, model.patches.len());
+}
