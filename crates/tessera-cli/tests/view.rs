@@ -183,10 +183,6 @@ fn views_refuse_what_they_do_not_take_yet_with_one_line() {
             "give --tolerance-px",
         ),
         (
-            vec!["tessellate", &teapot, "--tolerance-px", "1", "--no-cull"],
-            "Catmull-Clark",
-        ),
-        (
             vec![
                 "tessellate",
                 &teapot,
@@ -349,4 +345,39 @@ fn a_bezier_view_scales_the_threshold_on_either_backend() {
         coarse["triangles"].as_u64() < cpu["triangles"].as_u64(),
         "{coarse} against {cpu}"
     );
+    // Closer, by the spout: the patches out of view are culled alike on both backends,
+    // and kept with --no-cull.
+    let close = |backend: &str, keep: bool, name: &str| {
+        let mut args = vec![
+            "tessellate",
+            &teapot,
+            "--tolerance-px",
+            "1",
+            "--backend",
+            backend,
+            "--eye",
+            "4.3,-3.7,2.4",
+            "--target",
+            "2.7,0,1.6",
+            "--fov",
+            "30",
+            "--size",
+            "640x480",
+        ];
+        if keep {
+            args.push("--no-cull");
+        }
+        stats_of(&args, name)
+    };
+    let (cpu, gpu) = (
+        close("cpu", false, "bezier_close_cpu.json"),
+        close("gpu", false, "bezier_close_gpu.json"),
+    );
+    assert!(cpu["culled_patches"].as_u64().unwrap() > 0, "{cpu}");
+    assert_eq!(cpu["culled_patches"], gpu["culled_patches"]);
+    assert_eq!(cpu["triangles"], gpu["triangles"]);
+    assert_eq!(cpu["evaluations"], gpu["evaluations"]);
+    let kept = close("cpu", true, "bezier_close_kept.json");
+    assert_eq!(kept["culled_patches"], 0, "{kept}");
+    assert!(kept["triangles"].as_u64() > cpu["triangles"].as_u64());
 }
