@@ -419,6 +419,10 @@ impl Running {
                         p.pixels = None;
                     }
                     Setting::TolerancePx(px) if kind == Kind::CatmullClark => p.pixels = Some(px),
+                    Setting::CullBackfaces(c) if kind == Kind::CatmullClark => p.cull_backfaces = c,
+                    Setting::CullBackfaces(_) => {
+                        return Err(wrong("cull-backfaces is a Catmull-Clark setting"))
+                    }
                     Setting::TolerancePx(_) => return Err(wrong(
                         "tolerance-px is a Catmull-Clark setting; Bézier surfaces take threshold",
                     )),

@@ -37,7 +37,8 @@
 //!                             threshold T (Bézier, model units), tolerance-px P
 //!                             (Catmull-Clark, pixels of the view: the default, 1),
 //!                             tolerance-rel R (Catmull-Clark, fraction of the
-//!                             diagonal, instead of pixels), max-depth D,
+//!                             diagonal, instead of pixels), cull-backfaces on|off
+//!                             (Catmull-Clark in pixels), max-depth D,
 //!                             first-split search|midpoint, segments N,
 //!                             wireframe on|off, patch-tint on|off, backend gpu|cpu
 //! FRAME animate on|off|toggle the control points' animation

@@ -167,6 +167,8 @@ fn tessellation(ui: &mut egui::Ui, shown: &Shown, params: &mut Params) {
                     .custom_parser(|s| s.trim().parse().ok());
                 ui.add(slider);
                 ui.small("guaranteed in the view drawn; moving it tessellates again, and patches out of view are culled");
+                ui.checkbox(&mut params.cull_backfaces, "cull back faces")
+                    .on_hover_text("patches facing away from the eye everywhere emit nothing");
             } else {
                 let slider = egui::Slider::new(&mut params.tolerance_rel, 1e-5..=3e-2)
                     .logarithmic(true)

@@ -114,6 +114,8 @@ pub struct Params {
     /// Catmull-Clark adaptive: the tolerance in pixels of the view drawn (moving the
     /// camera tessellates again), patches out of view culled; `None`: `tolerance_rel`.
     pub pixels: Option<f64>,
+    /// In pixels, the patches facing away from the eye are culled too.
+    pub cull_backfaces: bool,
     pub bezier_depth: u32,
     pub cc_depth: u32,
     pub first_split: FirstSplit,
@@ -142,6 +144,7 @@ impl Params {
             threshold: model.default_threshold(),
             tolerance_rel: DEFAULT_TOLERANCE_REL,
             pixels: Some(DEFAULT_PIXELS),
+            cull_backfaces: false,
             bezier_depth: AdaptiveParams::DEFAULT_MAX_DEPTH,
             cc_depth: MAX_DEPTH,
             first_split: FirstSplit::Search,
@@ -196,7 +199,7 @@ impl Params {
                 view: *view,
                 pixels: Some(px),
                 cull: true,
-                cull_backfaces: false,
+                cull_backfaces: self.cull_backfaces,
                 max_triangles: Some(TRIANGLE_CAP),
             })
     }

@@ -51,6 +51,8 @@ pub enum Setting {
     ToleranceRel(f64),
     /// Catmull-Clark tolerance in pixels of the view drawn (`--tolerance-px`).
     TolerancePx(f64),
+    /// Catmull-Clark in pixels: the patches facing away from the eye are culled too.
+    CullBackfaces(bool),
     MaxDepth(u32),
     FirstSplit(FirstSplit),
     /// Uniform methods: segments per patch side.
@@ -261,6 +263,7 @@ pub fn setting(key: &str, value: &str) -> Result<Setting, String> {
         "threshold" => Setting::Threshold(finite(value, "threshold")? as f32),
         "tolerance-rel" => Setting::ToleranceRel(finite(value, "tolerance-rel")?),
         "tolerance-px" => Setting::TolerancePx(finite(value, "tolerance-px")?),
+        "cull-backfaces" => Setting::CullBackfaces(switch(value)?),
         "max-depth" => Setting::MaxDepth(number(value, "max-depth")?),
         "first-split" => Setting::FirstSplit(match value {
             "search" => FirstSplit::Search,
@@ -283,7 +286,7 @@ pub fn setting(key: &str, value: &str) -> Result<Setting, String> {
         }),
         _ => {
             return Err(format!(
-                "unknown setting {key:?} (method, threshold, tolerance-rel, tolerance-px, max-depth, first-split, segments, wireframe, patch-tint, backend)"
+                "unknown setting {key:?} (method, threshold, tolerance-rel, tolerance-px, cull-backfaces, max-depth, first-split, segments, wireframe, patch-tint, backend)"
             ))
         }
     })

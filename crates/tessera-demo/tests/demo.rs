@@ -544,3 +544,39 @@ fn no_adapter_exits_1_with_one_line() {
     );
     assert_eq!(stderr.lines().count(), 1, "{stderr}");
 }
+
+#[test]
+fn culling_back_faces_drops_the_patches_facing_away() {
+    // Spot in pixels: turning back-face culling on culls more patches with fewer
+    // triangles, and off again gives the first mesh back.
+    let d = dir("backfaces");
+    let (json, script) = (d.join("stats.json"), d.join("backfaces.txt"));
+    std::fs::write(
+        &script,
+        "2 set cull-backfaces on\n\
+         4 set cull-backfaces off\n",
+    )
+    .expect("script");
+    demo_ok(&[
+        s(&asset("catmull_clark/spot_control_mesh.obj")),
+        "--frames",
+        "6",
+        "--size",
+        &size_arg(),
+        "--no-panel",
+        "--script",
+        s(&script),
+        "--stats-json",
+        s(&json),
+    ]);
+    let rows = stats(&json);
+    let (front, culled, back) = (&rows[1], &rows[3], &rows[5]);
+    eprintln!("{front}\n{culled}\n{back}");
+    assert!(
+        u(culled, "culled_patches") > u(front, "culled_patches"),
+        "{front} then {culled}"
+    );
+    assert!(u(culled, "triangles") < u(front, "triangles"));
+    assert_eq!(u(back, "triangles"), u(front, "triangles"));
+    assert_eq!(u(back, "culled_patches"), u(front, "culled_patches"));
+}
