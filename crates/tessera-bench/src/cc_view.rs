@@ -49,6 +49,10 @@ struct Row {
     world_max_error_px: f64,
     triangles_ratio: f64,
     time_ratio: f64,
+    /// In pixels with the patches facing away culled too (outside the guarantee).
+    backfaces_triangles: usize,
+    backfaces_culled_patches: usize,
+    backfaces_ms: f64,
 }
 
 /// Vertical field of view, viewport and the sampling of the measurement.
@@ -112,8 +116,16 @@ pub fn run(assets: &Path, out_dir: &Path, quick: bool) {
         let samples = surface_samples(&model, SAMPLES);
         let (nearest, farthest) = depth_range(&view, &samples);
         for pixels in [1.0, 0.5] {
-            let run = |tolerance, px| cpu_in_view(&model, view, tolerance, px, repeats);
+            let run = |tolerance, px| cpu_in_view(&model, view, tolerance, px, false, repeats);
             let (px_ms, px) = run(Tolerance::Relative(1.0), Some(pixels));
+            let (backfaces_ms, backfaces) = cpu_in_view(
+                &model,
+                view,
+                Tolerance::Relative(1.0),
+                Some(pixels),
+                true,
+                repeats,
+            );
             let (px_gpu_ms, px_gpu_triangles) = gpu_in_view(
                 &gpu,
                 &kernels,
@@ -150,6 +162,9 @@ pub fn run(assets: &Path, out_dir: &Path, quick: bool) {
                 triangles_ratio: px.mesh.triangle_count() as f64
                     / world.mesh.triangle_count().max(1) as f64,
                 time_ratio: px_ms / world_ms,
+                backfaces_triangles: backfaces.mesh.triangle_count(),
+                backfaces_culled_patches: backfaces.culled_patches,
+                backfaces_ms,
             };
             eprintln!(
                 "cc view {name} {pixels} px: {} tris ({:.0} ms) against {} ({:.0} ms) at {world_tolerance:.2e}",
@@ -190,6 +205,19 @@ pub fn run(assets: &Path, out_dir: &Path, quick: bool) {
             r.time_ratio
         );
     }
+    s += "\nThe same close-ups in pixels with the patches facing away from the eye culled too (`cull_backfaces`, outside the guarantee, which then holds for the surface facing the eye); CPU reference:\n\n| model | p (px) | triangles | culled patches | CPU ms | against pixels alone | against world ε |\n|---|---|---|---|---|---|---|\n";
+    for r in &rows {
+        s += &format!(
+            "| {} | {} | {} | {} | {:.0} | {:.2} | {:.2} |\n",
+            r.model,
+            r.pixels,
+            r.backfaces_triangles,
+            r.backfaces_culled_patches,
+            r.backfaces_ms,
+            r.backfaces_triangles as f64 / r.px_triangles.max(1) as f64,
+            r.backfaces_triangles as f64 / r.world_triangles.max(1) as f64,
+        );
+    }
     if let Some(m) = &motion {
         s += &format!(
             "\nCamera motion on {} ({} patches, p = {} px, midpoint splits): {} views along a path from far to close and past, each written with `set_view` and run (the GPU stage), against the CPU reference in the same views; medians per frame:\n\n| frames | triangles (min–max) | culled patches (min–max) | **GPU ms per frame** | CPU ms per frame | GPU / CPU |\n|---|---|---|---|---|---|\n| {} | {}–{} | {}–{} | **{:.1}** | {:.0} | {:.2} |\n",
@@ -209,7 +237,7 @@ pub fn run(assets: &Path, out_dir: &Path, quick: bool) {
     }
     if let Some(sc) = &scene {
         s += &format!(
-            "\nA scene: {} copies of the car in an {}×{} grid, one control mesh ({} patches), seen from ground level off one corner, looking across it to the far corner ({}×{} pixels, p = {} px, midpoint splits, depth range {:.0}:1), against the same view culled at the world tolerance that guarantees the same pixel error ({:.2e}); CPU reference, medians of {}:\n\n| | triangles | culled patches | CPU ms |\n|---|---|---|---|\n| pixels | {} | {} | {:.0} |\n| world ε | {} | {} | {:.0} |\n| **ratio** | **{:.3}** | | **{:.3}** |\n\nThe GPU stage in the pixels' view: {}.\n",
+            "\nA scene: {} copies of the car in an {}×{} grid, one control mesh ({} patches), seen from ground level off one corner, looking across it to the far corner ({}×{} pixels, p = {} px, midpoint splits, depth range {:.0}:1), against the same view culled at the world tolerance that guarantees the same pixel error ({:.2e}); CPU reference, medians of {}:\n\n| | triangles | culled patches | CPU ms |\n|---|---|---|---|\n| pixels | {} | {} | {:.0} |\n| world ε | {} | {} | {:.0} |\n| **ratio** | **{:.3}** | | **{:.3}** |\n| pixels, back faces culled | {} | {} | {:.0} |\n| world ε, back faces culled | {} | {} | {:.0} |\n| **ratio**, back faces culled | **{:.3}** | | **{:.3}** |\n| pixels, back faces culled, against world ε | {:.3} | | {:.3} |\n\nThe GPU stage in the pixels' view: {}.\n",
             sc.copies,
             sc.side,
             sc.side,
@@ -228,6 +256,16 @@ pub fn run(assets: &Path, out_dir: &Path, quick: bool) {
             sc.world_ms,
             sc.px_triangles as f64 / sc.world_triangles.max(1) as f64,
             sc.px_ms / sc.world_ms,
+            sc.px_backfaces_triangles,
+            sc.px_backfaces_culled_patches,
+            sc.px_backfaces_ms,
+            sc.world_backfaces_triangles,
+            sc.world_backfaces_culled_patches,
+            sc.world_backfaces_ms,
+            sc.px_backfaces_triangles as f64 / sc.world_backfaces_triangles.max(1) as f64,
+            sc.px_backfaces_ms / sc.world_backfaces_ms,
+            sc.px_backfaces_triangles as f64 / sc.world_triangles.max(1) as f64,
+            sc.px_backfaces_ms / sc.world_ms,
             match &sc.px_gpu {
                 Ok(ms) => format!("{ms:.0} ms per run"),
                 Err(e) => format!("not run, the device cannot hold the scene ({e})"),
@@ -267,6 +305,7 @@ fn cpu_in_view(
     view: View,
     tolerance: Tolerance,
     pixels: Option<f64>,
+    backfaces: bool,
     repeats: usize,
 ) -> (f64, tessera_core::catmull_clark::CcTessellation) {
     let params = CcParams {
@@ -279,7 +318,7 @@ fn cpu_in_view(
         view,
         pixels,
         cull: true,
-        cull_backfaces: false,
+        cull_backfaces: backfaces,
         max_triangles: None,
     };
     median_time(repeats, || {
@@ -441,6 +480,13 @@ struct Scene {
     world_triangles: usize,
     world_culled_patches: usize,
     world_ms: f64,
+    /// Both runs again with the patches facing away culled too.
+    px_backfaces_triangles: usize,
+    px_backfaces_culled_patches: usize,
+    px_backfaces_ms: f64,
+    world_backfaces_triangles: usize,
+    world_backfaces_culled_patches: usize,
+    world_backfaces_ms: f64,
 }
 
 /// 64 cars in an 8 × 8 grid, one control mesh, from ground level off one corner,
@@ -510,7 +556,8 @@ fn scene(gpu: &Gpu, kernels: &Kernels, assets: &Path) -> Scene {
     let (nearest, farthest) = depth_range(&view, &surface_samples(&model, 2));
     let world_tolerance = PIXELS * nearest / focal();
     let repeats = 1;
-    let run = |tolerance, px| cpu_in_view(&model, view, tolerance, px, repeats);
+    let run = |tolerance, px| cpu_in_view(&model, view, tolerance, px, false, repeats);
+    let run_backfaces = |tolerance, px| cpu_in_view(&model, view, tolerance, px, true, repeats);
     eprintln!(
         "cc view scene: built and sampled in {:.0} s",
         started.elapsed().as_secs_f64()
@@ -536,6 +583,9 @@ fn scene(gpu: &Gpu, kernels: &Kernels, assets: &Path) -> Scene {
         px.mesh.triangle_count(),
         world.mesh.triangle_count()
     );
+    let (px_backfaces_ms, px_backfaces) = run_backfaces(Tolerance::Relative(1.0), Some(PIXELS));
+    let (world_backfaces_ms, world_backfaces) =
+        run_backfaces(Tolerance::Absolute(world_tolerance), None);
     Scene {
         copies: SIDE * SIDE,
         side: SIDE,
@@ -551,5 +601,11 @@ fn scene(gpu: &Gpu, kernels: &Kernels, assets: &Path) -> Scene {
         world_triangles: world.mesh.triangle_count(),
         world_culled_patches: world.culled_patches,
         world_ms,
+        px_backfaces_triangles: px_backfaces.mesh.triangle_count(),
+        px_backfaces_culled_patches: px_backfaces.culled_patches,
+        px_backfaces_ms,
+        world_backfaces_triangles: world_backfaces.mesh.triangle_count(),
+        world_backfaces_culled_patches: world_backfaces.culled_patches,
+        world_backfaces_ms,
     }
 }

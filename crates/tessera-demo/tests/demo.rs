@@ -373,28 +373,14 @@ fn in_pixels_by_default_moving_the_camera_tessellates_again_and_culls() {
     // A Catmull-Clark model opens with a tolerance of one pixel of the view drawn: a
     // still view does not tessellate again, zooming in does (more triangles, and patches
     // off screen culled), and a tolerance in model units no longer follows the view.
-    let d = dir("pixels");
-    let (json, script) = (d.join("stats.json"), d.join("pixels.txt"));
-    std::fs::write(
-        &script,
+    let rows = scripted_stats(
+        "pixels",
+        "opensubdiv/catmark_torus.obj",
+        16,
         "5 zoom 3\n\
          12 set tolerance-rel 3e-3\n\
          14 zoom 0.5\n",
-    )
-    .expect("script");
-    demo_ok(&[
-        s(&asset("opensubdiv/catmark_torus.obj")),
-        "--frames",
-        "16",
-        "--size",
-        &size_arg(),
-        "--no-panel",
-        "--script",
-        s(&script),
-        "--stats-json",
-        s(&json),
-    ]);
-    let rows = stats(&json);
+    );
     assert_eq!(rows.len(), 16);
     for r in &rows[..12] {
         assert_eq!(r["tolerance_px"].as_f64(), Some(1.0), "{r}");
@@ -549,27 +535,13 @@ fn no_adapter_exits_1_with_one_line() {
 fn culling_back_faces_drops_the_patches_facing_away() {
     // Spot in pixels: turning back-face culling on culls more patches with fewer
     // triangles, and off again gives the first mesh back.
-    let d = dir("backfaces");
-    let (json, script) = (d.join("stats.json"), d.join("backfaces.txt"));
-    std::fs::write(
-        &script,
+    let rows = scripted_stats(
+        "backfaces",
+        "catmull_clark/spot_control_mesh.obj",
+        6,
         "2 set cull-backfaces on\n\
          4 set cull-backfaces off\n",
-    )
-    .expect("script");
-    demo_ok(&[
-        s(&asset("catmull_clark/spot_control_mesh.obj")),
-        "--frames",
-        "6",
-        "--size",
-        &size_arg(),
-        "--no-panel",
-        "--script",
-        s(&script),
-        "--stats-json",
-        s(&json),
-    ]);
-    let rows = stats(&json);
+    );
     let (front, culled, back) = (&rows[1], &rows[3], &rows[5]);
     eprintln!("{front}\n{culled}\n{back}");
     assert!(
@@ -579,4 +551,25 @@ fn culling_back_faces_drops_the_patches_facing_away() {
     assert!(u(culled, "triangles") < u(front, "triangles"));
     assert_eq!(u(back, "triangles"), u(front, "triangles"));
     assert_eq!(u(back, "culled_patches"), u(front, "culled_patches"));
+}
+
+/// The demo on asset `model` for `frames` frames without the panel, running `script`:
+/// the stats of each frame.
+fn scripted_stats(name: &str, model: &str, frames: u32, script: &str) -> Vec<serde_json::Value> {
+    let d = dir(name);
+    let (json, path) = (d.join("stats.json"), d.join("script.txt"));
+    std::fs::write(&path, script).expect("script");
+    demo_ok(&[
+        s(&asset(model)),
+        "--frames",
+        &frames.to_string(),
+        "--size",
+        &size_arg(),
+        "--no-panel",
+        "--script",
+        s(&path),
+        "--stats-json",
+        s(&json),
+    ]);
+    stats(&json)
 }

@@ -526,6 +526,29 @@ fn two_collapsed_sides_count_by_replay_and_match_the_cpu() {
 }
 
 /// The mesh of a fresh stage run to completion, and the CPU reference's.
+/// A stage in `view`, run once and read back.
+fn run_in_view(
+    gpu: &Gpu,
+    prep: &PreparedBezier,
+    params: &AdaptiveParams,
+    view: &tessera_core::bezier::BezierView,
+) -> (BezierStage, BezierStatus, tessera_core::Mesh) {
+    let mut stage = BezierStage::new(
+        &gpu.device,
+        &gpu.queue,
+        &Kernels::new(&gpu.device),
+        prep,
+        params,
+    )
+    .expect("stage");
+    stage.set_view(&gpu.queue, Some(view)).expect("view");
+    let status = stage.run_blocking(&gpu.device, &gpu.queue).expect("run");
+    let mesh = stage
+        .read_mesh(&gpu.device, &gpu.queue, &status)
+        .expect("mesh");
+    (stage, status, mesh)
+}
+
 fn gpu_and_cpu_meshes(
     gpu: &Gpu,
     prep: &PreparedBezier,
@@ -816,19 +839,7 @@ fn in_a_view_the_thresholds_follow_the_distance_crack_free_and_as_on_the_cpu() {
             max_depth: 6,
         };
         let cpu = tessellate_adaptive_in_view(&prep, &params, &view).expect("cpu");
-        let mut stage = BezierStage::new(
-            &gpu.device,
-            &gpu.queue,
-            &Kernels::new(&gpu.device),
-            &prep,
-            &params,
-        )
-        .expect("stage");
-        stage.set_view(&gpu.queue, Some(&view)).expect("view");
-        let status = stage.run_blocking(&gpu.device, &gpu.queue).expect("run");
-        let mesh = stage
-            .read_mesh(&gpu.device, &gpu.queue, &status)
-            .expect("mesh");
+        let (mut stage, status, mesh) = run_in_view(&gpu, &prep, &params, &view);
         assert_eq!(mesh.indices, cpu.mesh.indices, "{}: topology", test.name());
         let positions: Vec<Vec3> = mesh.positions().collect();
         let report = check_watertight(
@@ -900,19 +911,7 @@ fn in_a_culling_view_the_gpu_culls_the_cpu_references_patches() {
         };
         let cpu = tessellate_adaptive_in_view(&prep, &params, &view).expect("cpu");
         assert!(cpu.culled_patches > 0, "{what}");
-        let mut stage = BezierStage::new(
-            &gpu.device,
-            &gpu.queue,
-            &Kernels::new(&gpu.device),
-            &prep,
-            &params,
-        )
-        .expect("stage");
-        stage.set_view(&gpu.queue, Some(&view)).expect("view");
-        let status = stage.run_blocking(&gpu.device, &gpu.queue).expect("run");
-        let mesh = stage
-            .read_mesh(&gpu.device, &gpu.queue, &status)
-            .expect("mesh");
+        let (mut stage, status, mesh) = run_in_view(&gpu, &prep, &params, &view);
         assert_eq!(
             status.culled_patches as usize, cpu.culled_patches,
             "{what}: culled patches"
