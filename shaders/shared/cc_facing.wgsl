@@ -11,6 +11,12 @@
 // taken as facing the eye.
 const CC_FACING_STACK: u32 = 128u;
 
+// The facing field over a box: at its lowest corner, and its steps along the sides.
+struct CcFacing {
+    f0: vec3f,
+    g: array<vec3f, 3>,
+}
+
 // `View::facing` at a point whose clip coordinates are `c`.
 fn cc_facing_at(c: vec4f) -> vec3f {
     let r_x = cc_view_row(0u);
@@ -19,17 +25,17 @@ fn cc_facing_at(c: vec4f) -> vec3f {
     return c.x * cross(r_y, r_w) + c.y * cross(r_w, r_x) + c.w * cross(r_x, r_y);
 }
 
-// Whether the generator `n` faces away at every corner of the box (`f` at them); a zero
-// one spans nothing. Without short circuits: a CPU device runs every branch anyway.
-fn cc_faces_away(f: array<vec3f, 8>, n: vec3f) -> bool {
-    let away = (dot(f[0], n) < 0.0) & (dot(f[1], n) < 0.0) & (dot(f[2], n) < 0.0)
-        & (dot(f[3], n) < 0.0) & (dot(f[4], n) < 0.0) & (dot(f[5], n) < 0.0)
-        & (dot(f[6], n) < 0.0) & (dot(f[7], n) < 0.0);
-    return away | all(n == vec3f(0.0));
+// Whether the generator `n` faces away over the whole box, from `f` at its lowest corner
+// and the steps `g` along its sides (`View::box_back_facing`); a zero one spans nothing.
+// Without short circuits: a CPU device runs every branch anyway.
+fn cc_faces_away(f: CcFacing, n: vec3f) -> bool {
+    let most = dot(f.f0, n) + max(dot(f.g[0], n), 0.0) + max(dot(f.g[1], n), 0.0)
+        + max(dot(f.g[2], n), 0.0);
+    return (most < 0.0) | all(n == vec3f(0.0));
 }
 
 // The twelve products of one u-difference `a` with the net's v-differences `b`.
-fn cc_row_faces_away(f: array<vec3f, 8>, a: vec3f, b: array<vec3f, 12>) -> bool {
+fn cc_row_faces_away(f: CcFacing, a: vec3f, b: array<vec3f, 12>) -> bool {
     return cc_faces_away(f, cross(a, b[0])) & cc_faces_away(f, cross(a, b[1]))
         & cc_faces_away(f, cross(a, b[2])) & cc_faces_away(f, cross(a, b[3]))
         & cc_faces_away(f, cross(a, b[4])) & cc_faces_away(f, cross(a, b[5]))
@@ -41,7 +47,7 @@ fn cc_row_faces_away(f: array<vec3f, 8>, a: vec3f, b: array<vec3f, 12>) -> bool 
 // `facing::net_normals` of net k, tested: point 0 is absolute and the rest offsets from
 // it, so point 0 is taken as the origin (differences do not change). Written out, so
 // that every index is a constant.
-fn cc_net_faces_away(f: array<vec3f, 8>, k: u32) -> bool {
+fn cc_net_faces_away(f: CcFacing, k: u32) -> bool {
     var q = cc_net_points(k);
     q[0] = vec3f(0.0);
     let dv = array<vec3f, 12>(
@@ -62,10 +68,9 @@ fn cc_net_faces_away(f: array<vec3f, 8>, k: u32) -> bool {
 // the cap on steps only guards against a corrupt upload.
 fn cc_patch_back_facing(p: u32, lo: vec3f, hi: vec3f) -> bool {
     let c = cc_view_corners(lo, hi);
-    var f: array<vec3f, 8>;
-    for (var k = 0u; k < 8u; k++) {
-        f[k] = cc_facing_at(c[k]);
-    }
+    let f0 = cc_facing_at(c[0]);
+    let f = CcFacing(f0, array<vec3f, 3>(cc_facing_at(c[1]) - f0, cc_facing_at(c[2]) - f0,
+        cc_facing_at(c[4]) - f0));
     let root = cc_roots[p];
     var stack: array<u32, CC_FACING_STACK>;
     stack[0] = root.node;

@@ -258,21 +258,24 @@ impl View {
 
     /// Whether every surface of the box `[lo, hi]` whose normals lie in the cone spanned
     /// by `normals` faces away from the eye: `f(X)·n < 0` for every point `X` of the box
-    /// and every normal `n` of the cone ([`facing`](Self::facing)). The product is affine
-    /// in `X` and linear in `n`, so the box's eight corners and the cone's generators
-    /// decide it. Where `w ≤ 0` nothing is drawn, so the sign of `w` does not matter.
-    /// Zero generators span nothing and are passed over.
+    /// and every normal `n` of the cone ([`facing`](Self::facing)). The product is linear
+    /// in `n`, so the cone's generators decide it, and affine in `X`,
+    /// `f(X) = f(lo) + Σ_k t_k g_k` with `g_k = f(lo + d_k e_k) − f(lo)` and `t_k ∈ [0, 1]`
+    /// over the box, so its largest value is `f(lo)·n + Σ_k max(0, g_k·n)` (the largest at
+    /// the eight corners, in four products). Where `w ≤ 0` nothing is drawn, so the sign of
+    /// `w` does not matter. Zero generators span nothing and are passed over.
     pub fn box_back_facing(
         &self,
         lo: DVec3,
         hi: DVec3,
         normals: impl IntoIterator<Item = DVec3>,
     ) -> bool {
-        let f = box_corners(lo, hi).map(|x| self.facing(x));
-        normals
-            .into_iter()
-            .filter(|n| *n != DVec3::ZERO)
-            .all(|n| f.iter().all(|f| f.dot(n) < 0.0))
+        let f0 = self.facing(lo);
+        let d = hi - lo;
+        let g = [DVec3::X, DVec3::Y, DVec3::Z].map(|e| self.facing(lo + d * e) - f0);
+        normals.into_iter().filter(|n| *n != DVec3::ZERO).all(|n| {
+            f0.dot(n) + g[0].dot(n).max(0.0) + g[1].dot(n).max(0.0) + g[2].dot(n).max(0.0) < 0.0
+        })
     }
 
     /// `K`, the pixels that a model-space distance can become on a segment inside the box
