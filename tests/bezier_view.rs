@@ -2,11 +2,12 @@
 //! evaluated inside, the rest keeps its shape, and the mesh stays free of T-junctions.
 
 use glam::{DVec3, Vec3};
-use tessera_core::bezier::tessellate::{culled, patch_thresholds};
+use tessera_core::bezier::tessellate::{culled, patch_thresholds, vertex_eval};
 use tessera_core::bezier::{
     tessellate_adaptive_in_view, AdaptiveParams, BezierModel, BezierView, EdgeTest, PreparedBezier,
     Tessellation,
 };
+use tessera_core::gpu_types::VertexRecord;
 use tessera_core::measure::{bezier_surface_samples, measure_error};
 use tessera_core::watertight::check_watertight;
 use tessera_core::View;
@@ -47,7 +48,8 @@ fn culled_patches_emit_nothing_and_the_rest_stays_whole() {
     let cps: Vec<[Vec3; 16]> = (0..prep.layout.patches)
         .map(|p| prep.control_points(p))
         .collect();
-    let th = patch_thresholds(&cps, diag(&model), Some(&near)).expect("thresholds");
+    let flipped: Vec<bool> = prep.topo.iter().map(|t| t.flipped()).collect();
+    let th = patch_thresholds(&cps, &flipped, diag(&model), Some(&near)).expect("thresholds");
     let is_culled: Vec<bool> = th.iter().map(|&t| culled(t)).collect();
     let n_culled = is_culled.iter().filter(|&&c| c).count();
     assert!(
@@ -149,4 +151,69 @@ fn a_bezier_view_looking_away_draws_nothing() {
     let out = run(&model, &prep, EdgeTest::Map4p, &v);
     assert_eq!(out.mesh.triangle_count(), 0);
     assert_eq!(out.culled_patches, model.patches.len());
+}
+
+#[test]
+fn culling_back_faces_drops_only_patches_facing_away() {
+    // The teapot framed from above one side: with back faces culled, more patches go,
+    // each facing away at every sample (its drawn normal, the winding's), fewer
+    // triangles are left, and the drawn normals face out of the teapot, so what goes is
+    // what a closed surface hides.
+    let model = teapot();
+    let prep = PreparedBezier::new(&model);
+    let (lo, hi) = model.bounds();
+    let c = ((lo + hi) / 2.0).as_dvec3();
+    let d = diag(&model) as f64;
+    let eye = c + DVec3::new(0.6, -0.9, 0.7) * d;
+    let view = |cull_backfaces| BezierView {
+        view: View::look_at(eye, c, DVec3::Z, 40f64.to_radians(), (640, 480), 0.01 * d)
+            .expect("view"),
+        pixels: 1.0,
+        cull: true,
+        cull_backfaces,
+    };
+    let cps: Vec<[Vec3; 16]> = (0..prep.layout.patches)
+        .map(|p| prep.control_points(p))
+        .collect();
+    let flipped: Vec<bool> = prep.topo.iter().map(|t| t.flipped()).collect();
+    let th = patch_thresholds(&cps, &flipped, diag(&model), Some(&view(true))).expect("th");
+    let front = run(&model, &prep, EdgeTest::Map4p, &view(false));
+    let culled_run = run(&model, &prep, EdgeTest::Map4p, &view(true));
+    eprintln!(
+        "{} patches culled facing away ({} without), {} triangles against {}",
+        culled_run.culled_patches,
+        front.culled_patches,
+        culled_run.mesh.triangle_count(),
+        front.mesh.triangle_count()
+    );
+    assert!(culled_run.culled_patches > front.culled_patches);
+    assert!(culled_run.mesh.triangle_count() < front.mesh.triangle_count());
+    let n = 8;
+    let (mut outward, mut samples) = (0, 0);
+    for p in 0..prep.layout.patches {
+        for k in 0..n * n {
+            let (u, v) = ((k % n) as f32 / 7.0, (k / n) as f32 / 7.0);
+            let r = VertexRecord { patch: p, u, v };
+            let s = vertex_eval(&prep, &cps, &r);
+            let (x, nrm) = (
+                Vec3::from(s.position).as_dvec3(),
+                Vec3::from(s.normal).as_dvec3(),
+            );
+            if nrm == DVec3::ZERO {
+                continue;
+            }
+            samples += 1;
+            outward += usize::from(nrm.dot(x - c) > 0.0);
+            if culled(th[p as usize]) && view(false).view.contains(x) {
+                assert!(
+                    nrm.dot(eye - x) < 0.0,
+                    "patch {p} faces the eye at ({u}, {v})"
+                );
+            }
+        }
+    }
+    assert!(
+        outward * 10 > samples * 7,
+        "{outward} of {samples} face out"
+    );
 }

@@ -255,5 +255,6 @@ pub fn bezier_close_view(model: &BezierModel, cull: bool) -> tessera_core::bezie
         .expect("view"),
         pixels: 1.0,
         cull,
+        cull_backfaces: false,
     }
 }

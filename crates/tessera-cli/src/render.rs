@@ -116,11 +116,8 @@ pub fn render(args: RenderArgs) -> Result<(), Error> {
         )
         .into());
     }
-    if !cc && (args.view.cull_backfaces || args.view.max_triangles.is_some()) {
-        return Err(CoreError::Param(
-            "--cull-backfaces and --max-triangles are for Catmull-Clark meshes".into(),
-        )
-        .into());
+    if !cc && (args.view.max_triangles.is_some()) {
+        return Err(CoreError::Param("--max-triangles is for Catmull-Clark meshes".into()).into());
     }
     let mut drawn_view = None;
     let mut timings = GpuTimings::default();
@@ -236,6 +233,7 @@ pub fn render(args: RenderArgs) -> Result<(), Error> {
                 view: v.view,
                 pixels: v.pixels.expect("checked"),
                 cull: v.cull,
+                cull_backfaces: v.cull_backfaces,
             })
         } else {
             None

@@ -213,11 +213,8 @@ fn tessellate(args: TessellateArgs) -> Result<(), Error> {
         )
         .into());
     }
-    if args.view.cull_backfaces || args.view.max_triangles.is_some() {
-        return Err(CoreError::Param(
-            "--cull-backfaces and --max-triangles are for Catmull-Clark meshes".into(),
-        )
-        .into());
+    if args.view.max_triangles.is_some() {
+        return Err(CoreError::Param("--max-triangles is for Catmull-Clark meshes".into()).into());
     }
     if in_view && (args.target_triangles.is_some() || args.method == Some(Method::Uniform)) {
         return Err(CoreError::Param(
@@ -304,6 +301,7 @@ fn tessellate(args: TessellateArgs) -> Result<(), Error> {
                 view: v.view,
                 pixels: v.pixels.expect("checked"),
                 cull: v.cull,
+                cull_backfaces: v.cull_backfaces,
             })
         }
         false => None,

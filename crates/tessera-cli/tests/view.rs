@@ -188,7 +188,8 @@ fn views_refuse_what_they_do_not_take_yet_with_one_line() {
                 &teapot,
                 "--tolerance-px",
                 "1",
-                "--cull-backfaces",
+                "--max-triangles",
+                "1000",
             ],
             "Catmull-Clark",
         ),
@@ -380,4 +381,25 @@ fn a_bezier_view_scales_the_threshold_on_either_backend() {
     let kept = close("cpu", true, "bezier_close_kept.json");
     assert_eq!(kept["culled_patches"], 0, "{kept}");
     assert!(kept["triangles"].as_u64() > cpu["triangles"].as_u64());
+    // From above the far side, back faces culled too.
+    let mut above = vec![
+        "tessellate",
+        &teapot,
+        "--tolerance-px",
+        "1",
+        "--eye",
+        "5.1,-7.4,7.3",
+        "--target",
+        "0.2,0,1.6",
+        "--size",
+        "640x480",
+    ];
+    let front = stats_of(&above, "bezier_above.json");
+    above.push("--cull-backfaces");
+    let backs = stats_of(&above, "bezier_above_backs.json");
+    assert!(
+        backs["culled_patches"].as_u64() > front["culled_patches"].as_u64(),
+        "{front} then {backs}"
+    );
+    assert!(backs["triangles"].as_u64() < front["triangles"].as_u64());
 }

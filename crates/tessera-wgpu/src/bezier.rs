@@ -302,8 +302,10 @@ pub struct BezierStage {
     growths: u32,
     prepared_layout: tessera_core::bezier::prepare::CoarseLayout,
     params: AdaptiveParams,
-    /// The control points, which the view's thresholds are scaled from.
+    /// The control points, which the view's thresholds are scaled from, and whether each
+    /// patch's winding is flipped (which way it faces).
     control_points: Vec<[Vec3; 16]>,
+    flipped: Vec<bool>,
     /// The view the thresholds are in, if any.
     view: Option<BezierView>,
     buffers: Buffers,
@@ -655,6 +657,7 @@ impl BezierStage {
             prepared_layout: l,
             params: *params,
             control_points: (0..l.patches).map(|p| prepared.control_points(p)).collect(),
+            flipped: prepared.topo.iter().map(|t| t.flipped()).collect(),
             view: None,
             bind_groups: BindGroups::new(device, &pipelines.0, &test_kernels, &buffers),
             test_kernels,
@@ -684,6 +687,7 @@ impl BezierStage {
     fn write_thresholds(&mut self, queue: &wgpu::Queue) -> Result<()> {
         let thresholds = patch_thresholds(
             &self.control_points,
+            &self.flipped,
             self.params.threshold,
             self.view.as_ref(),
         )?;

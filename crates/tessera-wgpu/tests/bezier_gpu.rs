@@ -831,6 +831,7 @@ fn in_a_view_the_thresholds_follow_the_distance_crack_free_and_as_on_the_cpu() {
         view: close,
         pixels: 1.0,
         cull: false,
+        cull_backfaces: false,
     };
     for test in [EdgeTest::Map4p, EdgeTest::Flat] {
         let params = AdaptiveParams {
@@ -839,7 +840,7 @@ fn in_a_view_the_thresholds_follow_the_distance_crack_free_and_as_on_the_cpu() {
             max_depth: 6,
         };
         let cpu = tessellate_adaptive_in_view(&prep, &params, &view).expect("cpu");
-        let (mut stage, status, mesh) = run_in_view(&gpu, &prep, &params, &view);
+        let (mut stage, _, mesh) = run_in_view(&gpu, &prep, &params, &view);
         assert_eq!(mesh.indices, cpu.mesh.indices, "{}: topology", test.name());
         let positions: Vec<Vec3> = mesh.positions().collect();
         let report = check_watertight(
@@ -853,7 +854,9 @@ fn in_a_view_the_thresholds_follow_the_distance_crack_free_and_as_on_the_cpu() {
         let cps: Vec<_> = (0..prep.layout.patches)
             .map(|p| prep.control_points(p))
             .collect();
-        let th = patch_thresholds(&cps, params.threshold, Some(&view)).expect("thresholds");
+        let flipped: Vec<bool> = prep.topo.iter().map(|t| t.flipped()).collect();
+        let th =
+            patch_thresholds(&cps, &flipped, params.threshold, Some(&view)).expect("thresholds");
         let (near, far) = th
             .iter()
             .fold((f32::INFINITY, 0f32), |(a, b), &t| (a.min(t), b.max(t)));
@@ -947,6 +950,33 @@ fn in_a_culling_view_the_gpu_culls_the_cpu_references_patches() {
             model.patches.len(),
             "{what}"
         );
+        // Back faces culled too, from above the far side: the CPU's patches and mesh.
+        let c = ((lo + hi) / 2.0).as_dvec3();
+        let backs = BezierView {
+            view: tessera_core::View::look_at(
+                c + glam::DVec3::new(0.6, -0.9, 0.7) * diag as f64,
+                c,
+                glam::DVec3::Z,
+                40f64.to_radians(),
+                (640, 480),
+                0.01,
+            )
+            .expect("view"),
+            cull_backfaces: true,
+            ..view
+        };
+        let cpu = tessellate_adaptive_in_view(&prep, &params, &backs).expect("cpu");
+        assert!(cpu.culled_patches > 0, "{what}: back faces");
+        stage.set_view(&gpu.queue, Some(&backs)).expect("view");
+        let status = stage.run_blocking(&gpu.device, &gpu.queue).expect("run");
+        let mesh = stage
+            .read_mesh(&gpu.device, &gpu.queue, &status)
+            .expect("mesh");
+        assert_eq!(
+            status.culled_patches as usize, cpu.culled_patches,
+            "{what}: back faces"
+        );
+        assert_eq!(mesh.indices, cpu.mesh.indices, "{what}: back faces");
     }
     gpu.check().expect("no wgpu validation errors");
 }

@@ -28,6 +28,8 @@ use super::refine::{
     inner_rank, interior_need, splits, tri_mark, tri_triangles, TriContext, TriScratch,
     TriangleSink, VertexRef,
 };
+use crate::catmull_clark::bicubic::Net;
+use crate::catmull_clark::facing::net_normals;
 use crate::error::{Error, Result};
 use crate::gpu_types::{tally, OutVertex, VertexRecord, EDGE_BIT_WORDS, MAX_DEPTH_LIMIT};
 use crate::mesh::Mesh;
@@ -91,6 +93,11 @@ pub struct BezierView {
     /// Patches whose control points' box lies wholly outside the frustum (the patch lies
     /// in their hull) emit nothing.
     pub cull: bool,
+    /// Patches facing away from the eye everywhere emit nothing too: the normals of a
+    /// bicubic piece lie in the cone of its control net's 144 products of u- and
+    /// v-differences ([`net_normals`]), tested over the control points' box
+    /// ([`View::box_back_facing`]). Outside the threshold's heuristic as well.
+    pub cull_backfaces: bool,
 }
 
 /// Each patch's edge-test threshold, model units: `world`, or in `view` the smaller of
@@ -103,6 +110,7 @@ pub struct BezierView {
 /// buffer.
 pub fn patch_thresholds(
     cps: &[[Vec3; 16]],
+    flipped: &[bool],
     world: f32,
     view: Option<&BezierView>,
 ) -> Result<Vec<f32>> {
@@ -117,7 +125,8 @@ pub fn patch_thresholds(
     }
     Ok(cps
         .iter()
-        .map(|net| {
+        .zip(flipped)
+        .map(|(net, &flipped)| {
             let lo = net.iter().fold(DVec3::INFINITY, |a, p| a.min(p.as_dvec3()));
             let hi = net
                 .iter()
@@ -125,7 +134,14 @@ pub fn patch_thresholds(
             let th = v.pixels / v.view.gain(lo, hi, 0.0);
             // A positive single-precision number at least.
             let th = (th.min(world as f64) as f32).max(f32::MIN_POSITIVE);
-            if v.cull && v.view.box_outside(lo, hi) {
+            // A flipped patch's normals, and its winding, are the net's reversed.
+            let away = v.cull_backfaces && {
+                let net: Net = net.map(|p| p.as_dvec3());
+                let sign = if flipped { -1.0 } else { 1.0 };
+                v.view
+                    .box_back_facing(lo, hi, net_normals(&net).map(|n| sign * n))
+            };
+            if (v.cull && v.view.box_outside(lo, hi)) || away {
                 -th
             } else {
                 th
@@ -608,7 +624,8 @@ fn run_adaptive(
     let start = std::time::Instant::now();
     let l = prep.layout;
     let cps: Vec<[Vec3; 16]> = (0..l.patches).map(|p| prep.control_points(p)).collect();
-    let thresholds = patch_thresholds(&cps, params.threshold, view)?;
+    let flipped: Vec<bool> = prep.topo.iter().map(|t| t.flipped()).collect();
+    let thresholds = patch_thresholds(&cps, &flipped, params.threshold, view)?;
     let mut evaluations = 0u64;
 
     // 1. Edge decisions.
@@ -745,8 +762,10 @@ mod tests {
             .expect("view"),
             pixels: 1.0,
             cull: false,
+            cull_backfaces: false,
         };
-        let th = patch_thresholds(&cps, 1.0, Some(&view)).expect("thresholds");
+        let flipped = [false; 2];
+        let th = patch_thresholds(&cps, &flipped, 1.0, Some(&view)).expect("thresholds");
         assert!(
             th[0] > 0.0 && th[1] > 1.8 * th[0] && th[1] < 2.5 * th[0],
             "{th:?}"
@@ -758,17 +777,18 @@ mod tests {
             th[0] as f64 <= pixel && th[0] as f64 > 0.7 * pixel,
             "{th:?} {pixel}"
         );
-        let capped = patch_thresholds(&cps, 0.5 * th[1], Some(&view)).expect("thresholds");
+        let capped =
+            patch_thresholds(&cps, &flipped, 0.5 * th[1], Some(&view)).expect("thresholds");
         assert_eq!(capped, vec![th[0], 0.5 * th[1]]);
         assert_eq!(
-            patch_thresholds(&cps, 0.3, None).expect("world"),
+            patch_thresholds(&cps, &flipped, 0.3, None).expect("world"),
             vec![0.3, 0.3]
         );
         let bad = BezierView {
             pixels: 0.0,
             ..view
         };
-        assert!(patch_thresholds(&cps, 1.0, Some(&bad)).is_err());
+        assert!(patch_thresholds(&cps, &flipped, 1.0, Some(&bad)).is_err());
     }
 
     #[test]
