@@ -199,8 +199,8 @@ pub struct ViewArgs {
     /// Keep the patches outside the view frustum (culled by default with a view).
     #[arg(long)]
     pub no_cull: bool,
-    /// Drop the patches that face away from the eye everywhere (Catmull-Clark; a closed
-    /// surface looks the same, an open one loses its inside).
+    /// Drop the patches that face away from the eye everywhere (a closed surface looks the
+    /// same, an open one loses its inside).
     #[arg(long)]
     pub cull_backfaces: bool,
     /// At most this many triangles (with --tolerance-px): the pixel tolerance is coarsened
