@@ -270,12 +270,19 @@ impl View {
         hi: DVec3,
         normals: impl IntoIterator<Item = DVec3>,
     ) -> bool {
+        let f = self.box_facing(lo, hi);
+        normals.into_iter().all(|n| f.faces_away(n))
+    }
+
+    /// The facing field over the box `[lo, hi]`, to test many generators against
+    /// ([`box_back_facing`](Self::box_back_facing)).
+    pub fn box_facing(&self, lo: DVec3, hi: DVec3) -> BoxFacing {
         let f0 = self.facing(lo);
         let d = hi - lo;
-        let g = [DVec3::X, DVec3::Y, DVec3::Z].map(|e| self.facing(lo + d * e) - f0);
-        normals.into_iter().filter(|n| *n != DVec3::ZERO).all(|n| {
-            f0.dot(n) + g[0].dot(n).max(0.0) + g[1].dot(n).max(0.0) + g[2].dot(n).max(0.0) < 0.0
-        })
+        BoxFacing {
+            f0,
+            g: [DVec3::X, DVec3::Y, DVec3::Z].map(|e| self.facing(lo + d * e) - f0),
+        }
     }
 
     /// `K`, the pixels that a model-space distance can become on a segment inside the box
@@ -464,6 +471,24 @@ fn bounding_sphere(min: DVec3, max: DVec3) -> (DVec3, f64) {
 
 /// Bisection steps of [`View::cell_tolerance`]: within 2⁻¹⁰ of the largest tolerance.
 const CELL_TOLERANCE_STEPS: usize = 10;
+
+/// [`View::facing`] over a box: at its lowest corner, and its steps along the sides.
+#[derive(Clone, Copy, Debug)]
+pub struct BoxFacing {
+    f0: DVec3,
+    g: [DVec3; 3],
+}
+
+impl BoxFacing {
+    /// Whether the generator `n` faces away over the whole box (a zero one spans
+    /// nothing): `f(lo)·n + Σ_k max(0, g_k·n) < 0`.
+    pub fn faces_away(&self, n: DVec3) -> bool {
+        let g = self.g;
+        n == DVec3::ZERO
+            || self.f0.dot(n) + g[0].dot(n).max(0.0) + g[1].dot(n).max(0.0) + g[2].dot(n).max(0.0)
+                < 0.0
+    }
+}
 
 /// The eight corners of a box.
 pub fn box_corners(lo: DVec3, hi: DVec3) -> [DVec3; 8] {

@@ -37,6 +37,7 @@ pub fn patch_back_facing(view: &View, surface: &PatchSurface, lo: DVec3, hi: DVe
     if surface.nodes.is_empty() {
         return false;
     }
+    let f = view.box_facing(lo, hi);
     let mut stack = vec![0u32];
     while let Some(k) = stack.pop() {
         let away = match &surface.nodes[k as usize] {
@@ -47,8 +48,8 @@ pub fn patch_back_facing(view: &View, surface: &PatchSurface, lo: DVec3, hi: DVe
                 stack.extend(children);
                 continue;
             }
-            Node::Bezier(net) => view.box_back_facing(lo, hi, net_normals(net)),
-            Node::Corner(c) => view.box_back_facing(lo, hi, [c.normal]),
+            Node::Bezier(net) => net_normals(net).all(|n| f.faces_away(n)),
+            Node::Corner(c) => f.faces_away(c.normal),
         };
         if !away {
             return false;
