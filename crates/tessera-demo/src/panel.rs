@@ -260,9 +260,10 @@ fn stats(ui: &mut egui::Ui, shown: &Shown, params: &Params) {
             }
             (_, Some(px)) => {
                 match params.pixels {
-                    Some(asked) if asked < px => {
-                        row("tolerance", format!("{px:.2} px (cap; {asked:.2} asked)"))
-                    }
+                    Some(asked) if asked < px => row(
+                        "tolerance",
+                        format!("{px:.2} px (coarsened; {asked:.2} asked)"),
+                    ),
                     _ => row("tolerance", format!("{px:.2} px")),
                 }
                 if let Some(c) = s.culled_patches {

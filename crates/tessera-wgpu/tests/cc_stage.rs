@@ -1718,3 +1718,112 @@ fn culling_back_faces_the_gpu_culls_the_patches_the_cpu_reference_culls() {
         );
     }
 }
+
+#[test]
+fn a_walk_the_device_cuts_short_coarsens_the_pixels_to_the_cpu_references_mesh() {
+    // From inside the cube at 0.25 px, the cells at the near plane by its corners split
+    // deep: lavapipe stops a patch's walk at its loop limit. The stage coarsens the
+    // pixels by √2 until every walk finishes, and the mesh is then the CPU reference's
+    // at the pixels reached; a frame loop settles there too and does not refine back
+    // into the limit, new pixels start over, and a world tolerance that walks as deep
+    // is an error naming the limit. A device without such a limit keeps the pixels.
+    use tessera_core::catmull_clark::{tessellate_adaptive_in_view, ViewTolerance};
+    use tessera_tests::{view, Stand};
+    let gpu = gpu();
+    let limited = gpu.adapter.get_info().device_type == wgpu::DeviceType::Cpu;
+    let model = tessera_tests::cc_model("opensubdiv/catmark_cube.obj");
+    let params = CcParams {
+        tolerance: Tolerance::Relative(1.0),
+        max_depth: 8,
+        // One trial per patch: where the walk is cut does not depend on timing.
+        first_split: FirstSplit::Midpoint,
+        leaf_bound: Default::default(),
+    };
+    let asked = ViewTolerance {
+        view: view(&model, Stand::Beside),
+        pixels: Some(0.25),
+        cull: true,
+        cull_backfaces: false,
+        max_triangles: None,
+    };
+    let mut stage =
+        CcStage::new(&gpu.device, &gpu.queue, &kernels(&gpu), &model, &params).expect("stage");
+    stage.set_view(&gpu.queue, Some(&asked)).expect("view");
+    let status = stage.run_blocking(&gpu.device, &gpu.queue).expect("run");
+    let achieved = stage.tolerance_px().expect("pixels");
+    eprintln!(
+        "asked 0.25 px, reached {achieved} px on {}",
+        gpu.adapter_name()
+    );
+    if limited {
+        assert!(
+            achieved > 0.25,
+            "the walk fits at 0.25 px: the test needs a deeper one"
+        );
+    } else {
+        assert_eq!(achieved, 0.25);
+    }
+    let reached = ViewTolerance {
+        pixels: Some(achieved),
+        ..asked
+    };
+    let cpu = tessellate_adaptive_in_view(&model, &params, &reached).expect("cpu");
+    assert_eq!(cpu.unmet, status.state.unmet as usize);
+    let (mesh, _) = without_unused_vertices(
+        &stage
+            .read_mesh(&gpu.device, &gpu.queue, &status)
+            .expect("read"),
+    );
+    same_mesh(&mesh, &cpu.mesh, size(&model)).expect("the CPU reference's mesh");
+
+    // A frame loop, statuses a frame late: the same pixels, and no step back down.
+    let mut looped =
+        CcStage::new(&gpu.device, &gpu.queue, &kernels(&gpu), &model, &params).expect("stage");
+    looped.set_view(&gpu.queue, Some(&asked)).expect("view");
+    let frame = |stage: &mut CcStage| {
+        let mut encoder = gpu.device.create_command_encoder(&Default::default());
+        stage
+            .prepare(&gpu.device, &gpu.queue, &mut encoder)
+            .expect("prepare");
+        gpu.queue.submit([encoder.finish()]);
+        gpu.wait().expect("gpu");
+        stage.poll_status(&gpu.device)
+    };
+    for _ in 0..30 {
+        frame(&mut looped);
+    }
+    let last = frame(&mut looped).expect("a status");
+    assert_eq!(looped.tolerance_px(), Some(achieved));
+    assert!(!last.overflowed());
+    assert_eq!(last.indices, status.indices);
+    // The same pixels in a new view keep the pixels reached; new pixels start over.
+    looped.set_view(&gpu.queue, Some(&asked)).expect("view");
+    assert_eq!(looped.tolerance_px(), Some(achieved));
+    let coarse = ViewTolerance {
+        pixels: Some(2.0),
+        ..asked
+    };
+    looped.set_view(&gpu.queue, Some(&coarse)).expect("view");
+    assert_eq!(looped.tolerance_px(), Some(2.0));
+
+    // About the world tolerance those pixels ask for at the near plane (0.25 px at a
+    // 0.02 near plane over a focal length of 330 px): no pixels to coarsen.
+    if limited {
+        let world = CcParams {
+            tolerance: Tolerance::Relative(2e-5),
+            ..params
+        };
+        let mut stage =
+            CcStage::new(&gpu.device, &gpu.queue, &kernels(&gpu), &model, &world).expect("stage");
+        let in_view = ViewTolerance {
+            pixels: None,
+            ..asked
+        };
+        stage.set_view(&gpu.queue, Some(&in_view)).expect("view");
+        let err = stage
+            .run_blocking(&gpu.device, &gpu.queue)
+            .expect_err("cut short");
+        assert!(err.to_string().contains("loop"), "{err}");
+    }
+    gpu.check().expect("no wgpu errors");
+}

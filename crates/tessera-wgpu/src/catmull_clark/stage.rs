@@ -306,8 +306,11 @@ pub struct CcStage {
     /// The view of the runs, as the kernels read it (all zero for none).
     view: CcView,
     /// The view as set, and the pixels the runs use now: the ones asked for, or coarser
-    /// by powers of √2 where the view's triangle cap needs it.
+    /// by powers of √2 where the view's triangle cap or the device's loop limit needs it.
     view_set: Option<(ViewTolerance, f64)>,
+    /// The coarsest pixels at which the device cut a marking walk short, for the view's
+    /// pixels and cap as set (0 if none): the runs never refine to them again.
+    walk_floor: f64,
     /// The parameters changed since they were last written (the pixels, by the cap).
     params_dirty: bool,
     topo: wgpu::Buffer,
@@ -457,6 +460,7 @@ impl CcStage {
             params: *params,
             view,
             view_set: None,
+            walk_floor: 0.0,
             params_dirty: false,
             topo,
             homes,
@@ -504,6 +508,14 @@ impl CcStage {
     /// with room for twice its triangles refines them by √2 again, down to those asked
     /// for. [`tolerance_px`](Self::tolerance_px) is what the runs use. The same view with
     /// the same pixels and cap keeps the coarsening reached.
+    ///
+    /// A device that stops every loop after a number of iterations (lavapipe: 65 535 per
+    /// group of eight invocations) can cut a patch's marking walk short where cells split
+    /// deep, as at the near plane. In pixels, such a run coarsens them by √2 as the cap
+    /// does, and the runs never refine back to pixels that were cut while the pixels and
+    /// cap asked for stay the same: the mesh is then the CPU reference's at
+    /// [`tolerance_px`](Self::tolerance_px). With a world tolerance alone the run is an
+    /// error.
     pub fn set_view(&mut self, queue: &wgpu::Queue, view: Option<&ViewTolerance>) -> Result<()> {
         let (gpu, set) = match view {
             None => (CcView::default(), None),
@@ -512,6 +524,9 @@ impl CcStage {
                     (old.pixels, old.max_triangles) == (v.pixels, v.max_triangles)
                 });
                 let px = kept.map_or(v.pixels.unwrap_or(0.0), |(_, px)| px);
+                if kept.is_none() {
+                    self.walk_floor = 0.0;
+                }
                 if v.max_triangles.is_some() && v.pixels.is_none() {
                     return Err(tessera_core::Error::Param(
                         "a triangle cap needs a pixel tolerance to coarsen".into(),
@@ -544,10 +559,21 @@ impl CcStage {
         let Some((v, px)) = self.view_set else {
             return Ok(None);
         };
-        let (Some(cap), Some(asked)) = (v.max_triangles, v.pixels) else {
+        let Some(asked) = v.pixels else {
             return Ok(None);
         };
         let s = &status.state;
+        // Past the viewport's diagonal, coarser pixels change little.
+        let coarsest = v.view.viewport().length();
+        if s.overflow & OVERFLOW_WALK_CUT != 0 {
+            if px > coarsest {
+                return Err(walk_cut_error(Some(px)));
+            }
+            return Ok(Some(px * std::f64::consts::SQRT_2));
+        }
+        let Some(cap) = v.max_triangles else {
+            return Ok(None);
+        };
         // Leaves cut at their capacity leave the triangles unknown: grow first, up to
         // twice the cap (a leaf in view has two triangles at least; the culled ones
         // have none, and past that many the run counts as over the cap all the same).
@@ -557,8 +583,7 @@ impl CcStage {
         }
         let triangles = s.need_indices as u64 / 3;
         if cut || triangles > cap as u64 {
-            // Past the viewport's diagonal, coarser pixels change little.
-            if px > v.view.viewport().length() {
+            if px > coarsest {
                 return Err(tessera_core::Error::Param(format!(
                     "at most {cap} triangles: not met even at {px:.0} pixels ({asked} asked): the patches in view need more"
                 ))
@@ -566,10 +591,27 @@ impl CcStage {
             }
             return Ok(Some(px * std::f64::consts::SQRT_2));
         }
-        if px > asked && 2 * triangles <= cap as u64 && !status.overflowed() {
-            return Ok(Some((px / std::f64::consts::SQRT_2).max(asked)));
+        let finer = (px / std::f64::consts::SQRT_2).max(asked);
+        if px > asked
+            && finer > self.walk_floor
+            && 2 * triangles <= cap as u64
+            && !status.overflowed()
+        {
+            return Ok(Some(finer));
         }
         Ok(None)
+    }
+
+    /// Moves the next runs to `px` pixels, the step [`capped_pixels`](Self::capped_pixels)
+    /// gave for `status`: a walk cut short there raises the floor to the pixels it was
+    /// cut at.
+    fn step_pixels(&mut self, status: &CcStatus, px: f64) {
+        if status.state.overflow & OVERFLOW_WALK_CUT != 0 {
+            if let Some(now) = self.tolerance_px() {
+                self.walk_floor = self.walk_floor.max(now);
+            }
+        }
+        self.set_pixels(px);
     }
 
     /// Moves the next runs to `px` pixels (written by the next `prepare`); statuses of
@@ -714,7 +756,7 @@ impl CcStage {
         // larger buffers.
         if let Some((status, _)) = self.latest {
             if let Some(px) = self.capped_pixels(&status)? {
-                self.set_pixels(px);
+                self.step_pixels(&status, px);
                 return Ok(());
             }
         }
@@ -870,10 +912,8 @@ impl CcStage {
         if !status.overflowed() {
             return Ok(None);
         }
-        if status.state.overflow & 4 != 0 {
-            return Err(Error::Wgpu(
-                "the device cut the marking's walk short (a loop-iteration limit per invocation, as lavapipe's 65535)".into(),
-            ));
+        if status.state.overflow & OVERFLOW_WALK_CUT != 0 {
+            return Err(walk_cut_error(None));
         }
         // A pool of decision blocks too small (bit 8) leaves replays short: that
         // disagreement is grown away, any other is a bug.
@@ -1076,12 +1116,27 @@ impl GrowingStage for CcStage {
         // climbs from the pixels asked for, as the CPU reference's does.
         if let Some(px) = self.capped_pixels(status)? {
             if self.tolerance_px().is_some_and(|now| px > now) {
-                self.set_pixels(px);
+                self.step_pixels(status, px);
                 return Ok(true);
             }
         }
         Ok(self.grow(device, status)?.is_some())
     }
+}
+
+/// The overflow bit of a marking walk the device cut short (`cc_traverse`).
+const OVERFLOW_WALK_CUT: u32 = 4;
+
+/// A marking walk cut short by the device's loop limit that coarser pixels cannot help:
+/// a world tolerance, or pixels already past the viewport's diagonal.
+fn walk_cut_error(pixels: Option<f64>) -> Error {
+    let tried = match pixels {
+        Some(px) => format!(" even at {px:.0} pixels"),
+        None => String::new(),
+    };
+    Error::Wgpu(format!(
+        "the device cut the marking's walk short{tried} (it stops loops after a number of iterations, as lavapipe's 65 535): a coarser tolerance, a smaller depth or midpoint splits walk less"
+    ))
 }
 
 /// An error if the run overflowed: its buffers hold nothing whole of this run.
