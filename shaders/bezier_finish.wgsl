@@ -40,10 +40,9 @@ fn main() {
     status.indices = indices;
     status.overflow = overflow;
     status.edge_vertices = edge_vertices;
-    // The vertices inside culled patches are not evaluated.
-    let culled = tally[TALLY_CULLED];
-    status.culled_patches = culled;
-    status.evaluations = tally[TALLY_EVALUATIONS] + vertices - culled * INTERIOR_COARSE_VERTICES_PER_PATCH;
+    // Of the coarse vertices only those a triangle in view uses are evaluated.
+    status.culled_patches = tally[TALLY_CULLED];
+    status.evaluations = tally[TALLY_EVALUATIONS] + vertices - params.coarse_vertices + tally[TALLY_USED];
     let vertex_dispatch = dispatch_of(vertices, overflow);
     status.dispatch_x = vertex_dispatch.x;
     status.dispatch_y = vertex_dispatch.y;

@@ -2,7 +2,8 @@
 // root is known to be a leaf without the interior test (its hypotenuse, the cell's
 // diagonal, has no midpoint point) marks nothing, and its counts follow from Euler's
 // formula; this kernel writes them. The others it lists for `bezier_tri_mark`,
-// dispatched indirectly over them. Twin of the root branch of the mark loop in
+// dispatched indirectly over them. A triangle in view also marks its corners as used:
+// the vertex kernel evaluates no other coarse vertex. Twin of the root branch of the mark loop in
 // `tessera_core::bezier::tessellate_adaptive` (`root_known_leaf`).
 //
 // A CPU device runs all of the mark kernel's walk, interior test and texel fetches
@@ -34,6 +35,15 @@ fn inner_rank(c: TriCtx, i: u32) -> u32 {
     return i;
 }
 
+// Coarse vertex v is a corner of a triangle in view: it is evaluated (the first to mark
+// it counts it).
+fn mark_used(v: u32) {
+    let bit = 1u << (v & 31u);
+    if (atomicOr(&tally[TALLY_USED_BITS + v / 32u], bit) & bit) == 0u {
+        atomicAdd(&tally[TALLY_USED], 1u);
+    }
+}
+
 @compute @workgroup_size(64)
 fn main(@builtin(global_invocation_id) gid: vec3u, @builtin(num_workgroups) groups: vec3u) {
     let t = gid.x + gid.y * groups.x * 64u;
@@ -43,6 +53,11 @@ fn main(@builtin(global_invocation_id) gid: vec3u, @builtin(num_workgroups) grou
     let c = tri_ctx(t);
     var made = NO_COUNT;
     let culled = patch_culled(c.l.patch_id);
+    if !culled {
+        mark_used(c.corner_ids.x);
+        mark_used(c.corner_ids.y);
+        mark_used(c.corner_ids.z);
+    }
     if culled {
         // A culled patch's triangles make nothing; its first one counts it.
         made = 0u;

@@ -5,13 +5,20 @@
 #include "shared/types.wgsl"
 #include "shared/patch.wgsl"
 #include "shared/topo.wgsl"
-#include "shared/thresholds.wgsl"
 
 @group(0) @binding(1) var nets: texture_storage_2d<rgba32float, read>;
 @group(0) @binding(3) var topology: texture_storage_2d<rgba32uint, read>;
 @group(0) @binding(9) var<storage, read> records: array<VertexRecord>;
 @group(0) @binding(10) var<storage, read_write> out_vertices: array<OutVertex>;
 @group(0) @binding(13) var<storage, read> status: BezierStatus;
+@group(0) @binding(14) var<storage, read> tally: array<u32>;
+
+// A coarse vertex no triangle in view has as a corner (all the others are made for
+// one): no triangle uses it.
+fn unused(v: u32) -> bool {
+    return v < params.coarse_vertices
+        && (tally[TALLY_USED_BITS + v / 32u] & (1u << (v & 31u))) == 0u;
+}
 
 @compute @workgroup_size(64)
 fn main(@builtin(global_invocation_id) gid: vec3u, @builtin(num_workgroups) groups: vec3u) {
@@ -20,8 +27,8 @@ fn main(@builtin(global_invocation_id) gid: vec3u, @builtin(num_workgroups) grou
         return;
     }
     let r = records[v];
-    // Inside a culled patch no triangle uses the vertex (`vertex_eval_at`).
-    if patch_culled(r.patch_id) && inside_patch(r.u, r.v) {
+    // Not evaluated (`vertex_eval_at`).
+    if unused(v) {
         out_vertices[v] = OutVertex(array<f32, 3>(0.0, 0.0, 0.0), array<f32, 3>(0.0, 0.0, 0.0),
             array<f32, 2>(r.u, r.v), r.patch_id);
         return;

@@ -97,6 +97,29 @@ fn culled_patches_emit_nothing_and_the_rest_stays_whole() {
             "{what}: a culled patch's triangle"
         );
         assert!(out.evaluations < whole.evaluations, "{what}");
+        // Exactly the vertices the triangles use are evaluated: the others keep no
+        // normal, and the vertex evaluations (past the flat test's) count the used ones.
+        let mut referenced = vec![false; out.mesh.vertices.len()];
+        for &i in &out.mesh.indices {
+            referenced[i as usize] = true;
+        }
+        let blank = |v: &tessera_core::gpu_types::OutVertex| v.normal == [0.0; 3];
+        let blanks = out.mesh.vertices.iter().filter(|v| blank(v)).count();
+        let used = referenced.iter().filter(|&&r| r).count();
+        assert!(
+            out.mesh
+                .vertices
+                .iter()
+                .zip(&referenced)
+                .all(|(v, &r)| r != blank(v)),
+            "{what}: a used vertex left out, or an unused one evaluated"
+        );
+        assert!(blanks > 4 * n_culled, "{what}: {blanks} left out");
+        eprintln!("{what}: {used} used vertices, {blanks} left out");
+        if test == EdgeTest::Map4p {
+            // The map tests evaluate nothing: every evaluation is a used vertex's.
+            assert_eq!(out.evaluations as usize, used, "{what}");
+        }
         let positions: Vec<Vec3> = out.mesh.positions().collect();
         let report = check_watertight(
             &positions,
@@ -148,9 +171,13 @@ fn a_bezier_view_looking_away_draws_nothing() {
         0.01,
     )
     .expect("view");
-    let out = run(&model, &prep, EdgeTest::Map4p, &v);
-    assert_eq!(out.mesh.triangle_count(), 0);
-    assert_eq!(out.culled_patches, model.patches.len());
+    for test in [EdgeTest::Map4p, EdgeTest::Flat] {
+        let out = run(&model, &prep, test, &v);
+        assert_eq!(out.mesh.triangle_count(), 0);
+        assert_eq!(out.culled_patches, model.patches.len());
+        // Not even the coarse grid's corners and sides are evaluated.
+        assert_eq!(out.evaluations, 0, "{}", test.name());
+    }
 }
 
 #[test]

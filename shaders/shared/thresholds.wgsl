@@ -1,6 +1,6 @@
 // Each patch's edge-test threshold (`tessera_core::bezier::patch_thresholds`): the world
 // threshold, or scaled to a view's pixels, negated where the view culls the patch. Twins:
-// `tessera_core::bezier::tessellate::{test_threshold, culled, inside_patch}`.
+// `tessera_core::bezier::tessellate::{test_threshold, culled}`.
 
 @group(0) @binding(18) var<storage, read> patch_thresholds: array<f32>;
 
@@ -15,9 +15,4 @@ fn patch_threshold(p: u32) -> f32 {
 // The patch lies wholly outside a culling view's frustum: it emits nothing.
 fn patch_culled(p: u32) -> bool {
     return patch_signed_threshold(p) < 0.0;
-}
-
-// A vertex at (u, v) inside its patch, off its sides: no other patch shares it.
-fn inside_patch(u: f32, v: f32) -> bool {
-    return u > 0.0 && u < 1.0 && v > 0.0 && v < 1.0;
 }

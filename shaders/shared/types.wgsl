@@ -136,6 +136,10 @@ const ORDER_BUCKETS: u32 = 256u;
 const TALLY_MARKED: u32 = TALLY_ORDER + ORDER_BUCKETS;
 // Patches culled by the view, counted by the root kernel.
 const TALLY_CULLED: u32 = TALLY_MARKED + 1u;
+// Coarse vertices at a corner of a coarse triangle in view, then one bit per coarse
+// vertex saying so, set by the root kernel: the others are not evaluated.
+const TALLY_USED: u32 = TALLY_CULLED + 1u;
+const TALLY_USED_BITS: u32 = TALLY_USED + 1u;
 
 const PLAIN_BUCKET: u32 = ORDER_BUCKETS - 1u;
 

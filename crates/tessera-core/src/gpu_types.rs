@@ -39,8 +39,17 @@ pub mod tally {
     pub const MARKED: usize = ORDER + ORDER_BUCKETS as usize;
     /// Patches culled by the view (counted by each one's first coarse triangle).
     pub const CULLED: usize = MARKED + 1;
-    /// Words in the buffer.
-    pub const WORDS: usize = CULLED + 1;
+    /// Coarse vertices that a coarse triangle in view has as a corner: the only ones
+    /// evaluated (each counted by the triangle that marks it first).
+    pub const USED: usize = CULLED + 1;
+    /// From here on, one bit per coarse vertex: set by the triangles in view at their
+    /// corners (bit `v % 32` of word `USED_BITS + v / 32`).
+    pub const USED_BITS: usize = USED + 1;
+
+    /// Words in the buffer for a model with `coarse_vertices` coarse vertices.
+    pub fn words(coarse_vertices: u32) -> usize {
+        USED_BITS + (coarse_vertices as usize).div_ceil(32)
+    }
 }
 
 /// Control points of one bicubic patch, row-major, `x y z` per point.
@@ -510,7 +519,9 @@ pub struct BezierStatus {
     /// The vertex kernel's indirect dispatch, `x y z` workgroups (`dispatch_x` ..
     /// `dispatch_z` in WGSL).
     pub dispatch: [u32; 3],
-    /// Surface evaluations: the flat test's (3 per tested chord) plus one per vertex.
+    /// Surface evaluations: the flat test's (3 per tested chord) plus one per vertex a
+    /// triangle uses (the coarse vertices only triangles of culled patches have as
+    /// corners are not evaluated).
     pub evaluations: u32,
     /// Coarse triangles the general emit kernel takes (the first slots of the emit
     /// order); the plain ones after them go to the plain kernel.

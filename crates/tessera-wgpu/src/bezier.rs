@@ -635,7 +635,11 @@ impl BezierStage {
             ),
             status,
             map_halves,
-            tally: storage(device, "tessera tally", 4 * tally::WORDS as u64),
+            tally: storage(
+                device,
+                "tessera tally",
+                4 * tally::words(l.coarse_vertices) as u64,
+            ),
             thresholds: device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("tessera bezier thresholds"),
                 size: 4 * l.patches.max(1) as u64,

@@ -896,8 +896,8 @@ fn in_a_view_the_thresholds_follow_the_distance_crack_free_and_as_on_the_cpu() {
 #[test]
 fn in_a_culling_view_the_gpu_culls_the_cpu_references_patches() {
     // The teapot close up with its handle out of view: the same triangles, the same
-    // culled patches and evaluations, the same vertices (those inside culled patches
-    // left unevaluated on both), and looking away nothing at all.
+    // culled patches and evaluations, the same vertices (those no triangle in view uses
+    // left unevaluated on both), and looking away nothing at all, not one evaluation.
     use tessera_core::bezier::{tessellate_adaptive_in_view, BezierView};
     let gpu = gpu();
     let model = load("teapot");
@@ -950,6 +950,7 @@ fn in_a_culling_view_the_gpu_culls_the_cpu_references_patches() {
             model.patches.len(),
             "{what}"
         );
+        assert_eq!(status.evaluations, 0, "{what}: nothing evaluated");
         // Back faces culled too, from above the far side: the CPU's patches and mesh.
         let c = ((lo + hi) / 2.0).as_dvec3();
         let backs = BezierView {

@@ -491,6 +491,8 @@ fn bezier_constants_match_their_rust_twins() {
         ("ORDER_BUCKETS", tally::ORDER_BUCKETS),
         ("TALLY_MARKED", tally::MARKED as u32),
         ("TALLY_CULLED", tally::CULLED as u32),
+        ("TALLY_USED", tally::USED as u32),
+        ("TALLY_USED_BITS", tally::USED_BITS as u32),
         (
             "STATUS_MARK_DISPATCH",
             (offset_of!(BezierStatus, mark_dispatch) / 4) as u32,

@@ -75,10 +75,11 @@ impl AdaptiveParams {
 pub struct Tessellation {
     /// The triangles and their vertices.
     pub mesh: Mesh,
-    /// Surface evaluations: one per output vertex (but those inside culled patches), plus
-    /// the flat test's candidates.
+    /// Surface evaluations: one per output vertex that a triangle uses ([`unused`]),
+    /// plus the flat test's candidates.
     pub evaluations: u64,
-    /// Patches wholly outside the view's frustum: no triangles, and no evaluation inside.
+    /// Patches the view culls: no triangles, and no evaluation but of the vertices they
+    /// share with patches in view.
     pub culled_patches: usize,
 }
 
@@ -158,12 +159,6 @@ pub fn culled(signed: f32) -> bool {
 /// The threshold the edge tests take from [`patch_thresholds`]'s `signed` one.
 pub fn test_threshold(signed: f32) -> f32 {
     signed.abs()
-}
-
-/// Whether a vertex at `(u, v)` of a patch lies inside it, off its sides: no other patch
-/// shares it, so it is not evaluated when its patch is culled.
-pub fn inside_patch(u: f32, v: f32) -> bool {
-    u > 0.0 && u < 1.0 && v > 0.0 && v < 1.0
 }
 
 /// Inputs of the tests on patch `p`, with its own `threshold` ([`patch_thresholds`]).
@@ -552,21 +547,31 @@ pub fn vertex_eval(prep: &PreparedBezier, cps: &[[Vec3; 16]], r: &VertexRecord) 
     }
 }
 
-/// Whether the vertex of record `r` is left unevaluated: it lies inside a culled patch
-/// ([`inside_patch`]), where no triangle uses it.
-pub fn skips_evaluation(thresholds: &[f32], r: &VertexRecord) -> bool {
-    culled(thresholds[r.patch as usize]) && inside_patch(r.u, r.v)
+/// Stage 3's marks (the root kernel's, per coarse triangle in view): the triangle's
+/// corners are used coarse vertices. `used` holds one flag per coarse vertex.
+pub fn mark_used(used: &mut [bool], corner_ids: [u32; 3]) {
+    for v in corner_ids {
+        used[v as usize] = true;
+    }
 }
 
-/// [`vertex_eval`] with each patch's signed threshold: a vertex inside a culled patch
-/// ([`skips_evaluation`]) keeps its parameter and patch, at the origin with no normal.
+/// Whether output vertex `v` is left unevaluated: a coarse vertex that no coarse
+/// triangle in view has as a corner ([`mark_used`]), so that no triangle uses it. Every
+/// other vertex is made for a triangle in view.
+pub fn unused(used: &[bool], v: usize) -> bool {
+    v < used.len() && !used[v]
+}
+
+/// [`vertex_eval`] of output vertex `v`, with the coarse vertices in use: an
+/// [`unused`] one keeps its parameter and patch, at the origin with no normal.
 pub fn vertex_eval_at(
     prep: &PreparedBezier,
     cps: &[[Vec3; 16]],
-    thresholds: &[f32],
+    used: &[bool],
+    v: usize,
     r: &VertexRecord,
 ) -> OutVertex {
-    if skips_evaluation(thresholds, r) {
+    if unused(used, v) {
         return OutVertex {
             position: [0.0; 3],
             normal: [0.0; 3],
@@ -647,9 +652,10 @@ fn run_adaptive(
     let mut buckets = Vec::with_capacity(l.coarse_triangles as usize);
     let mut plain = Vec::with_capacity(l.coarse_triangles as usize);
     let patch_of = |t: u32| t / crate::gpu_types::COARSE_TRIANGLES_PER_PATCH as u32;
+    let mut used = vec![false; l.coarse_vertices as usize];
     for t in 0..l.coarse_triangles {
         let mut s = TriScratch::new(params.max_depth);
-        // A culled patch's triangles make nothing (the root kernel's).
+        // A culled patch's triangles make nothing and use no vertex (the root kernel's).
         if culled(thresholds[patch_of(t) as usize]) {
             plain.push(false);
             buckets.push(order_bucket(0, false));
@@ -659,6 +665,7 @@ fn run_adaptive(
             continue;
         }
         let ctx = tri_context_at(prep, &cps, &bits, params, &thresholds, t);
+        mark_used(&mut used, ctx.corner_ids);
         // The root kernel's triangles, then the mark kernel's.
         let known = root_known_leaf(&ctx)
             .then(|| euler_count(&ctx, &s))
@@ -723,12 +730,10 @@ fn run_adaptive(
     // 6. Evaluate each vertex once.
     let vertices: Vec<OutVertex> = records
         .iter()
-        .map(|r| vertex_eval_at(prep, &cps, &thresholds, r))
+        .enumerate()
+        .map(|(v, r)| vertex_eval_at(prep, &cps, &used, v, r))
         .collect();
-    let skipped = records
-        .iter()
-        .filter(|r| skips_evaluation(&thresholds, r))
-        .count();
+    let skipped = (0..records.len()).filter(|&v| unused(&used, v)).count();
     evaluations += (vertices.len() - skipped) as u64;
     times.vertex_eval = ms(start);
     let out = Tessellation {
