@@ -352,7 +352,12 @@ pub fn tessellate(args: TessellateArgs) -> Result<(), Error> {
     if let Some(v) = &view {
         match (v.pixels, out.tolerance_px) {
             (Some(asked), Some(got)) if got > asked => {
-                line += &format!(", {got:.4} px (coarsened from {asked} to fit --max-triangles)")
+                // Without a cap only the device's loop limit coarsens (the GPU stage).
+                let why = match v.max_triangles {
+                    Some(_) => "to fit --max-triangles",
+                    None => "by the device's loop limit; --backend cpu keeps them",
+                };
+                line += &format!(", {got:.4} px (coarsened from {asked} {why})")
             }
             (Some(px), _) => line += &format!(", {px} px"),
             _ => {}

@@ -403,3 +403,75 @@ fn a_bezier_view_scales_the_threshold_on_either_backend() {
     );
     assert!(backs["triangles"].as_u64() < front["triangles"].as_u64());
 }
+
+#[test]
+fn a_walk_the_device_cuts_short_coarsens_to_the_cpu_backends_mesh_at_the_pixels_reached() {
+    // From inside the cube at 0.25 px, the cells at the near plane split deep near the
+    // corners: lavapipe's loop limit cuts those walks short, and the GPU backend coarsens
+    // the pixels until they fit, saying why. The CPU backend keeps the pixels asked for,
+    // and at the pixels reached gives the GPU's mesh.
+    let cube = asset("opensubdiv/catmark_cube.obj");
+    let view = |px: &str, backend: &str| {
+        vec![
+            "tessellate".to_string(),
+            cube.clone(),
+            "--eye".into(),
+            "0.2,0.1,0".into(),
+            "--target".into(),
+            "0.5,0.3,0.3".into(),
+            "--first-split".into(),
+            "midpoint".into(),
+            "--max-depth".into(),
+            "8".into(),
+            "--tolerance-px".into(),
+            px.into(),
+            "--backend".into(),
+            backend.into(),
+        ]
+    };
+    let args = view("0.25", "gpu");
+    let out = tessera()
+        .args(&args)
+        .arg("--stats")
+        .arg(tmp("walk_gpu.json"))
+        .arg("-o")
+        .arg(tmp("walk_gpu.obj"))
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let gpu: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(tmp("walk_gpu.json")).unwrap()).unwrap();
+    let reached = gpu["achieved_tolerance_px"].as_f64().unwrap();
+    let said = String::from_utf8_lossy(&out.stdout).contains("loop limit");
+    eprintln!("reached {reached} px on the GPU backend");
+    assert!(reached >= 0.25, "{gpu}");
+    assert_eq!(
+        said,
+        reached > 0.25,
+        "{}",
+        String::from_utf8_lossy(&out.stdout)
+    );
+    let asked = stats_of(
+        &view("0.25", "cpu")
+            .iter()
+            .map(String::as_str)
+            .collect::<Vec<_>>(),
+        "walk_cpu.json",
+    );
+    assert_eq!(asked["achieved_tolerance_px"], 0.25);
+    let px = format!("{reached}");
+    let at_reached = stats_of(
+        &view(&px, "cpu")
+            .iter()
+            .map(String::as_str)
+            .collect::<Vec<_>>(),
+        "walk_cpu_reached.json",
+    );
+    for key in ["triangles", "culled_patches", "unmet"] {
+        assert_eq!(at_reached[key], gpu[key], "{key}");
+    }
+}
