@@ -260,8 +260,10 @@ pub struct CcTessellation {
     /// The pixel tolerance the output meets in its view: the one asked for, or coarser
     /// where a triangle cap made it so.
     pub tolerance_px: Option<f64>,
-    /// Flatness bounds computed, every trial of the first-split search included: the
-    /// method's cost, most of its time.
+    /// Flatness bounds the decisions took, every trial of the first-split search
+    /// included: the method's cost, most of its time. A patch's bound over its whole
+    /// square is computed once per model ([`SurfaceModel::root_bound`]) and counted in
+    /// each decision that takes it, as the GPU computes it each run.
     pub bounds: u64,
     /// Cells split on the split proof alone, without a bound: with
     /// [`bounds`](Self::bounds), every cell tested.
@@ -286,8 +288,9 @@ struct Evaluator<'a> {
     eps: f64,
     /// The view that sets each cell's ε and culls, if any.
     view: Option<ViewTolerance>,
-    /// The bound of a patch's whole box, computed to cull it: the first trial's root.
-    root_bound: Option<(usize, f64)>,
+    /// The patch whose root bound its culling took: its first trial's root takes the
+    /// same bound, counted once.
+    root_counted: Option<usize>,
 }
 
 impl<'a> Evaluator<'a> {
@@ -302,7 +305,7 @@ impl<'a> Evaluator<'a> {
             triangle_bounds: 0,
             points: HashMap::default(),
             view: None,
-            root_bound: None,
+            root_counted: None,
         }
     }
 
@@ -441,11 +444,12 @@ fn decide_cell(
     let bound = if proven {
         eval.proven += 1;
         f64::INFINITY
-    } else if let Some(b) = eval
-        .root_bound
-        .filter(|&(q, _)| q == p && cell.w == eval.n && cell.h == eval.n)
-    {
-        b.1
+    } else if cell.w == eval.n && cell.h == eval.n {
+        // The whole patch: its bound is the model's, computed once.
+        if eval.root_counted != Some(p) {
+            eval.bounds += 1;
+        }
+        eval.model.root_bound(p)
     } else {
         eval.bounds += 1;
         box_bound(&eval.model.patches[p], bx, corners)
@@ -746,10 +750,9 @@ fn mark_patches(
                 depth: 0,
             };
             let corners = eval.corners(p, root);
-            let bx = [0, WALK_ONE, 0, WALK_ONE];
             eval.bounds += 1;
-            let bound = box_bound(&model.patches[p], bx, corners);
-            eval.root_bound = Some((p, bound));
+            eval.root_counted = Some(p);
+            let bound = model.root_bound(p);
             if eval.outside(&corners, bound) || eval.back_facing(p, &corners, bound) {
                 out.culled_patches += 1;
                 continue;

@@ -14,6 +14,7 @@
 //! itself, so the tessellator evaluates bicubics only.
 
 use glam::DVec3;
+use std::sync::OnceLock;
 
 use super::bicubic::{self, Net};
 use super::control_mesh::CreaseMethod;
@@ -296,20 +297,39 @@ pub struct SurfaceModel {
     pub patches: Vec<PatchSurface>,
     /// Levels each quadtree was built to (`1..=TREE_DEPTH`).
     pub depth: u32,
+    /// Each patch's flatness bound over its whole square ([`root_bound`](Self::root_bound)),
+    /// once asked for.
+    root_bounds: Vec<OnceLock<f64>>,
 }
 
 impl SurfaceModel {
     /// Builds every patch's quadtree to `depth` levels (`1..=TREE_DEPTH`).
     pub fn new(mesh: PatchMesh, depth: u32) -> Self {
         let depth = depth.clamp(1, super::TREE_DEPTH);
-        let patches = (0..mesh.patch_count())
+        let patches: Vec<PatchSurface> = (0..mesh.patch_count())
             .map(|p| PatchSurface::build(&mesh, p, depth))
             .collect();
         SurfaceModel {
+            root_bounds: patches.iter().map(|_| OnceLock::new()).collect(),
             mesh,
             patches,
             depth,
         }
+    }
+
+    /// The flatness bound ([`box_bound`](super::bound::box_bound)) of patch `p`'s whole
+    /// square, with its own corners. It depends on the surface alone, not on the
+    /// tolerance or the view, and every adaptive run takes it for every patch (the first
+    /// trial's root, and a view's culling): it is computed the first time and kept, so a
+    /// run in a new view pays only for the cells below.
+    pub fn root_bound(&self, p: usize) -> f64 {
+        *self.root_bounds[p].get_or_init(|| {
+            let surface = &self.patches[p];
+            let corners = [(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)]
+                .map(|(u, v)| surface.eval(u, v).position);
+            let walk = super::bound::WALK_ONE;
+            super::bound::box_bound(surface, [0, walk, 0, walk], corners)
+        })
     }
 
     /// The same surface with the control points moved to `positions` (same topology):
