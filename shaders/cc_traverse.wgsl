@@ -63,6 +63,20 @@ fn cc_outside(corners: array<vec3f, 4>, bound: f32) -> bool {
 // tolerance, the cell is outside the view, or it is at the deepest level; a cell at a
 // vertex whose children's corners already prove it too far from flat is split without
 // its bound.
+// The bound of patch p's whole square depends on the surface alone, not on the view or
+// the tolerance: computed by the first run that needs it and kept in the marks until the
+// control points move (`SurfaceModel::root_bound` on the CPU). Only trial 0's invocation
+// of the patch reads and writes it.
+fn cc_whole_bound(p: u32, walk_box: vec4u, corners: array<vec3f, 4>) -> f32 {
+    let kept = atomicLoad(&marks[cc_root_bound_at(p)]);
+    if kept != 0u {
+        return bitcast<f32>(kept - 1u);
+    }
+    let bound = cc_box_bound(p, walk_box, corners);
+    atomicStore(&marks[cc_root_bound_at(p)], bitcast<u32>(bound) + 1u);
+    return bound;
+}
+
 fn cc_decide(cell: CcCell) -> CcDecision {
     let size = cc_cell_size(cell);
     let i1 = cell.i + size.x;
@@ -80,11 +94,13 @@ fn cc_decide(cell: CcCell) -> CcDecision {
     let walk_box = vec4u(cell.i, i1, cell.j, j1) * scale;
     var bound = CC_INFINITY;
     var bounds = 0u;
+    // Trial 0's root (1 × 1): the whole patch.
+    let whole = (cell.trial_depth & 0xffu) == 0u && depth == 0u;
     // A whole patch outside a culling view, or facing away from the eye, costs one bound
-    // and no search: trial 0's root (1 × 1) is culled before the proof, and its bound
-    // serves the decision.
-    if cc_params.view.cull != 0u && (cell.trial_depth & 0xffu) == 0u && depth == 0u {
-        bound = cc_box_bound(p, walk_box, corners);
+    // and no search: trial 0's root is culled before the proof, and its bound serves the
+    // decision.
+    if cc_params.view.cull != 0u && whole {
+        bound = cc_whole_bound(p, walk_box, corners);
         bounds = 1u;
         var culled = cc_outside(corners, bound);
         if !culled && (cc_params.view.cull & CC_VIEW_CULL_BACKFACES) != 0u && bound < CC_INFINITY {
@@ -109,7 +125,11 @@ fn cc_decide(cell: CcCell) -> CcDecision {
         }
     }
     if bounds == 0u {
-        bound = cc_box_bound(p, walk_box, corners);
+        if whole {
+            bound = cc_whole_bound(p, walk_box, corners);
+        } else {
+            bound = cc_box_bound(p, walk_box, corners);
+        }
         bounds = 1u;
     }
     let culled = cc_outside(corners, bound);

@@ -41,6 +41,8 @@ struct CcHashStatusView {
 //   leaf (scanned in place, the total at P);
 // - [P + 1, 2P + 1): the same key, kept; [2P + 1, 3P + 1): the key of the best trial
 //   the device cut short; [3P + 1, 4P + 1): the trial chosen;
+// - [4P + 1, 5P + 1): per patch the flatness bound of its whole square, plus one in its
+//   bits (0 for none yet): kept from run to run, cleared when the control points move;
 // - per patch and trial, what its leaves guarantee: the largest bound, the leaves over
 //   their tolerance, the leaves culled;
 // - blocks of 32 decisions, `[bits, next]`: one per patch and trial, then a pool.
@@ -62,8 +64,12 @@ fn cc_chosen_at(p: u32) -> u32 {
     return 3u * cc_params.patch_count + 1u + p;
 }
 
+fn cc_root_bound_at(p: u32) -> u32 {
+    return 4u * cc_params.patch_count + 1u + p;
+}
+
 fn cc_stats_at(p: u32, t: u32) -> u32 {
-    return 4u * cc_params.patch_count + 1u + 3u * (p * cc_params.trials + t);
+    return 5u * cc_params.patch_count + 1u + 3u * (p * cc_params.trials + t);
 }
 
 fn cc_bits_at(block: u32) -> u32 {

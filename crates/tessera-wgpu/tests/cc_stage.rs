@@ -813,6 +813,33 @@ fn moved_control_points_retessellate_in_place() {
     same_mesh(&mesh, &cpu.mesh, size(&moved)).expect("moved surface");
     gpu.check().expect("no wgpu errors");
 
+    // So coarse that every patch is one leaf: the largest leaf bound is the largest of
+    // the patches' root bounds, which the stage keeps from run to run. After the move
+    // it is the moved surface's, not the one kept.
+    let coarse = CcParams {
+        tolerance: Tolerance::Relative(1.0),
+        ..params
+    };
+    let mut kept =
+        CcStage::new(&gpu.device, &gpu.queue, &kernels(&gpu), &model, &coarse).expect("stage");
+    let before = kept.run_blocking(&gpu.device, &gpu.queue).expect("run");
+    kept.update_points(&gpu.queue, &points)
+        .expect("same topology");
+    let after = kept.run_blocking(&gpu.device, &gpu.queue).expect("run");
+    let (cpu_before, cpu_after) = (
+        tessellate_adaptive(&model, &coarse).expect("cpu"),
+        tessellate_adaptive(&moved, &coarse).expect("cpu"),
+    );
+    let near = |gpu: f32, cpu: f64| (gpu as f64 - cpu).abs() <= 1e-5 * cpu;
+    assert!(!near(cpu_before.max_bound as f32, cpu_after.max_bound));
+    assert!(near(before.max_bound(), cpu_before.max_bound));
+    assert!(
+        near(after.max_bound(), cpu_after.max_bound),
+        "{} kept, {} moved",
+        after.max_bound(),
+        cpu_after.max_bound
+    );
+
     let n = 3;
     let mut uniform = tessera_wgpu::catmull_clark::CcUniformStage::new(
         &gpu.device,

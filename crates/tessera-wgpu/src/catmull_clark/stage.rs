@@ -325,6 +325,9 @@ pub struct CcStage {
     growths: u32,
     /// Dispatches the last recorded run held.
     dispatches: u32,
+    /// The control points moved since the last run was recorded: the root bounds the
+    /// marks keep are stale.
+    points_moved: bool,
     buffers: Buffers,
     binds: Binds,
 }
@@ -337,7 +340,14 @@ pub struct CcStage {
 fn marks_words(patches: u32, leaves: u32) -> u64 {
     let p = patches.max(1) as u64;
     let trials = CC_TRIALS as u64;
-    4 * p + 1 + 3 * p * trials + 2 * (p * trials + pool_blocks(patches, leaves))
+    5 * p + 1 + 3 * p * trials + 2 * (p * trials + pool_blocks(patches, leaves))
+}
+
+/// Where the marks buffer keeps each patch's root bound, in words: `patches` of them,
+/// from run to run.
+fn marks_root_bounds(patches: u32) -> (u64, u64) {
+    let p = patches.max(1) as u64;
+    (4 * p + 1, p)
 }
 
 /// The words of the marks buffer cleared before each run (the keys).
@@ -471,6 +481,7 @@ impl CcStage {
             latest: None,
             growths: 0,
             dispatches: 0,
+            points_moved: false,
             buffers,
             binds,
         })
@@ -648,7 +659,9 @@ impl CcStage {
     pub fn update_points(&mut self, queue: &wgpu::Queue, points: &[Vec3]) -> Result<()> {
         self.patches
             .check_control_points(points.iter().map(|p| p.as_dvec3()))?;
-        self.stencil.update(queue, points)
+        self.stencil.update(queue, points)?;
+        self.points_moved = true;
+        Ok(())
     }
 
     /// Bytes [`update_points`](Self::update_points) writes: 12 per control point and 24
@@ -824,6 +837,12 @@ impl CcStage {
         encoder.clear_buffer(&self.state, 0, None);
         // The trials' keys start from none (atomics in the count pass).
         encoder.clear_buffer(&b.marks, 0, Some(4 * marks_cleared(self.patch_count)));
+        // The root bounds kept are of the surface before its control points moved.
+        if self.points_moved {
+            let (at, words) = marks_root_bounds(self.patch_count);
+            encoder.clear_buffer(&b.marks, 4 * at, Some(4 * words));
+            self.points_moved = false;
+        }
         encoder.clear_buffer(&b.hash.status, 0, None);
         encoder.clear_buffer(&b.hash.table, 0, None);
         stamp(encoder, "");
