@@ -67,13 +67,24 @@ fn cc_outside(corners: array<vec3f, 4>, bound: f32) -> bool {
 // the tolerance: computed by the first run that needs it and kept in the marks until the
 // control points move (`SurfaceModel::root_bound` on the CPU). Only trial 0's invocation
 // of the patch reads and writes it.
-fn cc_whole_bound(p: u32, walk_box: vec4u, corners: array<vec3f, 4>) -> f32 {
-    let kept = atomicLoad(&marks[cc_root_bound_at(p)]);
+// One call of the walk in each of the two decisions below: each call is a copy of its
+// loop, which a CPU device runs for every lane.
+fn cc_kept_bound(p: u32, whole: bool) -> u32 {
+    if !whole {
+        return 0u;
+    }
+    return atomicLoad(&marks[cc_root_bound_at(p)]);
+}
+
+fn cc_bound_or_kept(p: u32, whole: bool, walk_box: vec4u, corners: array<vec3f, 4>) -> f32 {
+    let kept = cc_kept_bound(p, whole);
     if kept != 0u {
         return bitcast<f32>(kept - 1u);
     }
     let bound = cc_box_bound(p, walk_box, corners);
-    atomicStore(&marks[cc_root_bound_at(p)], bitcast<u32>(bound) + 1u);
+    if whole {
+        atomicStore(&marks[cc_root_bound_at(p)], bitcast<u32>(bound) + 1u);
+    }
     return bound;
 }
 
@@ -100,7 +111,7 @@ fn cc_decide(cell: CcCell) -> CcDecision {
     // and no search: trial 0's root is culled before the proof, and its bound serves the
     // decision.
     if cc_params.view.cull != 0u && whole {
-        bound = cc_whole_bound(p, walk_box, corners);
+        bound = cc_bound_or_kept(p, true, walk_box, corners);
         bounds = 1u;
         var culled = cc_outside(corners, bound);
         if !culled && (cc_params.view.cull & CC_VIEW_CULL_BACKFACES) != 0u && bound < CC_INFINITY {
@@ -125,11 +136,7 @@ fn cc_decide(cell: CcCell) -> CcDecision {
         }
     }
     if bounds == 0u {
-        if whole {
-            bound = cc_whole_bound(p, walk_box, corners);
-        } else {
-            bound = cc_box_bound(p, walk_box, corners);
-        }
+        bound = cc_bound_or_kept(p, whole, walk_box, corners);
         bounds = 1u;
     }
     let culled = cc_outside(corners, bound);
