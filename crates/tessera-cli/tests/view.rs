@@ -33,6 +33,11 @@ const CLOSE_VIEW: [&str; 6] = [
 ];
 
 fn stats_of(args: &[&str], name: &str) -> serde_json::Value {
+    stats_and_summary(args, name).0
+}
+
+/// The stats `args` write to `name`, and the summary line on stdout.
+fn stats_and_summary(args: &[&str], name: &str) -> (serde_json::Value, String) {
     let stats = tmp(name);
     let out = tessera()
         .args(args)
@@ -45,7 +50,10 @@ fn stats_of(args: &[&str], name: &str) -> serde_json::Value {
         "{args:?}: {}",
         String::from_utf8_lossy(&out.stderr)
     );
-    serde_json::from_str(&std::fs::read_to_string(stats).unwrap()).unwrap()
+    (
+        serde_json::from_str(&std::fs::read_to_string(stats).unwrap()).unwrap(),
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+    )
 }
 
 #[test]
@@ -429,48 +437,18 @@ fn a_walk_the_device_cuts_short_coarsens_to_the_cpu_backends_mesh_at_the_pixels_
             backend.into(),
         ]
     };
-    let args = view("0.25", "gpu");
-    let out = tessera()
-        .args(&args)
-        .arg("--stats")
-        .arg(tmp("walk_gpu.json"))
-        .arg("-o")
-        .arg(tmp("walk_gpu.obj"))
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let gpu: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(tmp("walk_gpu.json")).unwrap()).unwrap();
+    let run = |px: &str, backend: &str, name: &str| {
+        let args = view(px, backend);
+        stats_and_summary(&args.iter().map(String::as_str).collect::<Vec<_>>(), name)
+    };
+    let (gpu, summary) = run("0.25", "gpu", "walk_gpu.json");
     let reached = gpu["achieved_tolerance_px"].as_f64().unwrap();
-    let said = String::from_utf8_lossy(&out.stdout).contains("loop limit");
     eprintln!("reached {reached} px on the GPU backend");
     assert!(reached >= 0.25, "{gpu}");
-    assert_eq!(
-        said,
-        reached > 0.25,
-        "{}",
-        String::from_utf8_lossy(&out.stdout)
-    );
-    let asked = stats_of(
-        &view("0.25", "cpu")
-            .iter()
-            .map(String::as_str)
-            .collect::<Vec<_>>(),
-        "walk_cpu.json",
-    );
+    assert_eq!(summary.contains("loop limit"), reached > 0.25, "{summary}");
+    let (asked, _) = run("0.25", "cpu", "walk_cpu.json");
     assert_eq!(asked["achieved_tolerance_px"], 0.25);
-    let px = format!("{reached}");
-    let at_reached = stats_of(
-        &view(&px, "cpu")
-            .iter()
-            .map(String::as_str)
-            .collect::<Vec<_>>(),
-        "walk_cpu_reached.json",
-    );
+    let (at_reached, _) = run(&format!("{reached}"), "cpu", "walk_cpu_reached.json");
     for key in ["triangles", "culled_patches", "unmet"] {
         assert_eq!(at_reached[key], gpu[key], "{key}");
     }

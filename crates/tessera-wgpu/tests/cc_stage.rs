@@ -1342,6 +1342,18 @@ fn the_tie_count_catches_a_quad_cut_against_its_diagonals() {
     assert!(same_mesh_up_to_ties(&moved, &mesh, s).is_err());
 }
 
+/// One frame of a render loop: a `prepare`, submitted and waited for, and the newest
+/// status that has arrived (a frame late).
+fn frame(gpu: &Gpu, stage: &mut CcStage) -> Option<tessera_wgpu::catmull_clark::CcStatus> {
+    let mut encoder = gpu.device.create_command_encoder(&Default::default());
+    stage
+        .prepare(&gpu.device, &gpu.queue, &mut encoder)
+        .expect("prepare");
+    gpu.queue.submit([encoder.finish()]);
+    gpu.wait().expect("gpu");
+    stage.poll_status(&gpu.device)
+}
+
 /// A run in `view`, read back, after one without: the view is set through the queue.
 fn run_in_view(
     gpu: &Gpu,
@@ -1649,19 +1661,10 @@ fn a_triangle_cap_coarsens_the_pixels_as_the_cpu_reference_does() {
     let mut looped =
         CcStage::new(&gpu.device, &gpu.queue, &kernels(&gpu), &model, &params).expect("stage");
     looped.set_view(&gpu.queue, Some(&capped)).expect("view");
-    let frame = |stage: &mut CcStage| {
-        let mut encoder = gpu.device.create_command_encoder(&Default::default());
-        stage
-            .prepare(&gpu.device, &gpu.queue, &mut encoder)
-            .expect("prepare");
-        gpu.queue.submit([encoder.finish()]);
-        gpu.wait().expect("gpu");
-        stage.poll_status(&gpu.device)
-    };
     for _ in 0..40 {
-        frame(&mut looped);
+        frame(&gpu, &mut looped);
     }
-    let last = frame(&mut looped).expect("a status");
+    let last = frame(&gpu, &mut looped).expect("a status");
     assert_eq!(
         looped.tolerance_px(),
         Some(achieved),
@@ -1807,19 +1810,10 @@ fn a_walk_the_device_cuts_short_coarsens_the_pixels_to_the_cpu_references_mesh()
     let mut looped =
         CcStage::new(&gpu.device, &gpu.queue, &kernels(&gpu), &model, &params).expect("stage");
     looped.set_view(&gpu.queue, Some(&asked)).expect("view");
-    let frame = |stage: &mut CcStage| {
-        let mut encoder = gpu.device.create_command_encoder(&Default::default());
-        stage
-            .prepare(&gpu.device, &gpu.queue, &mut encoder)
-            .expect("prepare");
-        gpu.queue.submit([encoder.finish()]);
-        gpu.wait().expect("gpu");
-        stage.poll_status(&gpu.device)
-    };
     for _ in 0..30 {
-        frame(&mut looped);
+        frame(&gpu, &mut looped);
     }
-    let last = frame(&mut looped).expect("a status");
+    let last = frame(&gpu, &mut looped).expect("a status");
     assert_eq!(looped.tolerance_px(), Some(achieved));
     assert!(!last.overflowed());
     assert_eq!(last.indices, status.indices);
