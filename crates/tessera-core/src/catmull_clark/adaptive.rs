@@ -424,7 +424,7 @@ fn decide_cell(
     splits_left: u32,
     tolerance: f64,
     exact: bool,
-) -> Option<(f64, Option<u32>)> {
+) -> Option<(f64, Option<u32>, f64)> {
     // Grid units to walk units: WALK_ONE / n = 2^(18 - max_depth).
     let scale = WALK_ONE / eval.n;
     let bx = [cell.i, cell.i + cell.w, cell.j, cell.j + cell.h].map(|t| t * scale);
@@ -456,14 +456,14 @@ fn decide_cell(
     };
     // Nothing of it can be seen: a leaf that emits nothing.
     if bound <= tolerance || eval.outside(&corners, bound) {
-        return Some((bound, None));
+        return Some((bound, None, tolerance));
     }
     if exact {
         if let Some(b) = own_triangles_bound(eval, p, cell, bx, corners, tolerance) {
-            return Some((b, Some(splits_left)));
+            return Some((b, Some(splits_left), tolerance));
         }
     }
-    (splits_left == 0).then_some((bound, None))
+    (splits_left == 0).then_some((bound, None, tolerance))
 }
 
 /// Recursive marking of one cell (a leaf kept by its own triangles that failed against
@@ -474,10 +474,10 @@ fn mark(
     cell: Cell,
     splits_left: u32,
     tolerance: f64,
-    leaf: &mut dyn FnMut(Cell, f64),
+    leaf: &mut dyn FnMut(Cell, f64, f64),
 ) {
     match decide_cell(eval, p, cell, splits_left, tolerance, false) {
-        Some((bound, _)) => leaf(cell, bound),
+        Some((bound, _, eps)) => leaf(cell, bound, eps),
         None => {
             for q in 0..4 {
                 mark(eval, p, cell.child(q), splits_left - 1, tolerance, leaf);
@@ -767,8 +767,8 @@ fn mark_patches(
         let culled_before = out.culled_leaves;
         let mut seen = false;
         let mut culled = Vec::new();
-        for (c, (bound, e)) in walk.leaves {
-            if !out.keep_leaf(eval, p, c, bound) {
+        for (c, (bound, e, eps)) in walk.leaves {
+            if !out.keep_leaf(eval, p, c, bound, eps) {
                 culled.push((p, c));
                 continue;
             }
@@ -793,14 +793,22 @@ fn mark_patches(
 
 impl Marking {
     /// Counts a leaf of patch `p` with its bound: false for one outside the view (it
-    /// emits nothing), else whether the bound meets the cell's ε, and the largest bound.
-    fn keep_leaf(&mut self, eval: &mut Evaluator, p: usize, c: Cell, bound: f64) -> bool {
+    /// emits nothing), else whether the bound meets `tolerance` (the cell's ε, as its
+    /// decision took it), and the largest bound.
+    fn keep_leaf(
+        &mut self,
+        eval: &mut Evaluator,
+        p: usize,
+        c: Cell,
+        bound: f64,
+        tolerance: f64,
+    ) -> bool {
         let corners = eval.corners(p, c);
         if eval.outside(&corners, bound) {
             self.culled_leaves += 1;
             return false;
         }
-        if bound > eval.eps_at(&corners) {
+        if bound > tolerance {
             self.unmet += 1;
         }
         self.max_bound = self.max_bound.max(bound);
@@ -871,11 +879,11 @@ fn settle_exact_leaves(eval: &mut Evaluator, marking: &mut Marking) -> Vec<Polyg
                 let (p, cell) = marking.leaves[k];
                 let splits_left = marking.bounds[k].1.expect("an exact leaf");
                 let mut marked = Vec::new();
-                mark(eval, p, cell, splits_left, eps, &mut |c, b| {
-                    marked.push((c, b))
+                mark(eval, p, cell, splits_left, eps, &mut |c, b, e| {
+                    marked.push((c, b, e))
                 });
-                for (c, b) in marked {
-                    if marking.keep_leaf(eval, p, c, b) {
+                for (c, b, e) in marked {
+                    if marking.keep_leaf(eval, p, c, b, e) {
                         leaves.push((p, c));
                         bounds.push((b, None));
                     } else {
