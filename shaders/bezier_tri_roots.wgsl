@@ -3,8 +3,8 @@
 // diagonal, has no midpoint point) marks nothing, and its counts follow from Euler's
 // formula; this kernel writes them. The others it lists for `bezier_tri_mark`,
 // dispatched indirectly over them. A triangle in view also marks its corners as used:
-// the vertex kernel evaluates no other coarse vertex. Twin of the root branch of the mark loop in
-// `tessera_core::bezier::tessellate_adaptive` (`root_known_leaf`).
+// the vertex kernel evaluates no other coarse vertex. Twin of the root branch of the mark
+// loop in `tessera_core::bezier::tessellate_adaptive` (`root_known_leaf`, `mark_used`).
 //
 // A CPU device runs all of the mark kernel's walk, interior test and texel fetches
 // included, for every triangle, whether a lane needs it or not: at coarse thresholds

@@ -59,16 +59,11 @@ fn cc_outside(corners: array<vec3f, 4>, bound: f32) -> bool {
     return cc_view_box_outside(cc_corners_lo(corners) - b, cc_corners_hi(corners) + b);
 }
 
-// `adaptive::decide_cell`: split unless the flatness bound is within the cell's
-// tolerance, the cell is outside the view, or it is at the deepest level; a cell at a
-// vertex whose children's corners already prove it too far from flat is split without
-// its bound.
 // The bound of patch p's whole square depends on the surface alone, not on the view or
 // the tolerance: computed by the first run that needs it and kept in the marks until the
 // control points move (`SurfaceModel::root_bound` on the CPU). Only trial 0's invocation
-// of the patch reads and writes it.
-// One call of the walk in each of the two decisions below: each call is a copy of its
-// loop, which a CPU device runs for every lane.
+// of the patch reads and writes it. `cc_decide` calls the walk once in each of its two
+// decisions: each call is a copy of its loop, which a CPU device runs for every lane.
 fn cc_kept_bound(p: u32, whole: bool) -> u32 {
     if !whole {
         return 0u;
@@ -88,6 +83,10 @@ fn cc_bound_or_kept(p: u32, whole: bool, walk_box: vec4u, corners: array<vec3f, 
     return bound;
 }
 
+// `adaptive::decide_cell`: split unless the flatness bound is within the cell's
+// tolerance, the cell is outside the view, or it is at the deepest level; a cell at a
+// vertex whose children's corners already prove it too far from flat is split without
+// its bound.
 fn cc_decide(cell: CcCell) -> CcDecision {
     let size = cc_cell_size(cell);
     let i1 = cell.i + size.x;

@@ -262,8 +262,8 @@ pub struct CcTessellation {
     pub tolerance_px: Option<f64>,
     /// Flatness bounds the decisions took, every trial of the first-split search
     /// included: the method's cost, most of its time. A patch's bound over its whole
-    /// square is computed once per model ([`SurfaceModel::root_bound`]) and counted in
-    /// each decision that takes it, as the GPU computes it each run.
+    /// square is computed once per model ([`SurfaceModel::root_bound`]; the GPU stage
+    /// keeps it too) and counted in each decision that takes it, on both sides alike.
     pub bounds: u64,
     /// Cells split on the split proof alone, without a bound: with
     /// [`bounds`](Self::bounds), every cell tested.
