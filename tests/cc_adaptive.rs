@@ -246,6 +246,81 @@ fn the_bound_of_a_cell_is_above_its_true_error() {
 }
 
 #[test]
+fn the_bound_of_a_whole_face_is_above_its_true_error() {
+    // Quad control faces taken whole, extraordinary and creased ones included, through
+    // the limit points of their vertices: both diagonals, a fan from the edge point of
+    // the first side (a face across that is not a face leaf) and one from a point a
+    // quarter along it (finer leaves across). Every sampled surface point of the face
+    // must be within the bound of each.
+    let mut tightest = 0f64;
+    for name in [
+        "catmull_clark/spot_control_mesh.obj",
+        "opensubdiv/catmark_cube.obj",
+        "opensubdiv/catmark_cube_creases1.obj",
+        "opensubdiv/catmark_car.obj",
+        "opensubdiv/catmark_edgeonly.obj",
+    ] {
+        let model = cc_model(name);
+        let mut checked = 0;
+        let faces = model.mesh.control_faces.len();
+        for f in (0..faces).step_by((faces / 40).max(1)) {
+            let bound = model.face_bound(f);
+            if model.mesh.control_faces[f].len() != 4 {
+                assert!(bound.is_infinite(), "{name} face {f}");
+                continue;
+            }
+            let at = |s: f64, t: f64| {
+                model
+                    .eval_face(f as u32, s, t)
+                    .expect("on the face")
+                    .position
+            };
+            let [c0, c1, c2, c3, e, q] = [
+                (0.0, 0.0),
+                (1.0, 0.0),
+                (1.0, 1.0),
+                (0.0, 1.0),
+                (0.5, 0.0),
+                (0.25, 0.0),
+            ]
+            .map(|(s, t)| at(s, t));
+            let triangulations = [
+                vec![[c0, c1, c2], [c0, c2, c3]],
+                vec![[c0, c1, c3], [c1, c2, c3]],
+                vec![[e, c1, c2], [e, c2, c3], [e, c3, c0]],
+                vec![[q, c1, c2], [q, c2, c3], [q, c3, c0]],
+            ];
+            let mut worst = 0f64;
+            for j in 0..=24 {
+                for i in 0..=24 {
+                    let x = at(i as f64 / 24.0, j as f64 / 24.0);
+                    for tris in &triangulations {
+                        let d = tris
+                            .iter()
+                            .map(|t| (x - closest_point_on_triangle(x, t[0], t[1], t[2])).length())
+                            .fold(f64::INFINITY, f64::min);
+                        worst = worst.max(d);
+                    }
+                }
+            }
+            assert!(
+                worst <= bound * (1.0 + 1e-9),
+                "{name} face {f}: {worst} > bound {bound}"
+            );
+            assert!(bound.is_finite() && bound > 0.0, "{name} face {f}: {bound}");
+            tightest = tightest.max(worst / bound);
+            checked += 1;
+        }
+        assert!(checked >= 6, "{name}: {checked} faces");
+    }
+    eprintln!("tightest {tightest}");
+    assert!(
+        tightest > 0.5,
+        "the face bound is never within 2× of the truth: {tightest}"
+    );
+}
+
+#[test]
 fn the_split_proof_never_exceeds_the_bound() {
     // The proof skips the walk of a cell its centre and side midpoints already show to be
     // too far from flat; it must never be above the bound, or it would split cells the

@@ -149,6 +149,7 @@ pub fn run(assets: &Path, out_dir: &Path, quick: bool) {
                     cull: true,
                     cull_backfaces: false,
                     max_triangles: None,
+                    face_leaves: false,
                 },
                 repeats,
             )
@@ -333,6 +334,7 @@ fn cpu_in_view(
         cull: true,
         cull_backfaces: backfaces,
         max_triangles: None,
+        face_leaves: false,
     };
     median_time(repeats, || {
         tessellate_adaptive_in_view(model, &params, &vt).expect("tessellate")
@@ -431,6 +433,7 @@ fn camera_motion(
         cull: true,
         cull_backfaces: false,
         max_triangles: None,
+        face_leaves: false,
     };
     let mut stage = CcStage::new(&gpu.device, &gpu.queue, kernels, model, &params).expect("stage");
     // Every view once to completion: the buffers grown for the largest.
@@ -590,6 +593,7 @@ fn scene(gpu: &Gpu, kernels: &Kernels, assets: &Path) -> Scene {
             cull: true,
             cull_backfaces: false,
             max_triangles: None,
+            face_leaves: false,
         },
         repeats,
     );

@@ -434,6 +434,7 @@ pub(crate) fn view_tolerance(
         cull: !args.no_cull,
         cull_backfaces: args.cull_backfaces,
         max_triangles: args.max_triangles,
+        face_leaves: false,
     })
 }
 

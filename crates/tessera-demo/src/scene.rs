@@ -201,6 +201,7 @@ impl Params {
                 cull: true,
                 cull_backfaces: self.cull_backfaces,
                 max_triangles: Some(TRIANGLE_CAP),
+                face_leaves: false,
             })
     }
 

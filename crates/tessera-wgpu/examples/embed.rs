@@ -152,6 +152,7 @@ pub fn run(assets: &Path, frames: u32) -> Result<tessera_wgpu::image::RgbaImage,
                 cull: true,
                 cull_backfaces: false,
                 max_triangles: Some(500_000),
+                face_leaves: false,
             }),
         )?;
 

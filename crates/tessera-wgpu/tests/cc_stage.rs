@@ -1426,6 +1426,7 @@ fn in_a_view_the_gpu_gives_the_cpu_references_mesh_within_the_pixels() {
                 cull: true,
                 cull_backfaces: false,
                 max_triangles: None,
+                face_leaves: false,
             };
             // From among the model, the cells at the near plane split to full depth: with
             // the search, whether lavapipe's loop limit (65 535 iterations per group of 8
@@ -1545,6 +1546,7 @@ fn the_view_moves_through_the_queue_and_a_view_looking_away_draws_nothing() {
         cull: true,
         cull_backfaces: false,
         max_triangles: None,
+        face_leaves: false,
     };
     for pixels in [Some(1.0), None] {
         stage
@@ -1588,6 +1590,18 @@ fn the_view_moves_through_the_queue_and_a_view_looking_away_draws_nothing() {
         bytemuck::cast_slice::<_, u8>(&back.vertices),
         bytemuck::cast_slice::<_, u8>(&world.vertices)
     );
+    // Face leaves are the CPU reference's: the stage says so and keeps its view.
+    let faces = ViewTolerance {
+        face_leaves: true,
+        ..close
+    };
+    let refused = stage.set_view(&gpu.queue, Some(&faces)).unwrap_err();
+    assert!(refused.to_string().contains("face leaves"), "{refused}");
+    let kept = stage.run_blocking(&gpu.device, &gpu.queue).expect("run");
+    let kept = stage
+        .read_mesh(&gpu.device, &gpu.queue, &kept)
+        .expect("read");
+    assert_eq!(kept.indices, world.indices);
     gpu.check().expect("no wgpu errors");
 }
 
@@ -1613,6 +1627,7 @@ fn a_triangle_cap_coarsens_the_pixels_as_the_cpu_reference_does() {
         cull: true,
         cull_backfaces: false,
         max_triangles: None,
+        face_leaves: false,
     };
     let all = tessellate_adaptive_in_view(&model, &params, &free).expect("cpu");
     let cap = all.mesh.triangle_count() / 5;
@@ -1703,6 +1718,7 @@ fn culling_back_faces_the_gpu_culls_the_patches_the_cpu_reference_culls() {
             cull: frustum,
             cull_backfaces: true,
             max_triangles: None,
+            face_leaves: false,
         };
         let what = format!("{name} {stand:?}");
         let cpu = tessellate_adaptive_in_view(&model, &params, &v).expect("cpu");
@@ -1775,6 +1791,7 @@ fn a_walk_the_device_cuts_short_coarsens_the_pixels_to_the_cpu_references_mesh()
         cull: true,
         cull_backfaces: false,
         max_triangles: None,
+        face_leaves: false,
     };
     let mut stage =
         CcStage::new(&gpu.device, &gpu.queue, &kernels(&gpu), &model, &params).expect("stage");

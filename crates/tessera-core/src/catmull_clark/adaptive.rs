@@ -235,6 +235,13 @@ pub struct ViewTolerance {
     /// its leaves (two triangles at least each) pass the cap, so no step holds much more
     /// than the cap.
     pub max_triangles: Option<usize>,
+    /// A quad control face whose four patches meet their tolerance taken together, as
+    /// one cell through its vertices' limit points ([`SurfaceModel::face_bound`]), is one
+    /// leaf: a level of detail above the patch, two triangles for four patches where a
+    /// view sees a face from far away. Its sides get the points of the faces across, and
+    /// the level-1 edge point where the face across is not a leaf itself. The CPU
+    /// reference's only: the GPU stage refuses it.
+    pub face_leaves: bool,
 }
 
 /// A tessellation with what it cost.
@@ -641,8 +648,9 @@ fn tessellate_within(
     out.max_bound = marking.max_bound;
     out.culled_leaves = marking.culled_leaves;
     out.culled_patches = marking.culled_patches;
+    let faces = face_polygons(mesh, &marking, n);
     let leaves = marking.leaves;
-    out.leaves = leaves.len();
+    out.leaves = leaves.len() + faces.len();
 
     // Every polygon vertex evaluated once per point; one output vertex per point and
     // chart, its position and normal copied from the point's. Ids in the order of the
@@ -650,6 +658,12 @@ fn tessellate_within(
     let mut used: HashMap<u64, (usize, u32, u32)> = HashMap::default();
     for (&(p, _), (poly, _)) in leaves.iter().zip(&polygons) {
         for &(a, b) in poly {
+            eval.get(p, a, b);
+            used.entry(chart_key(mesh, p, a, b, n)).or_insert((p, a, b));
+        }
+    }
+    for (poly, _) in &faces {
+        for &(p, a, b) in poly {
             eval.get(p, a, b);
             used.entry(chart_key(mesh, p, a, b, n)).or_insert((p, a, b));
         }
@@ -687,6 +701,20 @@ fn tessellate_within(
             .collect();
         triangulate(&poly, *corners, position, &mut indices);
     }
+    for (poly, corners) in &faces {
+        let poly: Vec<PolyVertex> = poly
+            .iter()
+            .map(|&(p, a, b)| {
+                let (s, t) = face_grid(mesh.face_of[p].1, a, b, n);
+                PolyVertex {
+                    i: s,
+                    j: t,
+                    id: id_of[&chart_key(mesh, p, a, b, n)],
+                }
+            })
+            .collect();
+        triangulate(&poly, *corners, position, &mut indices);
+    }
     out.mesh.indices = indices;
     if cap.is_some_and(|c| out.mesh.triangle_count() > c) {
         return Ok(None);
@@ -713,6 +741,11 @@ struct Marking {
     culled: Vec<(usize, Cell)>,
     /// Marking stopped: more leaves than the cap allowed.
     over_cap: bool,
+    /// Face leaves in view ([`ViewTolerance::face_leaves`]): control faces emitted whole.
+    faces: Vec<usize>,
+    /// Per control face, whether it is a face leaf, in view or culled: its patches then
+    /// have no leaves of their own.
+    face_leaf: Vec<bool>,
 }
 
 /// Step 1, adaptive marking: the first split ku×kv of each patch is the one with the
@@ -737,8 +770,16 @@ fn mark_patches(
         culled_patches: 0,
         culled: Vec::new(),
         over_cap: false,
+        faces: Vec::new(),
+        face_leaf: vec![false; mesh.control_faces.len()],
     };
+    if eval.view.is_some_and(|v| v.face_leaves) {
+        mark_faces(eval, &mut out);
+    }
     for p in mesh.surface_patches() {
+        if out.face_leaf[mesh.face_of[p].0 as usize] {
+            continue;
+        }
         // A patch wholly outside a culling view, or facing away, costs one bound and no
         // search.
         if eval.view.is_some_and(|v| v.cull || v.cull_backfaces) {
@@ -783,12 +824,53 @@ fn mark_patches(
             out.culled_patches += 1;
             out.culled_leaves = culled_before;
         }
-        if leaf_cap.is_some_and(|cap| out.leaves.len() > cap) {
+        if leaf_cap.is_some_and(|cap| out.leaves.len() + out.faces.len() > cap) {
             out.over_cap = true;
             return out;
         }
     }
     out
+}
+
+/// The face leaves: every quad control face whose bound taken whole
+/// ([`SurfaceModel::face_bound`]) meets the tolerance at its corners' box. Such a face
+/// outside the frustum, or with its four patches facing away, counts as four culled
+/// patches.
+fn mark_faces(eval: &mut Evaluator, out: &mut Marking) {
+    let model = eval.model;
+    let mesh = &model.mesh;
+    for f in 0..mesh.control_faces.len() {
+        let bound = model.face_bound(f);
+        if !bound.is_finite() {
+            continue;
+        }
+        let first = mesh.first_patch[f] as usize;
+        let corners: [DVec3; 4] = std::array::from_fn(|k| eval.get(first + k, 0, 0).position);
+        eval.bounds += 1;
+        if bound > eval.eps.min(eval.eps_at(&corners)) {
+            continue;
+        }
+        out.face_leaf[f] = true;
+        let back_facing = eval.view.is_some_and(|v| v.cull_backfaces)
+            && (first..first + 4).all(|p| {
+                let whole = Cell {
+                    i: 0,
+                    j: 0,
+                    w: eval.n,
+                    h: eval.n,
+                    depth: 0,
+                };
+                let c = eval.corners(p, whole);
+                eval.bounds += 1;
+                eval.back_facing(p, &c, model.root_bound(p))
+            });
+        if eval.outside(&corners, bound) || back_facing {
+            out.culled_patches += 4;
+            continue;
+        }
+        out.max_bound = out.max_bound.max(bound);
+        out.faces.push(f);
+    }
 }
 
 impl Marking {
@@ -911,13 +993,7 @@ fn leaf_polygons(
     culled: &[(usize, Cell)],
     n: u32,
 ) -> Vec<Polygon> {
-    let mut lines = Lines::default();
-    for &(p, cell) in leaves.iter().chain(culled) {
-        for (a, b) in cell.corners() {
-            lines.add(point_key(mesh, p, a, b, n));
-        }
-    }
-    lines.sort();
+    let lines = marked_lines(mesh, leaves, culled, n);
     leaves
         .iter()
         .map(|&(p, cell)| {
@@ -932,6 +1008,86 @@ fn leaf_polygons(
             (poly, at)
         })
         .collect()
+}
+
+/// The marked points of every line: the corners of the leaves and of the culled leaves.
+fn marked_lines(
+    mesh: &PatchMesh,
+    leaves: &[(usize, Cell)],
+    culled: &[(usize, Cell)],
+    n: u32,
+) -> Lines {
+    let mut lines = Lines::default();
+    for &(p, cell) in leaves.iter().chain(culled) {
+        for (a, b) in cell.corners() {
+            lines.add(point_key(mesh, p, a, b, n));
+        }
+    }
+    lines.sort();
+    lines
+}
+
+/// A face leaf's polygon: its vertices as `(patch, i, j)`, each in the patch of the
+/// face it lies in, with the positions of the face's corners in it.
+type FacePolygon = (Vec<(usize, u32, u32)>, [usize; 4]);
+
+/// The polygons of the face leaves. Side `k` runs from vertex `k` along patch `k`'s
+/// side `v = 0` to the level-1 edge point, then along patch `k + 1`'s side `u = 0` to
+/// vertex `k + 1`, through the marked points of both halves; the edge point itself is
+/// on it when the face across is not a face leaf (its leaves have it as a corner).
+fn face_polygons(mesh: &PatchMesh, marking: &Marking, n: u32) -> Vec<FacePolygon> {
+    if marking.faces.is_empty() {
+        return Vec::new();
+    }
+    let lines = marked_lines(mesh, &marking.leaves, &marking.culled, n);
+    let mut uses: Vec<Vec<usize>> = vec![Vec::new(); mesh.edge_uses.len()];
+    for (p, edges) in mesh.quad_edges.iter().enumerate() {
+        if !mesh.hole[p] {
+            uses[edges[0] as usize].push(p);
+            uses[edges[3] as usize].push(p);
+        }
+    }
+    marking
+        .faces
+        .iter()
+        .map(|&f| {
+            let first = mesh.first_patch[f] as usize;
+            let mut poly = Vec::with_capacity(8);
+            let mut at = [0; 4];
+            for k in 0..4 {
+                let (p, q) = (first + k, first + (k + 1) % 4);
+                at[k] = poly.len();
+                poly.push((p, 0, 0));
+                let mut half = Vec::new();
+                lines.between(mesh, p, (0, 0), (n, 0), n, &mut half);
+                poly.extend(half.drain(..).map(|(a, b)| (p, a, b)));
+                let edge = mesh.quad_edges[p][0] as usize;
+                let across = uses[edge]
+                    .iter()
+                    .map(|&r| mesh.face_of[r].0 as usize)
+                    .find(|&g| g != f);
+                if across.is_some_and(|g| !marking.face_leaf[g]) {
+                    poly.push((p, n, 0));
+                }
+                lines.between(mesh, q, (0, n), (0, 0), n, &mut half);
+                poly.extend(half.drain(..).map(|(a, b)| (q, a, b)));
+            }
+            (poly, at)
+        })
+        .collect()
+}
+
+/// Point `(i, j)` of the patch at corner `k` of a quad face in the face's grid: units
+/// of `1/(2n)` of its side, `(0, 0)` at its first vertex
+/// ([`PatchMesh::face_point_at`]).
+fn face_grid(k: u8, i: u32, j: u32, n: u32) -> (i64, i64) {
+    let (i, j, m) = (i as i64, j as i64, 2 * n as i64);
+    match k {
+        0 => (i, j),
+        1 => (m - j, i),
+        2 => (m - i, m - j),
+        _ => (j, m - i),
+    }
 }
 
 /// Which line a side runs along: a level-1 edge, or a grid line inside a patch.

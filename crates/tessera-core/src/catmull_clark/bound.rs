@@ -453,6 +453,159 @@ pub fn orientation_kept(du: &[DVec2], dv: &[DVec2]) -> bool {
         .all(|b| first.perp_dot(*b) > 0.0 && last.perp_dot(*b) > 0.0)
 }
 
+/// The running maxima of the face bound ([`face_bound`]) over the pieces of a quad
+/// control face's four patches.
+struct FaceDeviation {
+    /// The face's corners relative to the first: the limit points of its vertices.
+    corners: [DVec3; 4],
+    /// Patch `k` of the face: its first corner relative to the face's.
+    shift: DVec3,
+    k: usize,
+    scale_rel: f64,
+    dev: f64,
+    dev_side: f64,
+}
+
+/// The patch sides on the face's boundary: a patch of a quad face runs from the face's
+/// vertex (its corner 0) along `v = 0` and `u = 0`; its other two sides are inside.
+const FACE_SIDES: u32 = SIDE_BOTTOM | SIDE_LEFT;
+
+impl FaceDeviation {
+    /// The bilinear quad through the face's corners at the point `(u, v)` of its patch
+    /// `k` ([`super::topology::PatchMesh::face_point_at`]: patch `k` covers the quarter at
+    /// vertex `k`, rotated).
+    fn bilinear(&self, u: f64, v: f64) -> DVec3 {
+        let (s, t) = match self.k {
+            0 => (u, v),
+            1 => (2.0 - v, u),
+            2 => (2.0 - u, 2.0 - v),
+            _ => (v, 2.0 - u),
+        };
+        bicubic::bilinear(&self.corners, 0.5 * s, 0.5 * t)
+    }
+}
+
+impl PieceSink for FaceDeviation {
+    fn piece(&mut self, shape: &Net, offset: DVec3, rect: [f64; 4], sides: u32) {
+        let (fu, fv) = (rect[1] - rect[0], rect[3] - rect[2]);
+        // B restricted to the piece is bilinear, so degree-raised to bicubic its control
+        // points are its values on the piece's 4 × 4 grid: `S − B` is the Bézier patch
+        // of these differences, within their hull; split at u = v = ½, within the
+        // tighter hulls of its four quarters.
+        let diff: [DVec3; 16] = std::array::from_fn(|k| {
+            let (i, j) = (k % 4, k / 4);
+            let p = shape[k] + offset + self.shift;
+            self.scale_rel = self.scale_rel.max(p.abs().max_element());
+            let u = rect[0] + fu * i as f64 / 3.0;
+            let v = rect[2] + fv * j as f64 / 3.0;
+            p - self.bilinear(u, v)
+        });
+        let halves = halved_grid(diff);
+        for j in 0..7 {
+            for i in 0..7 {
+                let e = halves[7 * j + i].length();
+                self.dev = self.dev.max(e);
+                let on_side =
+                    (i == 0 && sides & SIDE_LEFT != 0) || (j == 0 && sides & SIDE_BOTTOM != 0);
+                if on_side {
+                    self.dev_side = self.dev_side.max(e);
+                }
+            }
+        }
+    }
+
+    fn vertex(&mut self, limit: DVec3, radius: f64, rect: [f64; 4], sides: u32) {
+        let limit = limit + self.shift;
+        self.scale_rel = self.scale_rel.max(limit.abs().max_element());
+        // The square lies within `radius` of its limit point, and `B` over it within the
+        // largest distance of its corners' values (B is bilinear) from that point.
+        let e = [(0, 2), (1, 2), (1, 3), (0, 3)]
+            .map(|(a, b)| (limit - self.bilinear(rect[a], rect[b])).length())
+            .into_iter()
+            .fold(0.0, f64::max);
+        self.dev = self.dev.max(radius + e);
+        if sides & FACE_SIDES != 0 {
+            self.dev_side = self.dev_side.max(radius + e);
+        }
+    }
+}
+
+/// The control points of a bicubic's four quarters split at `u = v = ½`, on one 7 × 7
+/// grid (row-major, the quarters sharing their middle row and column).
+fn halved_grid(d: [DVec3; 16]) -> [DVec3; 49] {
+    let split = |a: [DVec3; 4]| -> [DVec3; 7] {
+        let b = [
+            0.5 * (a[0] + a[1]),
+            0.5 * (a[1] + a[2]),
+            0.5 * (a[2] + a[3]),
+        ];
+        let c = [0.5 * (b[0] + b[1]), 0.5 * (b[1] + b[2])];
+        let m = 0.5 * (c[0] + c[1]);
+        [a[0], b[0], c[0], m, c[1], b[2], a[3]]
+    };
+    let rows: [[DVec3; 7]; 4] =
+        std::array::from_fn(|j| split(std::array::from_fn(|i| d[4 * j + i])));
+    let mut out = [DVec3::ZERO; 49];
+    for i in 0..7 {
+        let column = split(std::array::from_fn(|j| rows[j][i]));
+        for (j, p) in column.into_iter().enumerate() {
+            out[7 * j + i] = p;
+        }
+    }
+    out
+}
+
+/// The flatness bound of a quad control face taken whole, as one cell: a guaranteed
+/// upper bound on the distance from the surface over the face (its four patches) to any
+/// triangulation of the polygon through the limit points of its four vertices and
+/// whatever surface points neighbours put on its sides. `None` where the walk ran out of
+/// stack.
+///
+/// With `B` the bilinear quad through the four corners over the face's `(s, t)`, `L` the
+/// piecewise-linear interpolant on the polygon's triangles laid out over the face's
+/// square (its side points at their own parameters) and `x = S(s, t)`:
+/// `|S − L S| ≤ |S − B| + |B − L B| + |L (B − S)| ≤ D + |twist|/4 + D_side`, the
+/// deviation form of a cell's bound ([`BoundSum`]), now over pieces of four patches:
+/// `D` bounds `|S − B|` over the face and `D_side` along its boundary (control points of
+/// every piece of each patch against `B` degree-raised there, split at its middle; the
+/// innermost square at a vertex as its ball), `|twist|/4` bounds a bilinear function's distance from its
+/// interpolant on any triangle of the unit square (Waldron's `M R²/2`, `M = |twist|`,
+/// `R² ≤ ½`), and `L (B − S)` is at most its largest value at a vertex, `0` at the corners
+/// and at most `D_side` on the sides. The surface is within `D` of the corners' hull, and
+/// so are the triangles, as the view's tolerance needs ([`crate::view`]).
+pub fn face_bound(surfaces: [&PatchSurface; 4], corners: [DVec3; 4]) -> Option<f64> {
+    let c = corners.map(|p| p - corners[0]);
+    let scale_abs = corners
+        .iter()
+        .map(|p| p.abs().max_element())
+        .fold(0.0, f64::max);
+    let mut sum = FaceDeviation {
+        corners: c,
+        shift: DVec3::ZERO,
+        k: 0,
+        scale_rel: c.iter().map(|p| p.abs().max_element()).fold(0.0, f64::max),
+        dev: 0.0,
+        dev_side: 0.0,
+    };
+    for (k, surface) in surfaces.into_iter().enumerate() {
+        let own = [(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)]
+            .map(|(u, v)| surface.eval(u, v).position);
+        sum.k = k;
+        sum.shift = own[0] - corners[0];
+        if !walk_pieces(surface, [0, WALK_ONE, 0, WALK_ONE], own, &mut sum) {
+            return None;
+        }
+    }
+    let twist = c[0] - c[1] + c[2] - c[3];
+    Some(
+        sum.dev
+            + sum.dev_side
+            + 0.25 * twist.length()
+            + ROUNDING_RELATIVE * sum.scale_rel
+            + ROUNDING_ABSOLUTE * scale_abs,
+    )
+}
+
 fn project(plane: (DVec3, DVec3), p: DVec3) -> DVec2 {
     DVec2::new(p.dot(plane.0), p.dot(plane.1))
 }

@@ -300,6 +300,9 @@ pub struct SurfaceModel {
     /// Each patch's flatness bound over its whole square ([`root_bound`](Self::root_bound)),
     /// once asked for.
     root_bounds: Vec<OnceLock<f64>>,
+    /// Each control face's bound taken whole ([`face_bound`](Self::face_bound)), once
+    /// asked for.
+    face_bounds: Vec<OnceLock<f64>>,
 }
 
 impl SurfaceModel {
@@ -311,6 +314,7 @@ impl SurfaceModel {
             .collect();
         SurfaceModel {
             root_bounds: patches.iter().map(|_| OnceLock::new()).collect(),
+            face_bounds: mesh.control_faces.iter().map(|_| OnceLock::new()).collect(),
             mesh,
             patches,
             depth,
@@ -329,6 +333,23 @@ impl SurfaceModel {
                 .map(|(u, v)| surface.eval(u, v).position);
             let walk = super::bound::WALK_ONE;
             super::bound::box_bound(surface, [0, walk, 0, walk], corners)
+        })
+    }
+
+    /// The flatness bound of control face `f` taken whole, as one cell through the limit
+    /// points of its vertices ([`face_bound`](super::bound::face_bound)): infinite for a
+    /// face that is not a quad or has a hole. Computed once, as the root bounds are.
+    pub fn face_bound(&self, f: usize) -> f64 {
+        *self.face_bounds[f].get_or_init(|| {
+            let first = self.mesh.first_patch[f] as usize;
+            if self.mesh.control_faces[f].len() != 4
+                || (first..first + 4).any(|p| self.mesh.hole[p])
+            {
+                return f64::INFINITY;
+            }
+            let surfaces: [&PatchSurface; 4] = std::array::from_fn(|k| &self.patches[first + k]);
+            let corners = surfaces.map(|s| s.eval(0.0, 0.0).position);
+            super::bound::face_bound(surfaces, corners).unwrap_or(f64::INFINITY)
         })
     }
 

@@ -538,6 +538,12 @@ impl CcStage {
                 if kept.is_none() {
                     self.walk_floor = 0.0;
                 }
+                if v.face_leaves {
+                    return Err(tessera_core::Error::Param(
+                        "face leaves are the CPU reference's only: the GPU stage tessellates per patch".into(),
+                    )
+                    .into());
+                }
                 if v.max_triangles.is_some() && v.pixels.is_none() {
                     return Err(tessera_core::Error::Param(
                         "a triangle cap needs a pixel tolerance to coarsen".into(),
