@@ -63,11 +63,15 @@ const SAMPLES: usize = 16;
 /// A view from just off one end of the model's longest side, a little above, looking
 /// along it: the near end large on screen, the far end small.
 /// The model as a renderer holds it after its first frame: each patch's root bound
-/// computed ([`SurfaceModel::root_bound`]), so that every run timed, in pixels or at the
-/// world ε, is a frame of a moving view and not the first.
+/// computed ([`SurfaceModel::root_bound`]), and each face's
+/// ([`SurfaceModel::face_bound`]) for the face leaves, so that every run timed, in
+/// pixels or at the world ε, is a frame of a moving view and not the first.
 fn warmed(model: SurfaceModel) -> SurfaceModel {
     for p in model.mesh.surface_patches() {
         model.root_bound(p);
+    }
+    for f in 0..model.mesh.control_faces.len() {
+        model.face_bound(f);
     }
     model
 }
@@ -129,7 +133,8 @@ pub fn run(assets: &Path, out_dir: &Path, quick: bool) {
         let samples = surface_samples(&model, SAMPLES);
         let (nearest, farthest) = depth_range(&view, &samples);
         for pixels in [1.0, 0.5] {
-            let run = |tolerance, px| cpu_in_view(&model, view, tolerance, px, false, repeats);
+            let run =
+                |tolerance, px| cpu_in_view(&model, view, tolerance, px, false, false, repeats);
             let (px_ms, px) = run(Tolerance::Relative(1.0), Some(pixels));
             let (backfaces_ms, backfaces) = cpu_in_view(
                 &model,
@@ -137,6 +142,7 @@ pub fn run(assets: &Path, out_dir: &Path, quick: bool) {
                 Tolerance::Relative(1.0),
                 Some(pixels),
                 true,
+                false,
                 repeats,
             );
             let (px_gpu_ms, px_gpu_triangles) = gpu_in_view(
@@ -251,7 +257,7 @@ pub fn run(assets: &Path, out_dir: &Path, quick: bool) {
     }
     if let Some(sc) = &scene {
         s += &format!(
-            "\nA scene: {} copies of the car in an {}×{} grid, one control mesh ({} patches), seen from ground level off one corner, looking across it to the far corner ({}×{} pixels, p = {} px, midpoint splits, depth range {:.0}:1), against the same view culled at the world tolerance that guarantees the same pixel error ({:.2e}); CPU reference, on a model that kept its patches' root bounds from an earlier frame, medians of {}:\n\n| | triangles | culled patches | CPU ms |\n|---|---|---|---|\n| pixels | {} | {} | {:.0} |\n| world ε | {} | {} | {:.0} |\n| **ratio** | **{:.3}** | | **{:.3}** |\n| pixels, back faces culled | {} | {} | {:.0} |\n| world ε, back faces culled | {} | {} | {:.0} |\n| **ratio**, back faces culled | **{:.3}** | | **{:.3}** |\n| pixels, back faces culled, against world ε | {:.3} | | {:.3} |\n\nThe GPU stage in the pixels' view: {}.\n",
+            "\nA scene: {} copies of the car in an {}×{} grid, one control mesh ({} patches), seen from ground level off one corner, looking across it to the far corner ({}×{} pixels, p = {} px, midpoint splits, depth range {:.0}:1), against the same view culled at the world tolerance that guarantees the same pixel error ({:.2e}); CPU reference, on a model that kept its patches' root bounds from an earlier frame, medians of {}:\n\n| | triangles | culled patches | CPU ms |\n|---|---|---|---|\n| pixels | {} | {} | {:.0} |\n| world ε | {} | {} | {:.0} |\n| **ratio** | **{:.3}** | | **{:.3}** |\n| pixels, back faces culled | {} | {} | {:.0} |\n| world ε, back faces culled | {} | {} | {:.0} |\n| **ratio**, back faces culled | **{:.3}** | | **{:.3}** |\n| pixels, back faces culled, against world ε | {:.3} | | {:.3} |\n| pixels, face leaves | {} | | {:.0} |\n| world ε, face leaves | {} | | {:.0} |\n| **ratio**, face leaves | **{:.3}** | | **{:.3}** |\n| pixels, face leaves, against world ε | {:.3} | | {:.3} |\n\nWith face leaves a quad control face whose bound taken whole meets its tolerance is one leaf ({} leaves for the pixels' {} patches in view); the CPU reference's only so far.\n\nThe GPU stage in the pixels' view: {}.\n",
             sc.copies,
             sc.side,
             sc.side,
@@ -280,6 +286,16 @@ pub fn run(assets: &Path, out_dir: &Path, quick: bool) {
             sc.px_backfaces_ms / sc.world_backfaces_ms,
             sc.px_backfaces_triangles as f64 / sc.world_triangles.max(1) as f64,
             sc.px_backfaces_ms / sc.world_ms,
+            sc.px_faces_triangles,
+            sc.px_faces_ms,
+            sc.world_faces_triangles,
+            sc.world_faces_ms,
+            sc.px_faces_triangles as f64 / sc.world_faces_triangles.max(1) as f64,
+            sc.px_faces_ms / sc.world_faces_ms,
+            sc.px_faces_triangles as f64 / sc.world_triangles.max(1) as f64,
+            sc.px_faces_ms / sc.world_ms,
+            sc.px_faces_leaves,
+            sc.patches - sc.px_culled_patches,
             match &sc.px_gpu {
                 Ok(ms) => format!("{ms:.0} ms per run"),
                 Err(e) => format!("not run, the device cannot hold the scene ({e})"),
@@ -320,6 +336,7 @@ fn cpu_in_view(
     tolerance: Tolerance,
     pixels: Option<f64>,
     backfaces: bool,
+    face_leaves: bool,
     repeats: usize,
 ) -> (f64, tessera_core::catmull_clark::CcTessellation) {
     let params = CcParams {
@@ -334,7 +351,7 @@ fn cpu_in_view(
         cull: true,
         cull_backfaces: backfaces,
         max_triangles: None,
-        face_leaves: false,
+        face_leaves,
     };
     median_time(repeats, || {
         tessellate_adaptive_in_view(model, &params, &vt).expect("tessellate")
@@ -503,6 +520,13 @@ struct Scene {
     world_backfaces_triangles: usize,
     world_backfaces_culled_patches: usize,
     world_backfaces_ms: f64,
+    /// Both runs again with face leaves: a quad control face within its tolerance taken
+    /// whole is one leaf.
+    px_faces_triangles: usize,
+    px_faces_leaves: usize,
+    px_faces_ms: f64,
+    world_faces_triangles: usize,
+    world_faces_ms: f64,
 }
 
 /// 64 cars in an 8 × 8 grid, one control mesh, from ground level off one corner,
@@ -575,8 +599,10 @@ fn scene(gpu: &Gpu, kernels: &Kernels, assets: &Path) -> Scene {
     let (nearest, farthest) = depth_range(&view, &surface_samples(&model, 2));
     let world_tolerance = PIXELS * nearest / focal();
     let repeats = 1;
-    let run = |tolerance, px| cpu_in_view(&model, view, tolerance, px, false, repeats);
-    let run_backfaces = |tolerance, px| cpu_in_view(&model, view, tolerance, px, true, repeats);
+    let run = |tolerance, px| cpu_in_view(&model, view, tolerance, px, false, false, repeats);
+    let run_backfaces =
+        |tolerance, px| cpu_in_view(&model, view, tolerance, px, true, false, repeats);
+    let run_faces = |tolerance, px| cpu_in_view(&model, view, tolerance, px, false, true, repeats);
     eprintln!(
         "cc view scene: built and sampled in {:.0} s",
         started.elapsed().as_secs_f64()
@@ -606,6 +632,13 @@ fn scene(gpu: &Gpu, kernels: &Kernels, assets: &Path) -> Scene {
     let (px_backfaces_ms, px_backfaces) = run_backfaces(Tolerance::Relative(1.0), Some(PIXELS));
     let (world_backfaces_ms, world_backfaces) =
         run_backfaces(Tolerance::Absolute(world_tolerance), None);
+    let (px_faces_ms, px_faces) = run_faces(Tolerance::Relative(1.0), Some(PIXELS));
+    let (world_faces_ms, world_faces) = run_faces(Tolerance::Absolute(world_tolerance), None);
+    eprintln!(
+        "cc view scene, face leaves: {} tris ({px_faces_ms:.0} ms) against {} ({world_faces_ms:.0} ms)",
+        px_faces.mesh.triangle_count(),
+        world_faces.mesh.triangle_count()
+    );
     Scene {
         copies: SIDE * SIDE,
         side: SIDE,
@@ -627,5 +660,10 @@ fn scene(gpu: &Gpu, kernels: &Kernels, assets: &Path) -> Scene {
         world_backfaces_triangles: world_backfaces.mesh.triangle_count(),
         world_backfaces_culled_patches: world_backfaces.culled_patches,
         world_backfaces_ms,
+        px_faces_triangles: px_faces.mesh.triangle_count(),
+        px_faces_leaves: px_faces.leaves,
+        px_faces_ms,
+        world_faces_triangles: world_faces.mesh.triangle_count(),
+        world_faces_ms,
     }
 }

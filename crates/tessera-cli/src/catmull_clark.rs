@@ -141,6 +141,11 @@ pub fn tessellate(args: TessellateArgs) -> Result<(), Error> {
         )
         .into());
     }
+    if on_gpu && args.view.face_leaves {
+        return Err(
+            CoreError::Param("--face-leaves runs on the CPU only (--backend cpu)".into()).into(),
+        );
+    }
     if method == Method::Adaptive && (args.level.is_some() || args.segments.is_some()) {
         return Err(
             CoreError::Param("--level and --segments are for --method uniform".into()).into(),
@@ -434,7 +439,7 @@ pub(crate) fn view_tolerance(
         cull: !args.no_cull,
         cull_backfaces: args.cull_backfaces,
         max_triangles: args.max_triangles,
-        face_leaves: false,
+        face_leaves: args.face_leaves,
     })
 }
 

@@ -208,6 +208,11 @@ pub struct ViewArgs {
     /// (`achieved_tolerance_px`).
     #[arg(long, requires = "tolerance_px")]
     pub max_triangles: Option<usize>,
+    /// Catmull-Clark, CPU backend: a quad control face whose bound taken whole meets its
+    /// tolerance is one leaf, two triangles for its four patches (a level of detail above
+    /// the patch, for models seen from far away).
+    #[arg(long)]
+    pub face_leaves: bool,
 }
 
 impl ViewArgs {
@@ -220,6 +225,7 @@ impl ViewArgs {
             || self.no_cull
             || self.cull_backfaces
             || self.max_triangles.is_some()
+            || self.face_leaves
     }
 }
 

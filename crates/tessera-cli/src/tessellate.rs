@@ -216,6 +216,9 @@ fn tessellate(args: TessellateArgs) -> Result<(), Error> {
     if args.view.max_triangles.is_some() {
         return Err(CoreError::Param("--max-triangles is for Catmull-Clark meshes".into()).into());
     }
+    if args.view.face_leaves {
+        return Err(CoreError::Param("--face-leaves is for Catmull-Clark meshes".into()).into());
+    }
     if in_view && (args.target_triangles.is_some() || args.method == Some(Method::Uniform)) {
         return Err(CoreError::Param(
             "--tolerance-px is for the adaptive methods, without --target-triangles".into(),

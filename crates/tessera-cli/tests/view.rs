@@ -125,6 +125,30 @@ fn a_pixel_tolerance_holds_when_measured_and_culling_drops_what_is_out_of_view()
         "{backs_only}"
     );
     assert!(backs_only["triangles"].as_u64() < whole["triangles"].as_u64());
+    // The car small on screen: faces taken whole, fewer triangles, the pixels still hold.
+    let car = asset("opensubdiv/catmark_car.obj");
+    let small = [
+        "tessellate",
+        &car,
+        "--size",
+        "160x120",
+        "--tolerance-px",
+        "1",
+        "--measure",
+        "--measure-samples",
+        "32",
+    ];
+    let patches = stats_of(&small, "car.json");
+    let mut faces_args = small.to_vec();
+    faces_args.push("--face-leaves");
+    let faces = stats_of(&faces_args, "car_faces.json");
+    assert!(
+        faces["triangles"].as_u64().unwrap() < patches["triangles"].as_u64().unwrap() * 3 / 4,
+        "{faces} against {patches}"
+    );
+    let px = faces["max_error_px"].as_f64().unwrap();
+    assert!(px <= 1.0, "{px}");
+    assert_eq!(faces["unmet"], 0);
 }
 
 #[test]
@@ -198,6 +222,40 @@ fn views_refuse_what_they_do_not_take_yet_with_one_line() {
                 "1",
                 "--max-triangles",
                 "1000",
+            ],
+            "Catmull-Clark",
+        ),
+        (
+            vec![
+                "tessellate",
+                &torus,
+                "--tolerance-px",
+                "1",
+                "--backend",
+                "gpu",
+                "--face-leaves",
+            ],
+            "--backend cpu",
+        ),
+        (
+            vec![
+                "render",
+                &torus,
+                "-o",
+                "never.png",
+                "--tolerance-px",
+                "1",
+                "--face-leaves",
+            ],
+            "--backend cpu",
+        ),
+        (
+            vec![
+                "tessellate",
+                &teapot,
+                "--tolerance-px",
+                "1",
+                "--face-leaves",
             ],
             "Catmull-Clark",
         ),
