@@ -11,7 +11,7 @@ use tessera_core::catmull_clark::{
 use tessera_core::measure::{max_error_px, measure_error};
 use tessera_core::watertight::check_watertight;
 use tessera_core::{Tolerance, View};
-use tessera_tests::{cc_model, open_boundary, view, Stand};
+use tessera_tests::{assert_crack_free, cc_model, open_boundary, view, Stand};
 
 fn params() -> CcParams {
     CcParams {
@@ -144,21 +144,7 @@ fn holds(
     if matches!(stand, Stand::Far) && px <= 1.0 {
         assert!(err >= 0.05 * px, "{name} {stand:?}: {err} px ≪ {px}");
     }
-    let report = check_watertight(
-        &positions(out).to_vec(),
-        &out.mesh.indices,
-        &open_boundary(model),
-        1e-5 * model.mesh.control_diag,
-    );
-    assert_eq!(
-        (
-            report.t_junctions,
-            report.degenerate_triangles,
-            report.non_manifold_edges
-        ),
-        (0, 0, 0),
-        "{name} {stand:?}: {report:?}"
-    );
+    assert_crack_free(model, &out.mesh, &format!("{name} {stand:?}"));
 }
 
 #[test]

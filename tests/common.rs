@@ -92,6 +92,35 @@ pub fn surface_of(
     SurfaceModel::new(PatchMesh::new(control).expect("valid"), TREE_DEPTH)
 }
 
+/// Asserts that a tessellation of `model` has no T-junction, degenerate triangle or
+/// edge of more than two triangles (its open boundary excepted).
+pub fn assert_crack_free(
+    model: &tessera_core::catmull_clark::SurfaceModel,
+    mesh: &tessera_core::mesh::Mesh,
+    what: &str,
+) {
+    let positions: Vec<glam::Vec3> = mesh
+        .vertices
+        .iter()
+        .map(|v| glam::Vec3::from(v.position))
+        .collect();
+    let report = tessera_core::watertight::check_watertight(
+        &positions,
+        &mesh.indices,
+        &open_boundary(model),
+        1e-5 * model.mesh.control_diag,
+    );
+    assert_eq!(
+        (
+            report.t_junctions,
+            report.degenerate_triangles,
+            report.non_manifold_edges
+        ),
+        (0, 0, 0),
+        "{what}: {report:?}"
+    );
+}
+
 /// The open boundary curves of a surface (patch sides no other patch shares, and sides
 /// against a hole), densely sampled: where a watertight mesh may have boundary edges.
 pub fn open_boundary(model: &tessera_core::catmull_clark::SurfaceModel) -> Vec<Vec<glam::DVec3>> {

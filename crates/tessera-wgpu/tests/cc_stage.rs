@@ -1386,7 +1386,6 @@ fn in_a_view_the_gpu_gives_the_cpu_references_mesh_within_the_pixels() {
         surface_samples, tessellate_adaptive_in_view, ViewTolerance,
     };
     use tessera_core::measure::max_error_px;
-    use tessera_core::watertight::check_watertight;
     use tessera_tests::{view, Stand};
     let gpu = gpu();
     let (mut ties, mut triangles) = (0, 0);
@@ -1478,26 +1477,7 @@ fn in_a_view_the_gpu_gives_the_cpu_references_mesh_within_the_pixels() {
             triangles += used.triangle_count();
             let err = max_error_px(&samples, &mesh, &v.view).expect("samples in view");
             assert!(err <= px, "{what}: {err} px > {px}");
-            let positions: Vec<glam::Vec3> = mesh
-                .vertices
-                .iter()
-                .map(|v| glam::Vec3::from(v.position))
-                .collect();
-            let report = check_watertight(
-                &positions,
-                &mesh.indices,
-                &tessera_tests::open_boundary(&model),
-                1e-5 * model.mesh.control_diag,
-            );
-            assert_eq!(
-                (
-                    report.t_junctions,
-                    report.degenerate_triangles,
-                    report.non_manifold_edges
-                ),
-                (0, 0, 0),
-                "{what}: {report:?}"
-            );
+            tessera_tests::assert_crack_free(&model, &mesh, &what);
         }
     }
     eprintln!("{ties} tied quads in {triangles} triangles");

@@ -1061,12 +1061,14 @@ fn face_polygons(mesh: &PatchMesh, marking: &Marking, n: u32) -> Vec<FacePolygon
                 let mut half = Vec::new();
                 lines.between(mesh, p, (0, 0), (n, 0), n, &mut half);
                 poly.extend(half.drain(..).map(|(a, b)| (p, a, b)));
+                // Any face across that is not a face leaf (more than one on an edge that is
+                // not manifold) has the edge point as a corner.
                 let edge = mesh.quad_edges[p][0] as usize;
-                let across = uses[edge]
+                let needed = uses[edge]
                     .iter()
                     .map(|&r| mesh.face_of[r].0 as usize)
-                    .find(|&g| g != f);
-                if across.is_some_and(|g| !marking.face_leaf[g]) {
+                    .any(|g| g != f && !marking.face_leaf[g]);
+                if needed {
                     poly.push((p, n, 0));
                 }
                 lines.between(mesh, q, (0, n), (0, 0), n, &mut half);
