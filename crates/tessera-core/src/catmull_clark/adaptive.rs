@@ -1054,9 +1054,9 @@ fn face_polygons(mesh: &PatchMesh, marking: &Marking, n: u32) -> Vec<FacePolygon
             let first = mesh.first_patch[f] as usize;
             let mut poly = Vec::with_capacity(8);
             let mut at = [0; 4];
-            for k in 0..4 {
+            for (k, corner) in at.iter_mut().enumerate() {
                 let (p, q) = (first + k, first + (k + 1) % 4);
-                at[k] = poly.len();
+                *corner = poly.len();
                 poly.push((p, 0, 0));
                 let mut half = Vec::new();
                 lines.between(mesh, p, (0, 0), (n, 0), n, &mut half);
