@@ -43,8 +43,9 @@ struct CcDecision {
     proven: bool,
     // A leaf wholly outside the view's frustum: it emits nothing.
     culled: bool,
-    // The cell's tolerance: the world's, or within its share of the view's pixels.
-    tolerance: f32,
+    // Whether the bound meets the cell's tolerance: the world's, and within its share of
+    // the view's pixels.
+    met: bool,
     // Flatness bounds computed (0 or 1).
     bounds: u32,
 }
@@ -83,6 +84,12 @@ fn cc_bound_or_kept(p: u32, whole: bool, walk_box: vec4u, corners: array<vec3f, 
     return bound;
 }
 
+// `CellTolerance::admits`: whether `bound` meets the world's tolerance and, in a view
+// in pixels, the cell's share of them.
+fn cc_cell_admits(search: ptr<function, CcViewSearch>, bound: f32) -> bool {
+    return bound <= cc_params.tolerance && (cc_params.view.pixels <= 0.0 || cc_view_admits(search, bound));
+}
+
 // `adaptive::decide_cell`: split unless the flatness bound is within the cell's
 // tolerance, the cell is outside the view, or it is at the deepest level; a cell at a
 // vertex whose children's corners already prove it too far from flat is split without
@@ -95,9 +102,10 @@ fn cc_decide(cell: CcCell) -> CcDecision {
     let corners = array<vec3f, 4>(cc_corner(p, cell.i, cell.j), cc_corner(p, i1, cell.j),
         cc_corner(p, i1, j1), cc_corner(p, cell.i, j1));
     let depth = cell.trial_depth >> 8u;
-    var tolerance = cc_params.tolerance;
+    // The world's tolerance, and the view's search for the cell's share of its pixels.
+    var search: CcViewSearch;
     if cc_params.view.pixels > 0.0 {
-        tolerance = min(tolerance, cc_view_tolerance(cc_corners_lo(corners), cc_corners_hi(corners)));
+        search = cc_view_search(cc_corners_lo(corners), cc_corners_hi(corners));
     }
     // Grid units to walk units: CC_WALK_ONE / grid = 2^(18 - max_depth).
     let scale = CC_WALK_ONE / cc_params.grid;
@@ -118,7 +126,8 @@ fn cc_decide(cell: CcCell) -> CcDecision {
             culled = cc_patch_back_facing(p, cc_corners_lo(corners) - b, cc_corners_hi(corners) + b);
         }
         if culled {
-            return CcDecision(false, bound, false, true, tolerance, bounds);
+            // A culled leaf counts apart, whatever its bound.
+            return CcDecision(false, bound, false, true, false, bounds);
         }
     }
     // Only at a vertex: a regular patch's bound is one Bézier piece, about as costly as
@@ -130,8 +139,8 @@ fn cc_decide(cell: CcCell) -> CcDecision {
         let centre = cc_corner(p, cell.i + w, cell.j + h);
         let mids = array<vec3f, 4>(cc_corner(p, cell.i + w, cell.j), cc_corner(p, i1, cell.j + h),
             cc_corner(p, cell.i + w, j1), cc_corner(p, cell.i, cell.j + h));
-        if cc_split_proof(corners, centre, mids) > tolerance {
-            return CcDecision(true, CC_INFINITY, true, false, tolerance, bounds);
+        if !cc_cell_admits(&search, cc_split_proof(corners, centre, mids)) {
+            return CcDecision(true, CC_INFINITY, true, false, false, bounds);
         }
     }
     if bounds == 0u {
@@ -139,8 +148,9 @@ fn cc_decide(cell: CcCell) -> CcDecision {
         bounds = 1u;
     }
     let culled = cc_outside(corners, bound);
-    let leaf = bound <= tolerance || culled || depth >= cc_params.max_depth;
-    return CcDecision(!leaf, bound, false, culled, tolerance, bounds);
+    let met = cc_cell_admits(&search, bound);
+    let leaf = met || culled || depth >= cc_params.max_depth;
+    return CcDecision(!leaf, bound, false, culled, met, bounds);
 }
 
 // Per invocation: what its decisions cost, and (emit) what its leaves guarantee.
@@ -162,7 +172,7 @@ fn decide_counted(cell: CcCell) -> CcDecision {
             lane_culled += 1u;
         } else {
             lane_max_bound = max(lane_max_bound, min(d.bound, CC_INFINITY));
-            if d.bound > d.tolerance {
+            if !d.met {
                 lane_unmet += 1u;
             }
         }

@@ -64,24 +64,36 @@ fn cc_view_g(lo: vec3f, hi: vec3f, delta: f32) -> f32 {
     return cc_params.view.pixels / cc_view_gain(lo - grow, hi + grow, delta);
 }
 
-// `View::cell_tolerance`: the largest δ ≤ g(δ), by bisection between g(g(0)) and g(0).
-fn cc_view_tolerance(lo: vec3f, hi: vec3f) -> f32 {
+// `ToleranceSearch`: `View::cell_tolerance`'s bisection for the largest δ ≤ g(δ) between
+// g(g(0)) and g(0), run only as far as each question needs. The steps never depend on
+// the questions, so each answer is the whole search's.
+struct CcViewSearch {
+    lo: vec3f,
+    hi: vec3f,
+    valid: f32,
+    invalid: f32,
+    // `CELL_TOLERANCE_STEPS` at first.
+    steps_left: u32,
+}
+
+fn cc_view_search(lo: vec3f, hi: vec3f) -> CcViewSearch {
     let upper = cc_view_g(lo, hi, 0.0);
-    var valid = cc_view_g(lo, hi, upper);
-    var invalid = upper;
-    if valid >= upper {
-        return valid;
-    }
-    // `CELL_TOLERANCE_STEPS`.
-    for (var k = 0u; k < 10u; k++) {
-        let mid = 0.5 * (valid + invalid);
-        if mid <= cc_view_g(lo, hi, mid) {
-            valid = mid;
+    let valid = cc_view_g(lo, hi, upper);
+    return CcViewSearch(lo, hi, valid, upper, select(10u, 0u, valid >= upper));
+}
+
+// `ToleranceSearch::admits`: whether `bound` ≤ the tolerance.
+fn cc_view_admits(s: ptr<function, CcViewSearch>, bound: f32) -> bool {
+    while (*s).steps_left > 0u && !(bound <= (*s).valid || bound > (*s).invalid) {
+        let mid = 0.5 * ((*s).valid + (*s).invalid);
+        if mid <= cc_view_g((*s).lo, (*s).hi, mid) {
+            (*s).valid = mid;
         } else {
-            invalid = mid;
+            (*s).invalid = mid;
         }
+        (*s).steps_left -= 1u;
     }
-    return valid;
+    return bound <= (*s).valid;
 }
 
 // `View::box_outside`: the box [lo, hi] lies wholly outside one plane of the frustum.

@@ -598,7 +598,8 @@ fn scene(gpu: &Gpu, kernels: &Kernels, assets: &Path) -> Scene {
     .expect("view");
     let (nearest, farthest) = depth_range(&view, &surface_samples(&model, 2));
     let world_tolerance = PIXELS * nearest / focal();
-    let repeats = 1;
+    // The first run after another config is slower (its allocations are new): medians.
+    let repeats = 3;
     let run = |tolerance, px| cpu_in_view(&model, view, tolerance, px, false, false, repeats);
     let run_backfaces =
         |tolerance, px| cpu_in_view(&model, view, tolerance, px, true, false, repeats);

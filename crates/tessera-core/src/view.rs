@@ -321,25 +321,84 @@ impl View {
     /// `g(0)`, and the set of them is an interval from 0 as `δ − g(δ)` grows), always
     /// returning one that satisfies it.
     pub fn cell_tolerance(&self, lo: DVec3, hi: DVec3, pixels: f64) -> f64 {
-        let g = |delta: f64| {
-            let grow = DVec3::splat(2.0 * delta);
-            pixels / self.gain(lo - grow, hi + grow, delta)
+        self.tolerance_search(lo, hi, pixels).value()
+    }
+
+    /// Whether `bound ≤` [`View::cell_tolerance`]`(lo, hi, pixels)`, the search stopped as
+    /// soon as the answer is known ([`ToleranceSearch::admits`]).
+    pub fn within_cell_tolerance(&self, lo: DVec3, hi: DVec3, pixels: f64, bound: f64) -> bool {
+        self.tolerance_search(lo, hi, pixels).admits(bound)
+    }
+
+    /// The bisection of [`View::cell_tolerance`], not yet run: it runs only as far as
+    /// each question asked of it needs.
+    pub fn tolerance_search(&self, lo: DVec3, hi: DVec3, pixels: f64) -> ToleranceSearch<'_> {
+        let mut search = ToleranceSearch {
+            view: self,
+            lo,
+            hi,
+            pixels,
+            valid: 0.0,
+            invalid: 0.0,
+            steps_left: CELL_TOLERANCE_STEPS,
         };
-        let upper = g(0.0);
-        let mut valid = g(upper);
-        let mut invalid = upper;
-        if valid >= upper {
-            return valid;
+        let upper = search.g(0.0);
+        search.valid = search.g(upper);
+        search.invalid = upper;
+        if search.valid >= upper {
+            search.steps_left = 0;
         }
-        for _ in 0..CELL_TOLERANCE_STEPS {
-            let mid = 0.5 * (valid + invalid);
-            if mid <= g(mid) {
-                valid = mid;
-            } else {
-                invalid = mid;
-            }
+        search
+    }
+}
+
+/// [`View::cell_tolerance`]'s bisection, run step by step. Its valid end only rises and
+/// its invalid end only falls, so a question whose answer is the same at both ends
+/// (a bound at most the valid end, or above the invalid one) is answered without the
+/// steps left, and the answer is the whole search's: the steps taken never depend on the
+/// questions asked.
+#[derive(Clone, Copy, Debug)]
+pub struct ToleranceSearch<'a> {
+    view: &'a View,
+    lo: DVec3,
+    hi: DVec3,
+    pixels: f64,
+    valid: f64,
+    invalid: f64,
+    steps_left: usize,
+}
+
+impl ToleranceSearch<'_> {
+    /// `g(δ) = p / K(A ⊕ 2δ, δ)`.
+    fn g(&self, delta: f64) -> f64 {
+        let grow = DVec3::splat(2.0 * delta);
+        self.pixels / self.view.gain(self.lo - grow, self.hi + grow, delta)
+    }
+
+    fn step(&mut self) {
+        let mid = 0.5 * (self.valid + self.invalid);
+        if mid <= self.g(mid) {
+            self.valid = mid;
+        } else {
+            self.invalid = mid;
         }
-        valid
+        self.steps_left -= 1;
+    }
+
+    /// Whether `bound ≤` the tolerance ([`View::cell_tolerance`]).
+    pub fn admits(&mut self, bound: f64) -> bool {
+        while self.steps_left > 0 && !(bound <= self.valid || bound > self.invalid) {
+            self.step();
+        }
+        bound <= self.valid
+    }
+
+    /// The tolerance: the search run to its end.
+    pub fn value(&mut self) -> f64 {
+        while self.steps_left > 0 {
+            self.step();
+        }
+        self.valid
     }
 }
 
@@ -662,6 +721,45 @@ mod tests {
             seen += 1;
         }
         assert!(seen > 500, "too few cases: {seen}");
+    }
+
+    #[test]
+    fn the_early_answer_is_the_full_searchs() {
+        // Bounds on both sides of each box's tolerance, and on it exactly: the search
+        // stopped early answers as the whole one, and both answers occur.
+        let view = car_view();
+        let mut rng = Lcg(5);
+        let (mut within, mut beyond) = (0, 0);
+        for _ in 0..3000 {
+            let centre = rng.vec(-3.0, 3.0);
+            let half = rng.vec(0.0, 0.5);
+            let (lo, hi) = (centre - half, centre + half);
+            let pixels = 0.25 + 4.0 * rng.next();
+            let t = view.cell_tolerance(lo, hi, pixels);
+            // One search asked every question in turn, as a cell's decision asks it.
+            let mut search = view.tolerance_search(lo, hi, pixels);
+            for bound in [
+                t,
+                2.0 * t * rng.next(),
+                t * (1.0 + 1e-12),
+                t * 0.999,
+                t * 1.001,
+            ] {
+                let early = view.within_cell_tolerance(lo, hi, pixels, bound);
+                assert_eq!(early, bound <= t, "bound {bound} against {t}");
+                assert_eq!(search.admits(bound), early, "bound {bound}, asked in turn");
+                if early {
+                    within += 1;
+                } else {
+                    beyond += 1;
+                }
+            }
+            assert_eq!(search.value(), t);
+        }
+        assert!(
+            within > 1000 && beyond > 1000,
+            "{within} within, {beyond} beyond"
+        );
     }
 
     #[test]

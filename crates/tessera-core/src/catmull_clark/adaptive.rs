@@ -67,7 +67,7 @@ use crate::gpu_types::{CcCell, OutVertex};
 use crate::measure::closest_point_on_triangle;
 use crate::mesh::Mesh;
 use crate::tolerance::Tolerance;
-use crate::view::View;
+use crate::view::{ToleranceSearch, View};
 
 /// The largest first split of a patch along each side (`ku × kv` cells).
 pub const MAX_BASE_SPLIT: u32 = 8;
@@ -316,22 +316,6 @@ impl<'a> Evaluator<'a> {
         }
     }
 
-    /// ε for a cell with these corners: the world ε, and within the view's pixels where
-    /// it sets them ([`View::cell_tolerance`]).
-    fn eps_at(&self, corners: &[DVec3; 4]) -> f64 {
-        match self.view {
-            Some(ViewTolerance {
-                view,
-                pixels: Some(px),
-                ..
-            }) => {
-                let (lo, hi) = corner_box(corners);
-                self.eps.min(view.cell_tolerance(lo, hi, px))
-            }
-            _ => self.eps,
-        }
-    }
-
     /// Whether a cell with these corners and this bound lies wholly outside the frustum
     /// of a culling view: its surface is within `bound` of its corners' hull.
     fn outside(&self, corners: &[DVec3; 4], bound: f64) -> bool {
@@ -384,6 +368,38 @@ fn corner_box(corners: &[DVec3; 4]) -> (DVec3, DVec3) {
     (lo, hi)
 }
 
+/// A cell's tolerance: `world`, and within the view's pixels at the box of its corners
+/// where the view sets them ([`View::cell_tolerance`]), the view's search run only as far
+/// as each question needs: a far cell's bound is most often far from its tolerance, and
+/// the answer is the whole search's ([`ToleranceSearch`]).
+struct CellTolerance<'v> {
+    world: f64,
+    search: Option<ToleranceSearch<'v>>,
+}
+
+impl<'v> CellTolerance<'v> {
+    fn new(view: Option<&'v ViewTolerance>, corners: &[DVec3; 4], world: f64) -> Self {
+        let search = view.and_then(|v| {
+            let px = v.pixels?;
+            let (lo, hi) = corner_box(corners);
+            Some(v.view.tolerance_search(lo, hi, px))
+        });
+        CellTolerance { world, search }
+    }
+
+    /// Whether `bound` is within the tolerance.
+    fn admits(&mut self, bound: f64) -> bool {
+        bound <= self.world && self.search.as_mut().is_none_or(|s| s.admits(bound))
+    }
+
+    /// The tolerance itself.
+    fn value(&mut self) -> f64 {
+        self.search
+            .as_mut()
+            .map_or(self.world, |s| self.world.min(s.value()))
+    }
+}
+
 /// The flatness bound of the box `[u0, u1] × [v0, v1]` of patch `p`: a guaranteed upper
 /// bound on the distance between the surface and any triangulation of the box's
 /// polygon ([`super::bound`]). The box is snapped to the walk grid (`1 / WALK_ONE`).
@@ -422,8 +438,8 @@ fn snapped_box(model: &SurfaceModel, p: usize, b: [f64; 4]) -> ([u32; 4], [DVec3
 }
 
 /// The decision on one cell alone (twin of `cc_decide` in `shaders/cc_traverse.wgsl`):
-/// `None` to split it, else the leaf's bound and, for a leaf kept by its own triangles
-/// (`exact`), the splits it had left.
+/// `None` to split it, else the leaf's bound, for a leaf kept by its own triangles
+/// (`exact`) the splits it had left, and whether the bound meets the cell's tolerance.
 fn decide_cell(
     eval: &mut Evaluator,
     p: usize,
@@ -431,13 +447,15 @@ fn decide_cell(
     splits_left: u32,
     tolerance: f64,
     exact: bool,
-) -> Option<(f64, Option<u32>, f64)> {
+) -> Option<(f64, Option<u32>, bool)> {
     // Grid units to walk units: WALK_ONE / n = 2^(18 - max_depth).
     let scale = WALK_ONE / eval.n;
     let bx = [cell.i, cell.i + cell.w, cell.j, cell.j + cell.h].map(|t| t * scale);
     let corners = cell.corners().map(|(a, c)| eval.get(p, a, c).position);
-    // The world ε, or the cell's share of the view's pixels.
-    let tolerance = tolerance.min(eval.eps_at(&corners));
+    // The world ε, or the cell's share of the view's pixels. A copy of the view, which
+    // the search borrows while the evaluator evaluates.
+    let view = eval.view;
+    let mut tolerance = CellTolerance::new(view.as_ref(), &corners, tolerance.min(eval.eps));
     // A cell whose children's corners already prove it too far from flat is split
     // without its bound. Only at a vertex: a regular patch's bound is one Bézier piece,
     // about as costly as the proof's five evaluations.
@@ -446,7 +464,7 @@ fn decide_cell(
         let centre = eval.get(p, cell.i + w, cell.j + h).position;
         let mids = [(w, 0), (2 * w, h), (w, 2 * h), (0, h)]
             .map(|(a, b)| eval.get(p, cell.i + a, cell.j + b).position);
-        split_proof(corners, centre, mids) > tolerance
+        !tolerance.admits(split_proof(corners, centre, mids))
     };
     let bound = if proven {
         eval.proven += 1;
@@ -461,16 +479,18 @@ fn decide_cell(
         eval.bounds += 1;
         box_bound(&eval.model.patches[p], bx, corners)
     };
+    let met = tolerance.admits(bound);
     // Nothing of it can be seen: a leaf that emits nothing.
-    if bound <= tolerance || eval.outside(&corners, bound) {
-        return Some((bound, None, tolerance));
+    if met || eval.outside(&corners, bound) {
+        return Some((bound, None, met));
     }
     if exact {
-        if let Some(b) = own_triangles_bound(eval, p, cell, bx, corners, tolerance) {
-            return Some((b, Some(splits_left), tolerance));
+        let target = tolerance.value();
+        if let Some(b) = own_triangles_bound(eval, p, cell, bx, corners, target) {
+            return Some((b, Some(splits_left), true));
         }
     }
-    (splits_left == 0).then_some((bound, None, tolerance))
+    (splits_left == 0).then_some((bound, None, met))
 }
 
 /// Recursive marking of one cell (a leaf kept by its own triangles that failed against
@@ -481,10 +501,10 @@ fn mark(
     cell: Cell,
     splits_left: u32,
     tolerance: f64,
-    leaf: &mut dyn FnMut(Cell, f64, f64),
+    leaf: &mut dyn FnMut(Cell, f64, bool),
 ) {
     match decide_cell(eval, p, cell, splits_left, tolerance, false) {
-        Some((bound, _, eps)) => leaf(cell, bound, eps),
+        Some((bound, _, met)) => leaf(cell, bound, met),
         None => {
             for q in 0..4 {
                 mark(eval, p, cell.child(q), splits_left - 1, tolerance, leaf);
@@ -640,7 +660,7 @@ fn tessellate_within(
     if marking.over_cap {
         return Ok(None);
     }
-    let polygons = settle_exact_leaves(&mut eval, &mut marking);
+    let (polygons, lines) = settle_exact_leaves(&mut eval, &mut marking);
     out.unmet = marking.unmet;
     out.bounds = eval.bounds;
     out.proven = eval.proven;
@@ -648,14 +668,16 @@ fn tessellate_within(
     out.max_bound = marking.max_bound;
     out.culled_leaves = marking.culled_leaves;
     out.culled_patches = marking.culled_patches;
-    let faces = face_polygons(mesh, &marking, n);
+    let faces = face_polygons(mesh, &marking, &lines, n);
     let leaves = marking.leaves;
     out.leaves = leaves.len() + faces.len();
 
     // Every polygon vertex evaluated once per point; one output vertex per point and
     // chart, its position and normal copied from the point's. Ids in the order of the
     // chart keys, so the numbering does not depend on the order of work.
-    let mut used: HashMap<u64, (usize, u32, u32)> = HashMap::default();
+    // About one new point per leaf, the rest shared with neighbours.
+    let mut used: HashMap<u64, (usize, u32, u32)> =
+        HashMap::with_capacity_and_hasher(2 * (leaves.len() + faces.len()), Default::default());
     for (&(p, _), (poly, _)) in leaves.iter().zip(&polygons) {
         for &(a, b) in poly {
             eval.get(p, a, b);
@@ -689,31 +711,29 @@ fn tessellate_within(
     // 3. Triangulation.
     let vertices = &out.mesh.vertices;
     let position = |id: u32| DVec3::from(vertices[id as usize].position.map(f64::from));
-    let mut indices = Vec::new();
+    let mut indices = Vec::with_capacity(3 * (2 * leaves.len() + 4 * faces.len()));
+    // One polygon buffer for all: a leaf's allocation would cost more than its zip.
+    let mut zip_poly: Vec<PolyVertex> = Vec::new();
     for (&(p, _), (poly, corners)) in leaves.iter().zip(&polygons) {
-        let poly: Vec<PolyVertex> = poly
-            .iter()
-            .map(|&(a, b)| PolyVertex {
-                i: a as i64,
-                j: b as i64,
-                id: id_of[&chart_key(mesh, p, a, b, n)],
-            })
-            .collect();
-        triangulate(&poly, *corners, position, &mut indices);
+        zip_poly.clear();
+        zip_poly.extend(poly.iter().map(|&(a, b)| PolyVertex {
+            i: a as i64,
+            j: b as i64,
+            id: id_of[&chart_key(mesh, p, a, b, n)],
+        }));
+        triangulate(&zip_poly, *corners, position, &mut indices);
     }
     for (poly, corners) in &faces {
-        let poly: Vec<PolyVertex> = poly
-            .iter()
-            .map(|&(p, a, b)| {
-                let (s, t) = face_grid(mesh.face_of[p].1, a, b, n);
-                PolyVertex {
-                    i: s,
-                    j: t,
-                    id: id_of[&chart_key(mesh, p, a, b, n)],
-                }
-            })
-            .collect();
-        triangulate(&poly, *corners, position, &mut indices);
+        zip_poly.clear();
+        zip_poly.extend(poly.iter().map(|&(p, a, b)| {
+            let (s, t) = face_grid(mesh.face_of[p].1, a, b, n);
+            PolyVertex {
+                i: s,
+                j: t,
+                id: id_of[&chart_key(mesh, p, a, b, n)],
+            }
+        }));
+        triangulate(&zip_poly, *corners, position, &mut indices);
     }
     out.mesh.indices = indices;
     if cap.is_some_and(|c| out.mesh.triangle_count() > c) {
@@ -808,8 +828,8 @@ fn mark_patches(
         let culled_before = out.culled_leaves;
         let mut seen = false;
         let mut culled = Vec::new();
-        for (c, (bound, e, eps)) in walk.leaves {
-            if !out.keep_leaf(eval, p, c, bound, eps) {
+        for (c, (bound, e, met)) in walk.leaves {
+            if !out.keep_leaf(eval, p, c, bound, met) {
                 culled.push((p, c));
                 continue;
             }
@@ -847,7 +867,8 @@ fn mark_faces(eval: &mut Evaluator, out: &mut Marking) {
         let first = mesh.first_patch[f] as usize;
         let corners: [DVec3; 4] = std::array::from_fn(|k| eval.get(first + k, 0, 0).position);
         eval.bounds += 1;
-        if bound > eval.eps.min(eval.eps_at(&corners)) {
+        let view = eval.view;
+        if !CellTolerance::new(view.as_ref(), &corners, eval.eps).admits(bound) {
             continue;
         }
         out.face_leaf[f] = true;
@@ -875,22 +896,22 @@ fn mark_faces(eval: &mut Evaluator, out: &mut Marking) {
 
 impl Marking {
     /// Counts a leaf of patch `p` with its bound: false for one outside the view (it
-    /// emits nothing), else whether the bound meets `tolerance` (the cell's ε, as its
-    /// decision took it), and the largest bound.
+    /// emits nothing), else whether the bound `met` the cell's ε (as its decision took
+    /// it), and the largest bound.
     fn keep_leaf(
         &mut self,
         eval: &mut Evaluator,
         p: usize,
         c: Cell,
         bound: f64,
-        tolerance: f64,
+        met: bool,
     ) -> bool {
         let corners = eval.corners(p, c);
         if eval.outside(&corners, bound) {
             self.culled_leaves += 1;
             return false;
         }
-        if bound > tolerance {
+        if !met {
             self.unmet += 1;
         }
         self.max_bound = self.max_bound.max(bound);
@@ -903,11 +924,12 @@ impl Marking {
 /// triangles), and marks again, with the flatness bound alone, each that fails; until
 /// none does. Marking again only adds points, so this ends, and the order of work does
 /// not matter. Returns the leaves' polygons.
-fn settle_exact_leaves(eval: &mut Evaluator, marking: &mut Marking) -> Vec<Polygon> {
+fn settle_exact_leaves(eval: &mut Evaluator, marking: &mut Marking) -> (Vec<Polygon>, Lines) {
     let eps = eval.eps;
     let (n, mesh) = (eval.n, &eval.model.mesh);
     loop {
-        let polygons = leaf_polygons(mesh, &marking.leaves, &marking.culled, n);
+        let lines = marked_lines(mesh, &marking.leaves, &marking.culled, n);
+        let polygons = leaf_polygons(mesh, &marking.leaves, &lines, n);
         let mut failed = Vec::new();
         for (k, (poly, corners)) in polygons.iter().enumerate() {
             let Some(_) = marking.bounds[k].1 else {
@@ -939,7 +961,8 @@ fn settle_exact_leaves(eval: &mut Evaluator, marking: &mut Marking) -> Vec<Polyg
             let scale = WALK_ONE / n;
             let bx = [cell.i, cell.i + cell.w, cell.j, cell.j + cell.h].map(|t| t * scale);
             let quad = cell.corners().map(|(a, c)| eval.get(p, a, c).position);
-            let eps = eval.eps_at(&quad);
+            let view = eval.view;
+            let eps = CellTolerance::new(view.as_ref(), &quad, eval.eps).value();
             eval.triangle_bounds += 1;
             let b = triangles_bound(&eval.model.patches[p], bx, quad, &triangles, eps);
             if b <= eps {
@@ -950,7 +973,7 @@ fn settle_exact_leaves(eval: &mut Evaluator, marking: &mut Marking) -> Vec<Polyg
         }
         if failed.is_empty() {
             marking.max_bound = marking.bounds.iter().map(|b| b.0).fold(0.0, f64::max);
-            return polygons;
+            return (polygons, lines);
         }
         let mut leaves = Vec::new();
         let mut bounds = Vec::new();
@@ -985,15 +1008,14 @@ fn settle_exact_leaves(eval: &mut Evaluator, marking: &mut Marking) -> Vec<Polyg
 /// A leaf's polygon, with the positions of its four corners in it.
 type Polygon = (Vec<(u32, u32)>, [usize; 4]);
 
-/// Step 2, base-quadrilateral replacement: the marked points on every line, in order
-/// (the corners of the leaves and of the culled leaves marked).
+/// Step 2, base-quadrilateral replacement: each leaf's sides through the marked points
+/// on them (`lines`: the corners of the leaves and of the culled leaves).
 fn leaf_polygons(
     mesh: &PatchMesh,
     leaves: &[(usize, Cell)],
-    culled: &[(usize, Cell)],
+    lines: &Lines,
     n: u32,
 ) -> Vec<Polygon> {
-    let lines = marked_lines(mesh, leaves, culled, n);
     leaves
         .iter()
         .map(|&(p, cell)| {
@@ -1035,11 +1057,10 @@ type FacePolygon = (Vec<(usize, u32, u32)>, [usize; 4]);
 /// side `v = 0` to the level-1 edge point, then along patch `k + 1`'s side `u = 0` to
 /// vertex `k + 1`, through the marked points of both halves; the edge point itself is
 /// on it when the face across is not a face leaf (its leaves have it as a corner).
-fn face_polygons(mesh: &PatchMesh, marking: &Marking, n: u32) -> Vec<FacePolygon> {
+fn face_polygons(mesh: &PatchMesh, marking: &Marking, lines: &Lines, n: u32) -> Vec<FacePolygon> {
     if marking.faces.is_empty() {
         return Vec::new();
     }
-    let lines = marked_lines(mesh, &marking.leaves, &marking.culled, n);
     let mut uses: Vec<Vec<usize>> = vec![Vec::new(); mesh.edge_uses.len()];
     for (p, edges) in mesh.quad_edges.iter().enumerate() {
         if !mesh.hole[p] {
@@ -1102,31 +1123,36 @@ enum Line {
     Row(u32, u32),
 }
 
-/// The marked points of every line, sorted by position.
+/// The marked points of every line, sorted by position: one list sorted by line and
+/// position, and where each line's run of it lies (a list per line would cost an
+/// allocation per row and column marked).
 #[derive(Default)]
 struct Lines {
-    points: HashMap<Line, Vec<u32>>,
+    marked: Vec<(Line, u32)>,
+    runs: HashMap<Line, (usize, usize)>,
 }
 
 impl Lines {
     fn add(&mut self, key: u64) {
         match key_place(key) {
             KeyPlace::Vertex(_) => {}
-            KeyPlace::Edge { edge, t } => self.points.entry(Line::Edge(edge)).or_default().push(t),
+            KeyPlace::Edge { edge, t } => self.marked.push((Line::Edge(edge), t)),
             KeyPlace::Interior { patch, i, j } => {
-                self.points
-                    .entry(Line::Column(patch, i))
-                    .or_default()
-                    .push(j);
-                self.points.entry(Line::Row(patch, j)).or_default().push(i);
+                self.marked.push((Line::Column(patch, i), j));
+                self.marked.push((Line::Row(patch, j), i));
             }
         }
     }
 
     fn sort(&mut self) {
-        for v in self.points.values_mut() {
-            v.sort_unstable();
-            v.dedup();
+        self.marked.sort_unstable();
+        self.marked.dedup();
+        let mut start = 0;
+        for (k, &(line, _)) in self.marked.iter().enumerate() {
+            if self.marked.get(k + 1).is_none_or(|next| next.0 != line) {
+                self.runs.insert(line, (start, k + 1));
+                start = k + 1;
+            }
         }
     }
 
@@ -1174,13 +1200,12 @@ impl Lines {
             None if a.0 == b.0 => (Line::Column(p as u32, a.0), a.1, b.1),
             None => (Line::Row(p as u32, a.1), a.0, b.0),
         };
-        let Some(ts) = self.points.get(&line) else {
-            return;
-        };
+        let (start, end) = self.runs.get(&line).copied().unwrap_or((0, 0));
+        let ts = &self.marked[start..end];
         let (lo, hi) = (ta.min(tb), ta.max(tb));
-        let start = ts.partition_point(|&t| t <= lo);
-        let end = ts.partition_point(|&t| t < hi);
-        let inside = &ts[start..end];
+        let first = ts.partition_point(|&(_, t)| t <= lo);
+        let last = ts.partition_point(|&(_, t)| t < hi);
+        let inside = ts[first..last].iter().map(|&(_, t)| t);
         let to_point = |t: u32| -> (u32, u32) {
             // Linear between a and b.
             let f = |x: u32, y: u32| -> u32 {
@@ -1190,9 +1215,9 @@ impl Lines {
             (f(a.0, b.0), f(a.1, b.1))
         };
         if ta < tb {
-            out.extend(inside.iter().map(|&t| to_point(t)));
+            out.extend(inside.map(to_point));
         } else {
-            out.extend(inside.iter().rev().map(|&t| to_point(t)));
+            out.extend(inside.rev().map(to_point));
         }
     }
 }
@@ -1383,7 +1408,8 @@ mod tests {
             let mut eval = Evaluator::new(&model, &params);
             let n = eval.n;
             let marking = mark_patches(&mut eval, &params, &splits, None);
-            let polygons = leaf_polygons(mesh, &marking.leaves, &marking.culled, n);
+            let lines = marked_lines(mesh, &marking.leaves, &marking.culled, n);
+            let polygons = leaf_polygons(mesh, &marking.leaves, &lines, n);
             let topo = patch_topology(mesh);
             let cells: Vec<CcCell> = marking
                 .leaves
