@@ -294,7 +294,7 @@ struct Evaluator<'a> {
     /// ε in model units.
     eps: f64,
     /// The view that sets each cell's ε and culls, if any.
-    view: Option<ViewTolerance>,
+    view: Option<&'a ViewTolerance>,
     /// The patch whose root bound its culling took: its first trial's root takes the
     /// same bound, counted once.
     root_counted: Option<usize>,
@@ -452,10 +452,8 @@ fn decide_cell(
     let scale = WALK_ONE / eval.n;
     let bx = [cell.i, cell.i + cell.w, cell.j, cell.j + cell.h].map(|t| t * scale);
     let corners = cell.corners().map(|(a, c)| eval.get(p, a, c).position);
-    // The world ε, or the cell's share of the view's pixels. A copy of the view, which
-    // the search borrows while the evaluator evaluates.
-    let view = eval.view;
-    let mut tolerance = CellTolerance::new(view.as_ref(), &corners, tolerance.min(eval.eps));
+    // The world ε, or the cell's share of the view's pixels.
+    let mut tolerance = CellTolerance::new(eval.view, &corners, tolerance.min(eval.eps));
     // A cell whose children's corners already prove it too far from flat is split
     // without its bound. Only at a vertex: a regular patch's bound is one Bézier piece,
     // about as costly as the proof's five evaluations.
@@ -648,7 +646,7 @@ fn tessellate_within(
 ) -> Result<Option<CcTessellation>> {
     params.validate(model)?;
     let mut eval = Evaluator::new(model, params);
-    eval.view = view;
+    eval.view = view.as_ref();
     let n = eval.n;
     let mesh = &model.mesh;
     let mut out = CcTessellation {
@@ -867,8 +865,7 @@ fn mark_faces(eval: &mut Evaluator, out: &mut Marking) {
         let first = mesh.first_patch[f] as usize;
         let corners: [DVec3; 4] = std::array::from_fn(|k| eval.get(first + k, 0, 0).position);
         eval.bounds += 1;
-        let view = eval.view;
-        if !CellTolerance::new(view.as_ref(), &corners, eval.eps).admits(bound) {
+        if !CellTolerance::new(eval.view, &corners, eval.eps).admits(bound) {
             continue;
         }
         out.face_leaf[f] = true;
@@ -961,8 +958,7 @@ fn settle_exact_leaves(eval: &mut Evaluator, marking: &mut Marking) -> (Vec<Poly
             let scale = WALK_ONE / n;
             let bx = [cell.i, cell.i + cell.w, cell.j, cell.j + cell.h].map(|t| t * scale);
             let quad = cell.corners().map(|(a, c)| eval.get(p, a, c).position);
-            let view = eval.view;
-            let eps = CellTolerance::new(view.as_ref(), &quad, eval.eps).value();
+            let eps = CellTolerance::new(eval.view, &quad, eval.eps).value();
             eval.triangle_bounds += 1;
             let b = triangles_bound(&eval.model.patches[p], bx, quad, &triangles, eps);
             if b <= eps {
@@ -1123,36 +1119,31 @@ enum Line {
     Row(u32, u32),
 }
 
-/// The marked points of every line, sorted by position: one list sorted by line and
-/// position, and where each line's run of it lies (a list per line would cost an
-/// allocation per row and column marked).
+/// The marked points of every line, sorted by position.
 #[derive(Default)]
 struct Lines {
-    marked: Vec<(Line, u32)>,
-    runs: HashMap<Line, (usize, usize)>,
+    points: HashMap<Line, Vec<u32>>,
 }
 
 impl Lines {
     fn add(&mut self, key: u64) {
         match key_place(key) {
             KeyPlace::Vertex(_) => {}
-            KeyPlace::Edge { edge, t } => self.marked.push((Line::Edge(edge), t)),
+            KeyPlace::Edge { edge, t } => self.points.entry(Line::Edge(edge)).or_default().push(t),
             KeyPlace::Interior { patch, i, j } => {
-                self.marked.push((Line::Column(patch, i), j));
-                self.marked.push((Line::Row(patch, j), i));
+                self.points
+                    .entry(Line::Column(patch, i))
+                    .or_default()
+                    .push(j);
+                self.points.entry(Line::Row(patch, j)).or_default().push(i);
             }
         }
     }
 
     fn sort(&mut self) {
-        self.marked.sort_unstable();
-        self.marked.dedup();
-        let mut start = 0;
-        for (k, &(line, _)) in self.marked.iter().enumerate() {
-            if self.marked.get(k + 1).is_none_or(|next| next.0 != line) {
-                self.runs.insert(line, (start, k + 1));
-                start = k + 1;
-            }
+        for v in self.points.values_mut() {
+            v.sort_unstable();
+            v.dedup();
         }
     }
 
@@ -1200,12 +1191,13 @@ impl Lines {
             None if a.0 == b.0 => (Line::Column(p as u32, a.0), a.1, b.1),
             None => (Line::Row(p as u32, a.1), a.0, b.0),
         };
-        let (start, end) = self.runs.get(&line).copied().unwrap_or((0, 0));
-        let ts = &self.marked[start..end];
+        let Some(ts) = self.points.get(&line) else {
+            return;
+        };
         let (lo, hi) = (ta.min(tb), ta.max(tb));
-        let first = ts.partition_point(|&(_, t)| t <= lo);
-        let last = ts.partition_point(|&(_, t)| t < hi);
-        let inside = ts[first..last].iter().map(|&(_, t)| t);
+        let first = ts.partition_point(|&t| t <= lo);
+        let last = ts.partition_point(|&t| t < hi);
+        let inside = ts[first..last].iter().copied();
         let to_point = |t: u32| -> (u32, u32) {
             // Linear between a and b.
             let f = |x: u32, y: u32| -> u32 {
