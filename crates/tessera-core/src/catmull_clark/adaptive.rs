@@ -341,7 +341,7 @@ impl<'a> Evaluator<'a> {
             }) if bound.is_finite() => {
                 let (lo, hi) = corner_box(corners);
                 let b = DVec3::splat(bound);
-                patch_back_facing(&view, &self.model.patches[p], lo - b, hi + b)
+                patch_back_facing(view, &self.model.patches[p], lo - b, hi + b)
             }
             _ => false,
         }
@@ -676,13 +676,13 @@ fn tessellate_within(
     // About one new point per leaf, the rest shared with neighbours.
     let mut used: HashMap<u64, (usize, u32, u32)> =
         HashMap::with_capacity_and_hasher(2 * (leaves.len() + faces.len()), Default::default());
-    for (&(p, _), (poly, _)) in leaves.iter().zip(&polygons) {
+    for (&(p, _), (poly, _)) in leaves.iter().zip(polygons.iter()) {
         for &(a, b) in poly {
             eval.get(p, a, b);
             used.entry(chart_key(mesh, p, a, b, n)).or_insert((p, a, b));
         }
     }
-    for (poly, _) in &faces {
+    for (poly, _) in faces.iter() {
         for &(p, a, b) in poly {
             eval.get(p, a, b);
             used.entry(chart_key(mesh, p, a, b, n)).or_insert((p, a, b));
@@ -712,7 +712,7 @@ fn tessellate_within(
     let mut indices = Vec::with_capacity(3 * (2 * leaves.len() + 4 * faces.len()));
     // One polygon buffer for all: a leaf's allocation would cost more than its zip.
     let mut zip_poly: Vec<PolyVertex> = Vec::new();
-    for (&(p, _), (poly, corners)) in leaves.iter().zip(&polygons) {
+    for (&(p, _), (poly, corners)) in leaves.iter().zip(polygons.iter()) {
         zip_poly.clear();
         zip_poly.extend(poly.iter().map(|&(a, b)| PolyVertex {
             i: a as i64,
@@ -721,7 +721,7 @@ fn tessellate_within(
         }));
         triangulate(&zip_poly, *corners, position, &mut indices);
     }
-    for (poly, corners) in &faces {
+    for (poly, corners) in faces.iter() {
         zip_poly.clear();
         zip_poly.extend(poly.iter().map(|&(p, a, b)| {
             let (s, t) = face_grid(mesh.face_of[p].1, a, b, n);
@@ -921,7 +921,10 @@ impl Marking {
 /// triangles), and marks again, with the flatness bound alone, each that fails; until
 /// none does. Marking again only adds points, so this ends, and the order of work does
 /// not matter. Returns the leaves' polygons.
-fn settle_exact_leaves(eval: &mut Evaluator, marking: &mut Marking) -> (Vec<Polygon>, Lines) {
+fn settle_exact_leaves(
+    eval: &mut Evaluator,
+    marking: &mut Marking,
+) -> (Polygons<(u32, u32)>, Lines) {
     let eps = eval.eps;
     let (n, mesh) = (eval.n, &eval.model.mesh);
     loop {
@@ -1001,8 +1004,47 @@ fn settle_exact_leaves(eval: &mut Evaluator, marking: &mut Marking) -> (Vec<Poly
     }
 }
 
-/// A leaf's polygon, with the positions of its four corners in it.
-type Polygon = (Vec<(u32, u32)>, [usize; 4]);
+/// Polygons in one list (a list per polygon would cost an allocation per leaf): polygon
+/// `k` is `points[start[k]..start[k + 1]]`, with the positions of its four corners in it.
+struct Polygons<T> {
+    points: Vec<T>,
+    start: Vec<usize>,
+    corners: Vec<[usize; 4]>,
+}
+
+impl<T> Polygons<T> {
+    fn with_capacity(polygons: usize) -> Self {
+        let mut start = Vec::with_capacity(polygons + 1);
+        start.push(0);
+        Polygons {
+            points: Vec::with_capacity(4 * polygons),
+            start,
+            corners: Vec::with_capacity(polygons),
+        }
+    }
+
+    /// Ends the polygon whose points were pushed since the last one ended.
+    fn end(&mut self, corners: [usize; 4]) {
+        self.start.push(self.points.len());
+        self.corners.push(corners);
+    }
+
+    fn len(&self) -> usize {
+        self.corners.len()
+    }
+
+    /// Where the next point pushed lies in its polygon.
+    fn next_at(&self) -> usize {
+        self.points.len() - self.start[self.start.len() - 1]
+    }
+
+    fn iter(&self) -> impl Iterator<Item = (&[T], &[usize; 4])> {
+        self.start
+            .windows(2)
+            .zip(&self.corners)
+            .map(|(w, c)| (&self.points[w[0]..w[1]], c))
+    }
+}
 
 /// Step 2, base-quadrilateral replacement: each leaf's sides through the marked points
 /// on them (`lines`: the corners of the leaves and of the culled leaves).
@@ -1011,21 +1053,19 @@ fn leaf_polygons(
     leaves: &[(usize, Cell)],
     lines: &Lines,
     n: u32,
-) -> Vec<Polygon> {
-    leaves
-        .iter()
-        .map(|&(p, cell)| {
-            let c = cell.corners();
-            let mut poly = Vec::with_capacity(4);
-            let mut at = [0; 4];
-            for k in 0..4 {
-                at[k] = poly.len();
-                poly.push(c[k]);
-                lines.between(mesh, p, c[k], c[(k + 1) % 4], n, &mut poly);
-            }
-            (poly, at)
-        })
-        .collect()
+) -> Polygons<(u32, u32)> {
+    let mut polygons = Polygons::with_capacity(leaves.len());
+    for &(p, cell) in leaves {
+        let c = cell.corners();
+        let mut at = [0; 4];
+        for k in 0..4 {
+            at[k] = polygons.next_at();
+            polygons.points.push(c[k]);
+            lines.between(mesh, p, c[k], c[(k + 1) % 4], n, &mut polygons.points);
+        }
+        polygons.end(at);
+    }
+    polygons
 }
 
 /// The marked points of every line: the corners of the leaves and of the culled leaves.
@@ -1045,17 +1085,20 @@ fn marked_lines(
     lines
 }
 
-/// A face leaf's polygon: its vertices as `(patch, i, j)`, each in the patch of the
-/// face it lies in, with the positions of the face's corners in it.
-type FacePolygon = (Vec<(usize, u32, u32)>, [usize; 4]);
-
 /// The polygons of the face leaves. Side `k` runs from vertex `k` along patch `k`'s
 /// side `v = 0` to the level-1 edge point, then along patch `k + 1`'s side `u = 0` to
 /// vertex `k + 1`, through the marked points of both halves; the edge point itself is
 /// on it when the face across is not a face leaf (its leaves have it as a corner).
-fn face_polygons(mesh: &PatchMesh, marking: &Marking, lines: &Lines, n: u32) -> Vec<FacePolygon> {
+/// Their vertices are `(patch, i, j)`, each in the patch of the face it lies in.
+fn face_polygons(
+    mesh: &PatchMesh,
+    marking: &Marking,
+    lines: &Lines,
+    n: u32,
+) -> Polygons<(usize, u32, u32)> {
+    let mut polygons = Polygons::with_capacity(marking.faces.len());
     if marking.faces.is_empty() {
-        return Vec::new();
+        return polygons;
     }
     let mut uses: Vec<Vec<usize>> = vec![Vec::new(); mesh.edge_uses.len()];
     for (p, edges) in mesh.quad_edges.iter().enumerate() {
@@ -1064,36 +1107,36 @@ fn face_polygons(mesh: &PatchMesh, marking: &Marking, lines: &Lines, n: u32) -> 
             uses[edges[3] as usize].push(p);
         }
     }
-    marking
-        .faces
-        .iter()
-        .map(|&f| {
-            let first = mesh.first_patch[f] as usize;
-            let mut poly = Vec::with_capacity(8);
-            let mut at = [0; 4];
-            for (k, corner) in at.iter_mut().enumerate() {
-                let (p, q) = (first + k, first + (k + 1) % 4);
-                *corner = poly.len();
-                poly.push((p, 0, 0));
-                let mut half = Vec::new();
-                lines.between(mesh, p, (0, 0), (n, 0), n, &mut half);
-                poly.extend(half.drain(..).map(|(a, b)| (p, a, b)));
-                // Any face across that is not a face leaf (more than one on an edge that is
-                // not manifold) has the edge point as a corner.
-                let edge = mesh.quad_edges[p][0] as usize;
-                let needed = uses[edge]
-                    .iter()
-                    .map(|&r| mesh.face_of[r].0 as usize)
-                    .any(|g| g != f && !marking.face_leaf[g]);
-                if needed {
-                    poly.push((p, n, 0));
-                }
-                lines.between(mesh, q, (0, n), (0, 0), n, &mut half);
-                poly.extend(half.drain(..).map(|(a, b)| (q, a, b)));
+    let mut half = Vec::new();
+    for &f in &marking.faces {
+        let first = mesh.first_patch[f] as usize;
+        let mut at = [0; 4];
+        for (k, corner) in at.iter_mut().enumerate() {
+            let (p, q) = (first + k, first + (k + 1) % 4);
+            *corner = polygons.next_at();
+            polygons.points.push((p, 0, 0));
+            lines.between(mesh, p, (0, 0), (n, 0), n, &mut half);
+            polygons
+                .points
+                .extend(half.drain(..).map(|(a, b)| (p, a, b)));
+            // Any face across that is not a face leaf (more than one on an edge that is
+            // not manifold) has the edge point as a corner.
+            let edge = mesh.quad_edges[p][0] as usize;
+            let needed = uses[edge]
+                .iter()
+                .map(|&r| mesh.face_of[r].0 as usize)
+                .any(|g| g != f && !marking.face_leaf[g]);
+            if needed {
+                polygons.points.push((p, n, 0));
             }
-            (poly, at)
-        })
-        .collect()
+            lines.between(mesh, q, (0, n), (0, 0), n, &mut half);
+            polygons
+                .points
+                .extend(half.drain(..).map(|(a, b)| (q, a, b)));
+        }
+        polygons.end(at);
+    }
+    polygons
 }
 
 /// Point `(i, j)` of the patch at corner `k` of a quad face in the face's grid: units
@@ -1440,7 +1483,8 @@ mod tests {
                 first_trial: &marking.first_split,
                 vertex_of: &vertex_of,
             };
-            for ((&(p, cell), (poly, _)), leaf) in marking.leaves.iter().zip(&polygons).zip(&cells)
+            for ((&(p, cell), (poly, _)), leaf) in
+                marking.leaves.iter().zip(polygons.iter()).zip(&cells)
             {
                 let counts = kernel.count(leaf);
                 let mut twin = Vec::new();
