@@ -324,12 +324,6 @@ impl View {
         self.tolerance_search(lo, hi, pixels).value()
     }
 
-    /// Whether `bound ≤` [`View::cell_tolerance`]`(lo, hi, pixels)`, the search stopped as
-    /// soon as the answer is known ([`ToleranceSearch::admits`]).
-    pub fn within_cell_tolerance(&self, lo: DVec3, hi: DVec3, pixels: f64, bound: f64) -> bool {
-        self.tolerance_search(lo, hi, pixels).admits(bound)
-    }
-
     /// The bisection of [`View::cell_tolerance`], not yet run: it runs only as far as
     /// each question asked of it needs.
     pub fn tolerance_search(&self, lo: DVec3, hi: DVec3, pixels: f64) -> ToleranceSearch<'_> {
@@ -745,7 +739,7 @@ mod tests {
                 t * 0.999,
                 t * 1.001,
             ] {
-                let early = view.within_cell_tolerance(lo, hi, pixels, bound);
+                let early = view.tolerance_search(lo, hi, pixels).admits(bound);
                 assert_eq!(early, bound <= t, "bound {bound} against {t}");
                 assert_eq!(search.admits(bound), early, "bound {bound}, asked in turn");
                 if early {
