@@ -9,6 +9,8 @@
 // halves, else there is none. On the patch boundary the points come from the patch
 // across the edge, whose own first split may differ: its root cells divide the edge in
 // steps of grid / k, and inside each step the same dyadic search applies.
+// A face leaf's sides each run along two patches of its face (`face_side_walk`), and its
+// points go out in the face's grid.
 // Twin: `tessera_core::catmull_clark::polygon`. The CPU reference builds the same
 // polygons from sorted lines of marked points instead (`Lines::between` in
 // `tessera_core::catmull_clark::adaptive`, step 2); tests compare all three.
@@ -66,6 +68,21 @@ var<private> line_topo: CcPatchTopo;
 var<private> found: u32;
 var<private> emitting: bool;
 var<private> emit_at: u32;
+// In a face leaf's polygon: the patch of the face whose grid the points are in (their
+// coordinates go out in the face's grid, `cc_face_grid`); 4 in a leaf's own.
+var<private> face_k: u32 = 4u;
+
+// Point q of the patch at corner k of a quad face in the face's grid: units of 1/(2n) of
+// its side, (0, 0) at its first vertex (`adaptive::face_grid`).
+fn cc_face_grid(k: u32, q: vec2u) -> vec2u {
+    let m = 2u * cc_params.grid;
+    switch k {
+        case 0u: { return q; }
+        case 1u: { return vec2u(m - q.y, q.x); }
+        case 2u: { return vec2u(m - q.x, m - q.y); }
+        default: { return vec2u(q.y, m - q.x); }
+    }
+}
 
 // Grid point of the leaf's patch at position x of the line.
 fn line_point(x: u32) -> vec2u {
@@ -91,8 +108,15 @@ fn line_slot(x: u32) -> u32 {
 }
 
 fn found_point(x: u32, slot: u32) {
+    found_at(line_point(x), slot);
+}
+
+fn found_at(grid_point: vec2u, slot: u32) {
     if emitting {
-        let q = line_point(x);
+        var q = grid_point;
+        if face_k < 4u {
+            q = cc_face_grid(face_k, q);
+        }
         let at = emit_at + found;
         if at < arrayLength(&poly_verts) && at < cc_params.poly_capacity {
             poly_verts[at] = vec4u(ids[~table[slot].first], q.x, q.y, 0u);
@@ -176,7 +200,8 @@ fn side_walk(cell: CcCell, s: u32) {
         return;
     }
     let q = across >> 2u;
-    let split = cc_trial_split(marks[cc_chosen_at(q)]);
+    // A patch of a face leaf chose trial 0, its one cell (marked CC_CHOSEN_FACE_LEAF).
+    let split = cc_trial_split(marks[cc_chosen_at(q)] & 0xffu);
     // Edges 0 and 2 of the patch across run along its u, 1 and 3 along its v.
     let k = select(split.y, split.x, ((across & 3u) % 2u) == 0u);
     let step = n / k;
@@ -198,6 +223,35 @@ fn side_walk(cell: CcCell, s: u32) {
             }
         }
         dyadic_walk(a, b, lo, hi, ascending);
+    }
+}
+
+// Side s of a face leaf (the quad face whose first patch is `first`), from vertex s to
+// vertex s + 1: along patch s's side v = 0 to the level-1 edge point, the point itself
+// where it is marked (`cc_leaf_keys` puts it in the hash where the face across is not
+// a face leaf), then along patch s + 1's side u = 0 (`adaptive::face_polygons`).
+fn face_side_walk(first: u32, s: u32) {
+    let n = cc_params.grid;
+    let p = first + s;
+    let q = first + (s + 1u) % 4u;
+    line_topo = topo[p];
+    face_k = s;
+    side_walk(CcCell(p, 0u, 0u, 0u), 0u);
+    let slot = cc_find(cc_chart_key(line_topo, p, n, 0u));
+    if slot != CC_NO_SLOT {
+        found_at(vec2u(n, 0u), slot);
+    }
+    line_topo = topo[q];
+    face_k = (s + 1u) % 4u;
+    side_walk(CcCell(q, 0u, 0u, 0u), 3u);
+}
+
+// The points on side s of leaf `cell`.
+fn leaf_side_walk(cell: CcCell, s: u32) {
+    if (cell.trial_depth & CC_CELL_FACE) != 0u {
+        face_side_walk(cell.patch_id, s);
+    } else {
+        side_walk(cell, s);
     }
 }
 
@@ -227,7 +281,7 @@ fn count(@builtin(global_invocation_id) gid: vec3u, @builtin(num_workgroups) gro
     var counts = vec4u(0u);
     for (var s = 0u; s < 4u; s++) {
         found = 0u;
-        side_walk(cell, s);
+        leaf_side_walk(cell, s);
         counts[s] = found;
     }
     for (var s = 0u; s < 4u; s++) {
@@ -265,17 +319,22 @@ fn emit_leaf(l: u32) {
     }
     var at = poly_offsets[l];
     emitting = true;
+    let face = (cell.trial_depth & CC_CELL_FACE) != 0u;
     for (var s = 0u; s < 4u; s++) {
-        // The corner's vertex is its item's number (items 8·leaf + corner).
+        // The corner's vertex is its item's number (items 8·leaf + corner); a face
+        // leaf's corner s is vertex s of the face, in the face's grid.
         if at < arrayLength(&poly_verts) && at < cc_params.poly_capacity {
-            let c = cc_cell_corner(cell, s);
+            var c = cc_cell_corner(cell, s);
+            if face {
+                c = cc_face_grid(s, vec2u(0u));
+            }
             poly_verts[at] = vec4u(ids[8u * l + s], c.x, c.y, 0u);
         }
         // `count` found the side's points: a side without any is not walked again.
         if counts[s] > 0u {
             emit_at = at + 1u;
             found = 0u;
-            side_walk(cell, s);
+            leaf_side_walk(cell, s);
         }
         at += 1u + counts[s];
     }

@@ -153,6 +153,57 @@ fn cc_decide(cell: CcCell) -> CcDecision {
     return CcDecision(!leaf, bound, false, culled, met, bounds);
 }
 
+// A face leaf (`adaptive::mark_faces`): with a view's face leaves, the quad control
+// face of patch p is one leaf when its bound taken whole (`cc_face_bound.wgsl`, kept in
+// the marks) meets the tolerance at its corners' box. Every patch of the face, in every
+// trial, decides it alike. `kind`: 0 none, 1 a face leaf, 2 a face leaf culled (outside
+// the frustum, or all four patches facing away).
+struct CcFaceDecision {
+    kind: u32,
+    bound: f32,
+    // Its patch's place in the face: patch 0 holds the leaf.
+    corner: u32,
+    // Bounds taken (0 or 1).
+    bounds: u32,
+}
+
+fn cc_face_decision(p: u32) -> CcFaceDecision {
+    let flags = cc_roots[p].flags;
+    let corner = flags >> CC_ROOT_CORNER_SHIFT;
+    var none = CcFaceDecision(0u, 0.0, corner, 0u);
+    if cc_params.view.face_leaves == 0u || (flags & CC_ROOT_QUAD_FACE) == 0u {
+        return none;
+    }
+    let first = p - corner;
+    let kept = atomicLoad(&marks[cc_face_bound_at(first)]);
+    let bound = bitcast<f32>(kept - 1u);
+    if kept == 0u || bound >= CC_INFINITY {
+        return none;
+    }
+    none.bounds = 1u;
+    let corners = array<vec3f, 4>(cc_corner(first, 0u, 0u), cc_corner(first + 1u, 0u, 0u),
+        cc_corner(first + 2u, 0u, 0u), cc_corner(first + 3u, 0u, 0u));
+    let lo = cc_corners_lo(corners);
+    let hi = cc_corners_hi(corners);
+    var search: CcViewSearch;
+    if cc_params.view.pixels > 0.0 {
+        search = cc_view_search(lo, hi);
+    }
+    if !cc_cell_admits(&search, bound) {
+        return none;
+    }
+    // The face's surface lies within its bound of the corners' hull.
+    var culled = cc_outside(corners, bound);
+    if !culled && (cc_params.view.cull & CC_VIEW_CULL_BACKFACES) != 0u {
+        let b = vec3f(bound);
+        culled = true;
+        for (var k = 0u; k < 4u; k++) {
+            culled = culled && cc_patch_back_facing(first + k, lo - b, hi + b);
+        }
+    }
+    return CcFaceDecision(select(1u, 2u, culled), bound, corner, 1u);
+}
+
 // Per invocation: what its decisions cost, and (emit) what its leaves guarantee.
 var<private> lane_bounds: u32;
 var<private> lane_proven: u32;
@@ -312,6 +363,20 @@ fn cc_replay(c: ptr<function, CcChain>) -> bool {
 // trial per invocation: even three in one ran past the device's loop limit at a deep
 // extraordinary vertex (see the top).
 fn count_trial(p: u32, t: u32) {
+    let face = cc_face_decision(p);
+    // The face's bound counts once, at its first patch's trial 0.
+    if t == 0u && face.corner == 0u {
+        lane_bounds += face.bounds;
+    }
+    if face.kind != 0u {
+        // Trial 0 alone offers: one leaf at the face's first patch, none at the others.
+        if t == 0u {
+            let mine = select(0u, 1u, face.corner == 0u);
+            atomicMax(&marks[cc_best_at(p)], ~cc_key(mine, 0u));
+            atomicMax(&marks[p], ~cc_key(mine, 0u));
+        }
+        return;
+    }
     let s = cc_trial_split(t);
     let area = s.x * s.y;
     // A split into ku·kv cells has at least ku·kv leaves: skipped if a finished trial
@@ -372,6 +437,25 @@ fn count_trial(p: u32, t: u32) {
 
 // Emitting: the best trial's walk replayed, its leaves written from the patch's first.
 fn emit_patch(p: u32) {
+    let face = cc_face_decision(p);
+    if face.kind != 0u {
+        atomicStore(&marks[cc_chosen_at(p)], CC_CHOSEN_FACE_LEAF);
+        if face.corner != 0u {
+            return;
+        }
+        let k = atomicLoad(&marks[p]);
+        let culled = face.kind == 2u;
+        if k < cc_params.leaf_capacity && k < arrayLength(&leaves) {
+            leaves[k] = CcCell(p, CC_CELL_FACE | select(0u, CC_CELL_CULLED | CC_CELL_PATCH_CULLED, culled), 0u, 0u);
+        }
+        // A face culled counts as its four patches.
+        if culled {
+            atomicAdd(&cc_state.culled_patches, 4u);
+        } else {
+            atomicMax(&cc_state.max_bound_bits, bitcast<u32>(face.bound));
+        }
+        return;
+    }
     let key = cc_best_so_far(p);
     atomicStore(&marks[cc_chosen_at(p)], select(key & 31u, CC_TRIALS, key == 0xffffffffu));
     // A trial cut short that might have beaten the one chosen: no mesh.

@@ -13,6 +13,10 @@ const CC_SIDE_TOP: u32 = 4u;
 const CC_SIDE_LEFT: u32 = 8u;
 const CC_F32_EPSILON: f32 = 1.1920929e-7;
 const CC_INFINITY: f32 = 3.4028235e38;
+// 1: the walk feeds the face bound's sums (`face_piece`, `face_vertex`) instead of a
+// box's. Replaced in the source of the one kernel that takes the face bound
+// (`cc_face_bound.wgsl`), so that no other kernel's walk carries that code.
+const CC_FACE_SINK: u32 = 0u;
 
 // BoundSum, as private state of the invocation.
 var<private> bs_corners: array<vec3f, 4>;
@@ -303,6 +307,84 @@ fn bound_vertex(limit: vec3f, radius: f32, rect: vec4f, sides: u32) {
     bs_hi = max(bs_hi, h + radius);
 }
 
+// ---- The face bound (`bound::face_bound`, its sums `FaceDeviation`): a quad control
+// face's four patches walked in turn against the bilinear quad through the face's
+// corners, bs_corners relative to the first.
+
+// Patch k of the face being walked, and its first corner relative to the face's.
+var<private> fb_k: u32;
+var<private> fb_shift: vec3f;
+
+// The bilinear quad through the face's corners at (u, v) of its patch fb_k: patch k
+// covers the quarter at vertex k, rotated.
+fn cc_face_bilinear(u: f32, v: f32) -> vec3f {
+    var st = vec2f(u, v);
+    switch fb_k {
+        case 1u: { st = vec2f(2.0 - v, u); }
+        case 2u: { st = vec2f(2.0 - u, 2.0 - v); }
+        case 3u: { st = vec2f(v, 2.0 - u); }
+        default: {}
+    }
+    return cc_bilinear(0.5 * st.x, 0.5 * st.y);
+}
+
+// The seven control points of a cubic split at its middle.
+fn cc_halved_cubic(a: array<vec3f, 4>) -> array<vec3f, 7> {
+    let b0 = 0.5 * (a[0] + a[1]);
+    let b1 = 0.5 * (a[1] + a[2]);
+    let b2 = 0.5 * (a[2] + a[3]);
+    let c0 = 0.5 * (b0 + b1);
+    let c1 = 0.5 * (b1 + b2);
+    return array<vec3f, 7>(a[0], b0, c0, 0.5 * (c0 + c1), c1, b2, a[3]);
+}
+
+// A piece: the surface less the bilinear quad degree-raised over it, split at u = v =
+// 1/2, within the hulls of its quarters' control points (`bound::halved_grid`).
+fn face_piece(rect: vec4f, sides: u32) {
+    let fu = rect.y - rect.x;
+    let fv = rect.w - rect.z;
+    var rows: array<array<vec3f, 7>, 4>;
+    for (var j = 0u; j < 4u; j++) {
+        var d: array<vec3f, 4>;
+        for (var i = 0u; i < 4u; i++) {
+            let p = bs_net[4u * j + i] + bs_offset + fb_shift;
+            bs_scale_rel = max(bs_scale_rel, cc_max_abs(p));
+            let u = rect.x + fu * f32(i) / 3.0;
+            let v = rect.z + fv * f32(j) / 3.0;
+            d[i] = p - cc_face_bilinear(u, v);
+        }
+        rows[j] = cc_halved_cubic(d);
+    }
+    for (var i = 0u; i < 7u; i++) {
+        let column = cc_halved_cubic(array<vec3f, 4>(rows[0][i], rows[1][i], rows[2][i], rows[3][i]));
+        for (var j = 0u; j < 7u; j++) {
+            let e = length(column[j]);
+            bs_dev = max(bs_dev, e);
+            let on_side = (i == 0u && (sides & CC_SIDE_LEFT) != 0u)
+                || (j == 0u && (sides & CC_SIDE_BOTTOM) != 0u);
+            if on_side {
+                bs_dev_side = max(bs_dev_side, e);
+            }
+        }
+    }
+}
+
+// The innermost square at a vertex: within `radius` of its limit point, and the
+// bilinear quad over it within its corners' largest distance from that point.
+fn face_vertex(limit: vec3f, radius: f32, rect: vec4f, sides: u32) {
+    let l = limit + fb_shift;
+    bs_scale_rel = max(bs_scale_rel, cc_max_abs(l));
+    var e = length(l - cc_face_bilinear(rect.x, rect.z));
+    e = max(e, length(l - cc_face_bilinear(rect.y, rect.z)));
+    e = max(e, length(l - cc_face_bilinear(rect.y, rect.w)));
+    e = max(e, length(l - cc_face_bilinear(rect.x, rect.w)));
+    bs_dev = max(bs_dev, radius + e);
+    // The patch sides on the face's boundary: v = 0 and u = 0.
+    if (sides & (CC_SIDE_BOTTOM | CC_SIDE_LEFT)) != 0u {
+        bs_dev_side = max(bs_dev_side, radius + e);
+    }
+}
+
 fn bound_finish() -> f32 {
     let c = bs_corners;
     let twist = c[0] - c[1] + c[2] - c[3];
@@ -553,17 +635,59 @@ fn walk_child(c: u32) -> CcWalkEntry {
 // `bound::box_bound`: the bound of box `bx` (walk units: u0, u1, v0, v1) of patch p with
 // corner positions c.
 fn cc_box_bound(p: u32, bx: vec4u, c: array<vec3f, 4>) -> f32 {
+    bound_start(c);
+    // A patch without a vertex is one Bézier piece.
+    let root = cc_roots[p];
+    bs_track_dev = (cc_nodes[root.node].kind & CC_NODE_KIND_MASK) != CC_NODE_BEZIER;
+    bs_dev_everywhere = (root.flags & CC_ROOT_CREASED) != 0u;
+    if !cc_walk_pieces(p, bx, c) {
+        return CC_INFINITY;
+    }
+    return bound_finish();
+}
+
+// `bound::face_bound`: the bound of the quad control face whose patches are first ..
+// first + 3, the limit points of its vertices at `corners`: CC_INFINITY where a walk ran
+// out of stack. Only with CC_FACE_SINK.
+fn cc_face_bound(first: u32, corners: array<vec3f, 4>) -> f32 {
+    var scale_abs = 0.0;
+    for (var k = 0u; k < 4u; k++) {
+        scale_abs = max(scale_abs, cc_max_abs(corners[k]));
+        bs_corners[k] = corners[k] - corners[0];
+    }
+    bs_scale_rel = 0.0;
+    for (var k = 0u; k < 4u; k++) {
+        bs_scale_rel = max(bs_scale_rel, cc_max_abs(bs_corners[k]));
+    }
+    bs_dev = 0.0;
+    bs_dev_side = 0.0;
+    for (var k = 0u; k < 4u; k++) {
+        let p = first + k;
+        let one = CC_PARAM_ONE;
+        let own = array<vec3f, 4>(cc_eval(CcPoint(p, 0u, 0u)).position, cc_eval(CcPoint(p, one, 0u)).position,
+            cc_eval(CcPoint(p, one, one)).position, cc_eval(CcPoint(p, 0u, one)).position);
+        fb_k = k;
+        fb_shift = own[0] - corners[0];
+        if !cc_walk_pieces(p, vec4u(0u, CC_WALK_ONE, 0u, CC_WALK_ONE), own) {
+            return CC_INFINITY;
+        }
+    }
+    let c = bs_corners;
+    let twist = c[0] - c[1] + c[2] - c[3];
+    return bs_dev + bs_dev_side + 0.25 * length(twist) + 64.0 * CC_F32_EPSILON * bs_scale_rel
+        + 8.0 * CC_F32_EPSILON * scale_abs;
+}
+
+// `bound::walk_pieces`: every piece of box `bx` of patch p (corner positions c) fed to
+// the sums, relative to c[0]; false where the walk ran out of stack.
+fn cc_walk_pieces(p: u32, bx: vec4u, c: array<vec3f, 4>) -> bool {
     walk_box = bx;
     walk_max_ball = 1e-4 * max(length(c[2] - c[0]), length(c[3] - c[1]));
     walk_origin = c[0];
     walk_len = 0u;
     walk_overflow = false;
-    bound_start(c);
-    // A patch without a vertex is one Bézier piece.
     // Patches alike share nodes: a node's net or corner counts from the patch's first.
     let root = cc_roots[p];
-    bs_track_dev = (cc_nodes[root.node].kind & CC_NODE_KIND_MASK) != CC_NODE_BEZIER;
-    bs_dev_everywhere = (root.flags & CC_ROOT_CREASED) != 0u;
     var e = CcWalkEntry(root.node, 0u, 0u, 0u, CC_WALK_ONE, false, vec4f(0.0), 0u);
     // Bounded: every node is visited once, and trees are finite; the cap guards a
     // corrupt upload.
@@ -594,12 +718,20 @@ fn cc_box_bound(p: u32, bx: vec4u, c: array<vec3f, 4>) -> f32 {
             if walk_cut {
                 cc_clip_net();
             }
-            bound_piece(e.rect, e.sides);
+            if CC_FACE_SINK != 0u {
+                face_piece(e.rect, e.sides);
+            } else {
+                bound_piece(e.rect, e.sides);
+            }
         }
         if vertex {
             let cv = cc_corners[corner];
-            bound_vertex(vec3f(cv.limit[0], cv.limit[1], cv.limit[2]) - walk_origin, cv.hull_radius, e.rect,
-                e.sides);
+            let limit = vec3f(cv.limit[0], cv.limit[1], cv.limit[2]) - walk_origin;
+            if CC_FACE_SINK != 0u {
+                face_vertex(limit, cv.hull_radius, e.rect, e.sides);
+            } else {
+                bound_vertex(limit, cv.hull_radius, e.rect, e.sides);
+            }
         }
         // The next node: the next child of the innermost split node with one left.
         while walk_len > 0u && walk_stack[walk_len - 1u].todo == 0u {
@@ -613,8 +745,5 @@ fn cc_box_bound(p: u32, bx: vec4u, c: array<vec3f, 4>) -> f32 {
         walk_stack[walk_len - 1u].todo = todo & (todo - 1u);
         e = walk_child(c);
     }
-    if walk_overflow || walk_len > 0u {
-        return CC_INFINITY;
-    }
-    return bound_finish();
+    return !walk_overflow && walk_len == 0u;
 }

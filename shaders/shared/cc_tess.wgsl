@@ -43,6 +43,8 @@ struct CcHashStatusView {
 //   the device cut short; [3P + 1, 4P + 1): the trial chosen;
 // - [4P + 1, 5P + 1): per patch the flatness bound of its whole square, plus one in its
 //   bits (0 for none yet): kept from run to run, cleared when the control points move;
+// - [5P + 1, 6P + 1): at the first patch of each quad face, the bound of the face taken
+//   whole (`cc_face_bound.wgsl`), kept likewise;
 // - per patch and trial, what its leaves guarantee: the largest bound, the leaves over
 //   their tolerance, the leaves culled;
 // - blocks of 32 decisions, `[bits, next]`: one per patch and trial, then a pool.
@@ -68,8 +70,12 @@ fn cc_root_bound_at(p: u32) -> u32 {
     return 4u * cc_params.patch_count + 1u + p;
 }
 
+fn cc_face_bound_at(first: u32) -> u32 {
+    return 5u * cc_params.patch_count + 1u + first;
+}
+
 fn cc_stats_at(p: u32, t: u32) -> u32 {
-    return 5u * cc_params.patch_count + 1u + 3u * (p * cc_params.trials + t);
+    return 6u * cc_params.patch_count + 1u + 3u * (p * cc_params.trials + t);
 }
 
 fn cc_bits_at(block: u32) -> u32 {
@@ -92,7 +98,7 @@ fn cc_trial_split(t: u32) -> vec2u {
 // Width and height of a cell in grid units.
 fn cc_cell_size(cell: CcCell) -> vec2u {
     let s = cc_trial_split(cell.trial_depth & 0xffu);
-    let depth = (cell.trial_depth & ~(CC_CELL_CULLED | CC_CELL_PATCH_CULLED)) >> 8u;
+    let depth = (cell.trial_depth & ~(CC_CELL_CULLED | CC_CELL_PATCH_CULLED | CC_CELL_FACE)) >> 8u;
     return vec2u((cc_params.grid / s.x) >> depth, (cc_params.grid / s.y) >> depth);
 }
 

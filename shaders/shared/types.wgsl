@@ -168,6 +168,9 @@ const CC_NODE_KIND_MASK: u32 = 0xffu;
 const CC_NODE_BALL_SHIFT: u32 = 8u;
 const CC_NO_ROOT: u32 = 0xffffffffu;
 const CC_ROOT_CREASED: u32 = 1u;
+// `tessera_core::gpu_types::{CC_ROOT_QUAD_FACE, CC_ROOT_CORNER_SHIFT}`.
+const CC_ROOT_QUAD_FACE: u32 = 2u;
+const CC_ROOT_CORNER_SHIFT: u32 = 8u;
 const CC_PARAM_ONE: u32 = 0x80000000u;
 
 struct CcNode {
@@ -290,7 +293,8 @@ struct CcView {
     pixels: f32,
     near_w: f32,
     cull: u32,
-    pad0: u32,
+    // 1: quad control faces that meet their tolerance whole are one leaf each.
+    face_leaves: u32,
     pad1: u32,
     pad2: u32,
 }
@@ -304,6 +308,11 @@ const CC_VIEW_CULL_BACKFACES: u32 = 2u;
 // of a patch wholly outside, which has no vertices either.
 const CC_CELL_CULLED: u32 = 0x80000000u;
 const CC_CELL_PATCH_CULLED: u32 = 0x40000000u;
+// `tessera_core::gpu_types::{CC_CELL_FACE, CC_CHOSEN_FACE_LEAF}`: a face leaf (the
+// whole quad face of the leaf's patch, its first), and the mark on the trial chosen of
+// each patch of a face leaf.
+const CC_CELL_FACE: u32 = 0x20000000u;
+const CC_CHOSEN_FACE_LEAF: u32 = 0x100u;
 
 // Uniform Catmull-Clark tessellation (`tessera_core::gpu_types::{CcUniformPatch,
 // CcUniformParams}`, flags of `tessera_core::catmull_clark::gpu_uniform`).

@@ -658,6 +658,12 @@ pub const CC_NO_ROOT: u32 = u32::MAX;
 /// need not be one smooth spline and its flatness bound also takes the deviation from
 /// the bilinear quad (`PatchSurface::creased`).
 pub const CC_ROOT_CREASED: u32 = 1;
+/// [`CcRoot::flags`]: the patch's control face is a quad, whose four patches are
+/// consecutive, this one at corner `flags >> CC_ROOT_CORNER_SHIFT` of them: marking finds
+/// the face of a face leaf there.
+pub const CC_ROOT_QUAD_FACE: u32 = 2;
+/// Bit position of the patch's corner in its quad face in [`CcRoot::flags`].
+pub const CC_ROOT_CORNER_SHIFT: u32 = 8;
 /// Patch parameters are fixed point: `u = x / CC_PARAM_ONE`, so that the walk down the
 /// quadtree is exact integer arithmetic, the same on the GPU and in its CPU twin.
 pub const CC_PARAM_ONE: u32 = 1 << 31;
@@ -709,7 +715,8 @@ pub struct CcRoot {
     pub nets: u32,
     /// First corner (binding 24).
     pub corners: u32,
-    /// [`CC_ROOT_CREASED`] or 0.
+    /// [`CC_ROOT_CREASED`], [`CC_ROOT_QUAD_FACE`] and the corner in the face above
+    /// [`CC_ROOT_CORNER_SHIFT`], or 0.
     pub flags: u32,
 }
 
@@ -1009,8 +1016,11 @@ pub struct CcView {
     pub near_w: f32,
     /// What is culled: [`CC_VIEW_CULL_FRUSTUM`] and [`CC_VIEW_CULL_BACKFACES`], or 0.
     pub cull: u32,
-    /// Padding to a multiple of 16 bytes (`pad0`..`pad2` in WGSL).
-    pub pad: [u32; 3],
+    /// 1: quad control faces whose four patches meet their tolerance as one cell are
+    /// one leaf ([`ViewTolerance::face_leaves`](crate::catmull_clark::ViewTolerance::face_leaves)); 0: none.
+    pub face_leaves: u32,
+    /// Padding to a multiple of 16 bytes (`pad1`, `pad2` in WGSL).
+    pub pad: [u32; 2],
 }
 
 /// Bit of [`CcView::cull`]: cells wholly outside the frustum emit nothing.
@@ -1029,6 +1039,16 @@ pub const CC_CELL_CULLED: u32 = 1 << 31;
 /// Bit of [`CcCell::trial_depth`] set, with [`CC_CELL_CULLED`], on the leaves of a patch
 /// wholly out of view: they have no vertices at all.
 pub const CC_CELL_PATCH_CULLED: u32 = 1 << 30;
+
+/// Bit of [`CcCell::trial_depth`] that marks a face leaf: the whole quad control face
+/// whose first patch is [`CcCell::patch_id`], one polygon through its vertices' limit
+/// points (its trial and depth are 0).
+pub const CC_CELL_FACE: u32 = 1 << 29;
+
+/// Bit of the trial each patch chose, as the marking leaves it for the later kernels:
+/// the patch's face is a face leaf (in view or culled), and the patch has no leaves of
+/// its own.
+pub const CC_CHOSEN_FACE_LEAF: u32 = 1 << 8;
 
 /// Counters of the adaptive Catmull-Clark kernels, read back to check capacities.
 #[repr(C)]

@@ -80,6 +80,10 @@ pub const SOURCES: &[(&str, &str)] = &[
         include_str!("../../../shaders/cc_stencil.wgsl"),
     ),
     (
+        "cc_face_bound.wgsl",
+        include_str!("../../../shaders/cc_face_bound.wgsl"),
+    ),
+    (
         "cc_traverse.wgsl",
         include_str!("../../../shaders/cc_traverse.wgsl"),
     ),

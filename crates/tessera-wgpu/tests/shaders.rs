@@ -362,6 +362,11 @@ fn catmull_clark_parameters_and_counters_match_their_rust_twins() {
         ("CC_VIEW_CULL_BACKFACES", CC_VIEW_CULL_BACKFACES),
         ("CC_CELL_CULLED", CC_CELL_CULLED),
         ("CC_CELL_PATCH_CULLED", CC_CELL_PATCH_CULLED),
+        ("CC_CELL_FACE", CC_CELL_FACE),
+        ("CC_CHOSEN_FACE_LEAF", CC_CHOSEN_FACE_LEAF),
+        ("CC_ROOT_CREASED", CC_ROOT_CREASED),
+        ("CC_ROOT_QUAD_FACE", CC_ROOT_QUAD_FACE),
+        ("CC_ROOT_CORNER_SHIFT", CC_ROOT_CORNER_SHIFT),
         (
             "CC_FACING_STACK",
             tessera_core::catmull_clark::facing::FACING_STACK as u32,
@@ -399,9 +404,9 @@ fn catmull_clark_parameters_and_counters_match_their_rust_twins() {
         ("pixels", offset_of!(CcView, pixels)),
         ("near_w", offset_of!(CcView, near_w)),
         ("cull", offset_of!(CcView, cull)),
-        ("pad0", offset_of!(CcView, pad)),
-        ("pad1", offset_of!(CcView, pad) + 4),
-        ("pad2", offset_of!(CcView, pad) + 8),
+        ("face_leaves", offset_of!(CcView, face_leaves)),
+        ("pad1", offset_of!(CcView, pad)),
+        ("pad2", offset_of!(CcView, pad) + 4),
     ];
     let members: Vec<(&str, usize)> = members
         .iter()

@@ -239,8 +239,7 @@ pub struct ViewTolerance {
     /// one cell through its vertices' limit points ([`SurfaceModel::face_bound`]), is one
     /// leaf: a level of detail above the patch, two triangles for four patches where a
     /// view sees a face from far away. Its sides get the points of the faces across, and
-    /// the level-1 edge point where the face across is not a leaf itself. The CPU
-    /// reference's only: the GPU stage refuses it.
+    /// the level-1 edge point where the face across is not a leaf itself.
     pub face_leaves: bool,
 }
 
@@ -853,7 +852,7 @@ fn mark_patches(
 /// The face leaves: every quad control face whose bound taken whole
 /// ([`SurfaceModel::face_bound`]) meets the tolerance at its corners' box. Such a face
 /// outside the frustum, or with its four patches facing away, counts as four culled
-/// patches.
+/// patches. The GPU decides the same in `cc_traverse.wgsl` (`cc_face_decision`).
 fn mark_faces(eval: &mut Evaluator, out: &mut Marking) {
     let model = eval.model;
     let mesh = &model.mesh;
@@ -869,19 +868,9 @@ fn mark_faces(eval: &mut Evaluator, out: &mut Marking) {
             continue;
         }
         out.face_leaf[f] = true;
+        // The face's surface lies within its bound of the corners' hull, each patch's too.
         let back_facing = eval.view.is_some_and(|v| v.cull_backfaces)
-            && (first..first + 4).all(|p| {
-                let whole = Cell {
-                    i: 0,
-                    j: 0,
-                    w: eval.n,
-                    h: eval.n,
-                    depth: 0,
-                };
-                let c = eval.corners(p, whole);
-                eval.bounds += 1;
-                eval.back_facing(p, &c, model.root_bound(p))
-            });
+            && (first..first + 4).all(|p| eval.back_facing(p, &corners, bound));
         if eval.outside(&corners, bound) || back_facing {
             out.culled_patches += 4;
             continue;

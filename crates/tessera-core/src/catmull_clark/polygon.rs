@@ -14,7 +14,10 @@
 
 use super::keys::topo_chart_key;
 use super::vertex_hash::split_key;
-use crate::gpu_types::{cc_trial_split, CcCell, CcPatchTopo, CC_NO_NEIGHBOUR};
+use crate::gpu_types::{
+    cc_trial_split, CcCell, CcPatchTopo, CC_CELL_CULLED, CC_CELL_FACE, CC_CELL_PATCH_CULLED,
+    CC_NO_NEIGHBOUR,
+};
 
 /// What the kernel reads besides the leaf: the grid, the patches' connectivity, their
 /// first splits and the vertex hash.
@@ -57,7 +60,7 @@ struct Walk<'k, 'a> {
 /// Width and height of a cell in grid units (`cc_cell_size`).
 fn cell_size(grid: u32, cell: &CcCell) -> (u32, u32) {
     let (ku, kv) = cc_trial_split(cell.trial_depth & 0xff);
-    let depth = cell.trial_depth >> 8;
+    let depth = (cell.trial_depth & !(CC_CELL_CULLED | CC_CELL_PATCH_CULLED | CC_CELL_FACE)) >> 8;
     ((grid / ku) >> depth, (grid / kv) >> depth)
 }
 
@@ -191,7 +194,8 @@ impl Walk<'_, '_> {
             return;
         }
         let q = (across >> 2) as usize;
-        let (ku, kv) = cc_trial_split(self.kernel.first_trial[q]);
+        // A patch of a face leaf chose trial 0, its one cell (marked CC_CHOSEN_FACE_LEAF).
+        let (ku, kv) = cc_trial_split(self.kernel.first_trial[q] & 0xff);
         // Edges 0 and 2 of the patch across run along its u, 1 and 3 along its v.
         let k = if across & 1 == 0 { ku } else { kv };
         let step = n / k;

@@ -39,7 +39,7 @@ use super::topology::PatchMesh;
 use crate::gpu_types::{
     CcCorner, CcNode, CcPatchStencil, CcPieceRecord, CcRoot, CcStencilTable, CcWeight, GpuPatch,
     CC_NODE_BALL_SHIFT, CC_NODE_BEZIER, CC_NODE_CORNER, CC_NODE_SPLIT, CC_NO_ROOT, CC_RECORD_BALL,
-    CC_RECORD_CORNER, CC_RECORD_NET, CC_ROOT_CREASED,
+    CC_RECORD_CORNER, CC_RECORD_NET, CC_ROOT_CORNER_SHIFT, CC_ROOT_CREASED, CC_ROOT_QUAD_FACE,
 };
 
 /// Steps of the rescaled one-ring a corner's normal is read from, past the corner node:
@@ -121,11 +121,7 @@ impl CcStencils {
                 &mesh.sharpness,
                 p,
             );
-            let flags = if ring.sharp.is_empty() {
-                0
-            } else {
-                CC_ROOT_CREASED
-            };
+            let flags = root_flags(mesh, p, !ring.sharp.is_empty());
             let key = table_key(&ring);
             let t = *index.entry(key).or_insert_with(|| {
                 let table = Table::new(&ring, mesh.scheme, depth);
@@ -657,6 +653,17 @@ pub fn record_patch(patches: &[CcPatchStencil], r: u32) -> usize {
     lo
 }
 
+/// [`CcRoot::flags`] of patch `p`: creased or not, and its place in a quad face.
+pub fn root_flags(mesh: &PatchMesh, p: usize, creased: bool) -> u32 {
+    let (f, corner) = mesh.face_of[p];
+    let quad = if mesh.control_faces[f as usize].len() == 4 {
+        CC_ROOT_QUAD_FACE | (corner as u32) << CC_ROOT_CORNER_SHIFT
+    } else {
+        0
+    };
+    quad | if creased { CC_ROOT_CREASED } else { 0 }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -686,7 +693,7 @@ mod tests {
                 node: base,
                 nets,
                 corners,
-                flags: if surface.creased { CC_ROOT_CREASED } else { 0 },
+                flags: root_flags(&model.mesh, p, surface.creased),
             });
             let f = |v: DVec3| v.as_vec3().to_array();
             for (id, node) in surface.nodes.iter().enumerate() {

@@ -9,18 +9,19 @@
 //! |---|---|---|---|
 //! | 1 | `cc_stencil` level1 | level-1 point | the first subdivision step of the control points (only when they moved) |
 //! | 2 | `cc_stencil` pieces | net, ball or corner | every patch's quadtree from its one-ring, through tables shared by patches alike (only when the points moved) |
-//! | 3 | `cc_traverse` (count) | patch and trial | the first-split search to full depth: best split, its leaves, its decisions |
-//! | 4–5 | scan | patch | each patch's first leaf |
-//! | 6 | `cc_traverse` (emit) | patch | the best split's leaves, its decisions replayed; leaf and item dispatch sizes |
-//! | 7 | `cc_leaf_keys` (indirect) | leaf | corner keys in their charts (and across seams) and vertices |
-//! | 8 | `cc_hash_insert` (indirect) | item | the vertex hash |
-//! | 9 | `cc_hash_number` mark_first (indirect) | item | each key's first item |
-//! | 10 | `cc_polygon` count (indirect) | leaf | points on each side (found in the hash) |
-//! | 11–12 | scan of both | item, leaf | vertex numbers, polygon offsets |
-//! | 13 | `cc_hash_number` assign_gather (indirect) | item | vertex ids, one point per vertex, the hash's outcome |
-//! | 14 | `cc_polygon` emit (indirect) | leaf | polygons: corners + marked points on the sides; invocation 0: whether the mesh fits, what the run needed |
-//! | 15 | `cc_vertex_eval` (indirect) | vertex | vertices (position, normal at the point's home; face, face u v) |
-//! | 16 | `cc_triangulate` (indirect) | leaf | indices; invocation 0: the draw arguments |
+//! | 3 | `cc_face_bound` | patch | with face leaves, each quad face's bound taken whole, once (kept until the points move) |
+//! | 4 | `cc_traverse` (count) | patch and trial | the first-split search to full depth: best split, its leaves, its decisions |
+//! | 5–6 | scan | patch | each patch's first leaf |
+//! | 7 | `cc_traverse` (emit) | patch | the best split's leaves, its decisions replayed; leaf and item dispatch sizes |
+//! | 8 | `cc_leaf_keys` (indirect) | leaf | corner keys in their charts (and across seams) and vertices |
+//! | 9 | `cc_hash_insert` (indirect) | item | the vertex hash |
+//! | 10 | `cc_hash_number` mark_first (indirect) | item | each key's first item |
+//! | 11 | `cc_polygon` count (indirect) | leaf | points on each side (found in the hash) |
+//! | 12–13 | scan of both | item, leaf | vertex numbers, polygon offsets |
+//! | 14 | `cc_hash_number` assign_gather (indirect) | item | vertex ids, one point per vertex, the hash's outcome |
+//! | 15 | `cc_polygon` emit (indirect) | leaf | polygons: corners + marked points on the sides; invocation 0: whether the mesh fits, what the run needed |
+//! | 16 | `cc_vertex_eval` (indirect) | vertex | vertices (position, normal at the point's home; face, face u v) |
+//! | 17 | `cc_triangulate` (indirect) | leaf | indices; invocation 0: the draw arguments |
 //!
 //! Only the control points move per frame ([`CcStage::update_points`] writes them and a
 //! word): the tables they are derived through are built once per topology
@@ -124,6 +125,7 @@ const ITEM_ARGS: u64 = 24;
 
 /// Every kernel of the stage, compiled once per device (part of [`Kernels`]).
 pub(crate) struct CcKernels {
+    face_bound: Kernel,
     traverse: Kernel,
     leaf_keys: Kernel,
     assign_gather: Kernel,
@@ -141,6 +143,14 @@ impl CcKernels {
     pub fn new(device: &wgpu::Device, stencil: std::sync::Arc<CcStencilKernels>) -> Self {
         let k = |file, entry| Kernel::new(device, file, entry);
         CcKernels {
+            // Its walk feeds the face's sums: the one kernel compiled with them.
+            face_bound: Kernel::specialised(
+                device,
+                "cc_face_bound.wgsl",
+                "main",
+                &[],
+                &[("CC_FACE_SINK", 1)],
+            ),
             traverse: k("cc_traverse.wgsl", "main"),
             leaf_keys: k("cc_leaf_keys.wgsl", "main"),
             assign_gather: k("cc_hash_number.wgsl", "assign_gather"),
@@ -266,6 +276,7 @@ struct Buffers {
 
 /// Bind groups of every dispatch, rebuilt when buffers are reallocated.
 struct Binds {
+    face_bound: wgpu::BindGroup,
     /// The count pass, then the emit pass.
     traverse: [wgpu::BindGroup; 2],
     leaf_keys: wgpu::BindGroup,
@@ -335,19 +346,21 @@ pub struct CcStage {
 /// Words of the marks buffer (`shaders/shared/cc_tess.wgsl`) for `patches` patches and
 /// `leaves` leaves, any first split: per patch the key of its best trial (scanned into
 /// its first leaf; the total after them), the same key kept, the key of the best trial
-/// cut short, the trial chosen; per patch and trial three words of what its leaves
-/// guarantee (and how many are culled) and a block of 32 decisions; then the pool of blocks ([`pool_blocks`]).
+/// cut short, the trial chosen, its root bound and its face's bound (kept); per patch
+/// and trial three words of what its leaves guarantee (and how many are culled) and a
+/// block of 32 decisions; then the pool of blocks ([`pool_blocks`]).
 fn marks_words(patches: u32, leaves: u32) -> u64 {
     let p = patches.max(1) as u64;
     let trials = CC_TRIALS as u64;
-    5 * p + 1 + 3 * p * trials + 2 * (p * trials + pool_blocks(patches, leaves))
+    6 * p + 1 + 3 * p * trials + 2 * (p * trials + pool_blocks(patches, leaves))
 }
 
-/// Where the marks buffer keeps each patch's root bound, in words: `patches` of them,
-/// from run to run.
-fn marks_root_bounds(patches: u32) -> (u64, u64) {
+/// Where the marks buffer keeps the bounds that depend on the surface alone, in words:
+/// each patch's root bound, then each quad face's bound (at its first patch), from run
+/// to run.
+fn marks_kept_bounds(patches: u32) -> (u64, u64) {
     let p = patches.max(1) as u64;
-    (4 * p + 1, p)
+    (4 * p + 1, 2 * p)
 }
 
 /// The words of the marks buffer cleared before each run (the keys).
@@ -364,7 +377,7 @@ fn pool_blocks(patches: u32, leaves: u32) -> u64 {
 
 impl CcStage {
     /// Dispatches in every run, whatever the model, tolerance, depth or first split.
-    pub const DISPATCHES: u32 = 12 + 2 * PrefixSum::DISPATCHES;
+    pub const DISPATCHES: u32 = 13 + 2 * PrefixSum::DISPATCHES;
 
     /// Phases [`profile_phases`](Self::profile_phases) times: marking, vertices (keys,
     /// hash, numbering, evaluation), polygons and triangles.
@@ -537,12 +550,6 @@ impl CcStage {
                 let px = kept.map_or(v.pixels.unwrap_or(0.0), |(_, px)| px);
                 if kept.is_none() {
                     self.walk_floor = 0.0;
-                }
-                if v.face_leaves {
-                    return Err(tessera_core::Error::Param(
-                        "face leaves are the CPU reference's only: the GPU stage tessellates per patch".into(),
-                    )
-                    .into());
                 }
                 if v.max_triangles.is_some() && v.pixels.is_none() {
                     return Err(tessera_core::Error::Param(
@@ -843,9 +850,9 @@ impl CcStage {
         encoder.clear_buffer(&self.state, 0, None);
         // The trials' keys start from none (atomics in the count pass).
         encoder.clear_buffer(&b.marks, 0, Some(4 * marks_cleared(self.patch_count)));
-        // The root bounds kept are of the surface before its control points moved.
+        // The bounds kept are of the surface before its control points moved.
         if self.points_moved {
-            let (at, words) = marks_root_bounds(self.patch_count);
+            let (at, words) = marks_kept_bounds(self.patch_count);
             encoder.clear_buffer(&b.marks, 4 * at, Some(4 * words));
             self.points_moved = false;
         }
@@ -861,6 +868,10 @@ impl CcStage {
         {
             let mut pass = passes.begin(encoder, "tessera cc marking", false);
             let patches = self.patch_count;
+            // The bounds of the faces, once (nothing to do without face leaves).
+            dispatches += k
+                .face_bound
+                .dispatch(&mut pass, &binds.face_bound, patches.max(1), 64);
             // `cc_traverse.wgsl`: blocks of 8 patches, one invocation per trial.
             let trials = self.params.first_split.trials();
             let counting = patches.max(1).div_ceil(8) * 8 * trials;
@@ -1262,7 +1273,8 @@ fn gpu_view(v: &ViewTolerance) -> Result<CcView> {
             } else {
                 0
             },
-        pad: [0; 3],
+        face_leaves: v.face_leaves as u32,
+        pad: [0; 2],
     })
 }
 
@@ -1394,6 +1406,7 @@ impl Binds {
             kernel.bind_with_textures(device, entries, &model.textures())
         };
         Binds {
+            face_bound: bind(&k.face_bound, &count),
             traverse: [bind(&k.traverse, &count), bind(&k.traverse, &emit)],
             leaf_keys: bind(&k.leaf_keys, &count),
             assign_gather: bind(&k.assign_gather, &count),
