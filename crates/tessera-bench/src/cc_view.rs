@@ -53,6 +53,11 @@ struct Row {
     backfaces_triangles: usize,
     backfaces_culled_patches: usize,
     backfaces_ms: f64,
+    /// In pixels with face leaves: the CPU reference, and the GPU stage in the same view.
+    faces_triangles: usize,
+    faces_ms: f64,
+    faces_gpu_triangles: u32,
+    faces_gpu_ms: f64,
 }
 
 /// Vertical field of view, viewport and the sampling of the measurement.
@@ -160,6 +165,30 @@ pub fn run(assets: &Path, out_dir: &Path, quick: bool) {
                 repeats,
             )
             .expect("the close-up fits the device");
+            let (faces_ms, faces) = cpu_in_view(
+                &model,
+                view,
+                Tolerance::Relative(1.0),
+                Some(pixels),
+                false,
+                true,
+                repeats,
+            );
+            let (faces_gpu_ms, faces_gpu_triangles) = gpu_in_view(
+                &gpu,
+                &kernels,
+                &model,
+                &ViewTolerance {
+                    view,
+                    pixels: Some(pixels),
+                    cull: true,
+                    cull_backfaces: false,
+                    max_triangles: None,
+                    face_leaves: true,
+                },
+                repeats,
+            )
+            .expect("the close-up fits the device");
             let world_tolerance = pixels * nearest / focal();
             let (world_ms, world) = run(Tolerance::Absolute(world_tolerance), None);
             let err = |m| max_error_px(&samples, m, &view).unwrap_or(0.0);
@@ -185,6 +214,10 @@ pub fn run(assets: &Path, out_dir: &Path, quick: bool) {
                 backfaces_triangles: backfaces.mesh.triangle_count(),
                 backfaces_culled_patches: backfaces.culled_patches,
                 backfaces_ms,
+                faces_triangles: faces.mesh.triangle_count(),
+                faces_ms,
+                faces_gpu_triangles,
+                faces_gpu_ms,
             };
             eprintln!(
                 "cc view {name} {pixels} px: {} tris ({:.0} ms) against {} ({:.0} ms) at {world_tolerance:.2e}",
@@ -238,6 +271,20 @@ pub fn run(assets: &Path, out_dir: &Path, quick: bool) {
             r.backfaces_triangles as f64 / r.world_triangles.max(1) as f64,
         );
     }
+    s += "\nThe same close-ups in pixels with face leaves (a quad control face whose bound taken whole meets its tolerance is one leaf), on the CPU reference and on the GPU stage in the same view:\n\n| model | p (px) | triangles, CPU | CPU ms | triangles, GPU | GPU ms | against pixels alone | against world ε |\n|---|---|---|---|---|---|---|---|\n";
+    for r in &rows {
+        s += &format!(
+            "| {} | {} | {} | {:.0} | {} | {:.1} | {:.2} | {:.2} |\n",
+            r.model,
+            r.pixels,
+            r.faces_triangles,
+            r.faces_ms,
+            r.faces_gpu_triangles,
+            r.faces_gpu_ms,
+            r.faces_triangles as f64 / r.px_triangles.max(1) as f64,
+            r.faces_triangles as f64 / r.world_triangles.max(1) as f64,
+        );
+    }
     if let Some(m) = &motion {
         s += &format!(
             "\nCamera motion on {} ({} patches, p = {} px, midpoint splits): {} views along a path from far to close and past, each written with `set_view` and run (the GPU stage), against the CPU reference in the same views; medians per frame:\n\n| frames | triangles (min–max) | culled patches (min–max) | **GPU ms per frame** | CPU ms per frame | GPU / CPU |\n|---|---|---|---|---|---|\n| {} | {}–{} | {}–{} | **{:.1}** | {:.0} | {:.2} |\n",
@@ -257,7 +304,7 @@ pub fn run(assets: &Path, out_dir: &Path, quick: bool) {
     }
     if let Some(sc) = &scene {
         s += &format!(
-            "\nA scene: {} copies of the car in an {}×{} grid, one control mesh ({} patches), seen from ground level off one corner, looking across it to the far corner ({}×{} pixels, p = {} px, midpoint splits, depth range {:.0}:1), against the same view culled at the world tolerance that guarantees the same pixel error ({:.2e}); CPU reference, on a model that kept its patches' root bounds from an earlier frame, medians of {}:\n\n| | triangles | culled patches | CPU ms |\n|---|---|---|---|\n| pixels | {} | {} | {:.0} |\n| world ε | {} | {} | {:.0} |\n| **ratio** | **{:.3}** | | **{:.3}** |\n| pixels, back faces culled | {} | {} | {:.0} |\n| world ε, back faces culled | {} | {} | {:.0} |\n| **ratio**, back faces culled | **{:.3}** | | **{:.3}** |\n| pixels, back faces culled, against world ε | {:.3} | | {:.3} |\n| pixels, face leaves | {} | | {:.0} |\n| world ε, face leaves | {} | | {:.0} |\n| **ratio**, face leaves | **{:.3}** | | **{:.3}** |\n| pixels, face leaves, against world ε | {:.3} | | {:.3} |\n\nWith face leaves a quad control face whose bound taken whole meets its tolerance is one leaf ({} leaves for the pixels' {} patches in view); the CPU reference's only so far.\n\nThe GPU stage in the pixels' view: {}.\n",
+            "\nA scene: {} copies of the car in an {}×{} grid, one control mesh ({} patches), seen from ground level off one corner, looking across it to the far corner ({}×{} pixels, p = {} px, midpoint splits, depth range {:.0}:1), against the same view culled at the world tolerance that guarantees the same pixel error ({:.2e}); CPU reference, on a model that kept its patches' root bounds from an earlier frame, medians of {}:\n\n| | triangles | culled patches | CPU ms |\n|---|---|---|---|\n| pixels | {} | {} | {:.0} |\n| world ε | {} | {} | {:.0} |\n| **ratio** | **{:.3}** | | **{:.3}** |\n| pixels, back faces culled | {} | {} | {:.0} |\n| world ε, back faces culled | {} | {} | {:.0} |\n| **ratio**, back faces culled | **{:.3}** | | **{:.3}** |\n| pixels, back faces culled, against world ε | {:.3} | | {:.3} |\n| pixels, face leaves | {} | | {:.0} |\n| world ε, face leaves | {} | | {:.0} |\n| **ratio**, face leaves | **{:.3}** | | **{:.3}** |\n| pixels, face leaves, against world ε | {:.3} | | {:.3} |\n\nWith face leaves a quad control face whose bound taken whole meets its tolerance is one leaf ({} leaves for the pixels' {} patches in view).\n\nThe GPU stage in the pixels' view: {}.\n",
             sc.copies,
             sc.side,
             sc.side,

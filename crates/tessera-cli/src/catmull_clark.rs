@@ -141,11 +141,6 @@ pub fn tessellate(args: TessellateArgs) -> Result<(), Error> {
         )
         .into());
     }
-    if on_gpu && args.view.face_leaves {
-        return Err(
-            CoreError::Param("--face-leaves runs on the CPU only (--backend cpu)".into()).into(),
-        );
-    }
     if method == Method::Adaptive && (args.level.is_some() || args.segments.is_some()) {
         return Err(
             CoreError::Param("--level and --segments are for --method uniform".into()).into(),

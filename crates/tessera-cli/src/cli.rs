@@ -208,7 +208,7 @@ pub struct ViewArgs {
     /// (`achieved_tolerance_px`).
     #[arg(long, requires = "tolerance_px")]
     pub max_triangles: Option<usize>,
-    /// Catmull-Clark, CPU backend: a quad control face whose bound taken whole meets its
+    /// Catmull-Clark, both backends: a quad control face whose bound taken whole meets its
     /// tolerance is one leaf, two triangles for its four patches (a level of detail above
     /// the patch, for models seen from far away).
     #[arg(long)]

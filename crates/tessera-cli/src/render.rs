@@ -122,11 +122,6 @@ pub fn render(args: RenderArgs) -> Result<(), Error> {
     if !cc && args.view.face_leaves {
         return Err(CoreError::Param("--face-leaves is for Catmull-Clark meshes".into()).into());
     }
-    if cc && args.view.face_leaves && args.backend != Some(Backend::Cpu) {
-        return Err(
-            CoreError::Param("--face-leaves runs on the CPU only (--backend cpu)".into()).into(),
-        );
-    }
     let mut drawn_view = None;
     let mut timings = GpuTimings::default();
     let (gpu, output, (lo, hi), what, (triangles, vertices)) = if cc {

@@ -149,6 +149,16 @@ fn a_pixel_tolerance_holds_when_measured_and_culling_drops_what_is_out_of_view()
     let px = faces["max_error_px"].as_f64().unwrap();
     assert!(px <= 1.0, "{px}");
     assert_eq!(faces["unmet"], 0);
+    // The GPU stage takes the same faces whole.
+    let mut gpu_args = faces_args.clone();
+    gpu_args.extend(["--backend", "gpu"]);
+    let gpu = stats_of(&gpu_args, "car_faces_gpu.json");
+    assert_eq!(
+        gpu["triangles"], faces["triangles"],
+        "{gpu} against {faces}"
+    );
+    assert_eq!(gpu["culled_patches"], faces["culled_patches"]);
+    assert!(gpu["max_error_px"].as_f64().unwrap() <= 1.0, "{gpu}");
 }
 
 #[test]
@@ -224,30 +234,6 @@ fn views_refuse_what_they_do_not_take_yet_with_one_line() {
                 "1000",
             ],
             "Catmull-Clark",
-        ),
-        (
-            vec![
-                "tessellate",
-                &torus,
-                "--tolerance-px",
-                "1",
-                "--backend",
-                "gpu",
-                "--face-leaves",
-            ],
-            "--backend cpu",
-        ),
-        (
-            vec![
-                "render",
-                &torus,
-                "-o",
-                "never.png",
-                "--tolerance-px",
-                "1",
-                "--face-leaves",
-            ],
-            "--backend cpu",
         ),
         (
             vec![

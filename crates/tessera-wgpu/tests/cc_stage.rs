@@ -60,8 +60,8 @@ fn same_mesh(a: &Mesh, b: &Mesh, model_size: f64) -> Result<(), String> {
 }
 
 /// As [`same_mesh`], except for polygons zipped from the other pair of corners where
-/// the choice is a tie: a polygon is a connected region of the triangles that differ,
-/// the same points on both sides, and the corners a zip runs between are its two ears
+/// the choice is a tie: a polygon is a region of the triangles that differ joined
+/// through edges the other side lacks, the same points on both sides, and the corners a zip runs between are its two ears
 /// (the points in one of its triangles alone; a quad's are the ends of the diagonal
 /// not cut). Their distances on the two sides are within the triangulation's margin of
 /// each other once each end may move by the vertex tolerance (`1e-5 · model_size`), the
@@ -81,8 +81,16 @@ fn same_mesh_up_to_ties(a: &Mesh, b: &Mesh, model_size: f64) -> Result<usize, St
             ob.len()
         ));
     }
-    // Triangles joined through shared edges: each region's points, and its ears.
-    let regions = |tris: &[[u32; 3]]| -> Result<HashMap<Vec<u32>, [u32; 2]>, String> {
+    // Triangles joined through the edges inside a polygon, those the other side does not
+    // have (its sides are in both): each region's points, and its ears.
+    let edges_of = |tris: &[[u32; 3]]| -> std::collections::HashSet<[u32; 2]> {
+        tris.iter()
+            .flat_map(|t| (0..3).map(move |e| [t[e].min(t[(e + 1) % 3]), t[e].max(t[(e + 1) % 3])]))
+            .collect()
+    };
+    let regions = |tris: &[[u32; 3]],
+                   other: &std::collections::HashSet<[u32; 2]>|
+     -> Result<HashMap<Vec<u32>, [u32; 2]>, String> {
         let mut by_edge: HashMap<[u32; 2], Vec<usize>> = HashMap::new();
         for (k, t) in tris.iter().enumerate() {
             for e in 0..3 {
@@ -103,7 +111,11 @@ fn same_mesh_up_to_ties(a: &Mesh, b: &Mesh, model_size: f64) -> Result<usize, St
                 let t = tris[k];
                 for e in 0..3 {
                     let (x, y) = (t[e], t[(e + 1) % 3]);
-                    for &n in &by_edge[&[x.min(y), x.max(y)]] {
+                    let edge = [x.min(y), x.max(y)];
+                    if other.contains(&edge) {
+                        continue;
+                    }
+                    for &n in &by_edge[&edge] {
                         if !seen[n] {
                             seen[n] = true;
                             todo.push(n);
@@ -130,7 +142,7 @@ fn same_mesh_up_to_ties(a: &Mesh, b: &Mesh, model_size: f64) -> Result<usize, St
         }
         Ok(out)
     };
-    let (ra, rb) = (regions(&oa)?, regions(&ob)?);
+    let (ra, rb) = (regions(&oa, &edges_of(&tb))?, regions(&ob, &edges_of(&ta))?);
     let tol = 1e-5 * model_size;
     let at = |v: u32| glam::Vec3::from(b.vertices[v as usize].position).as_dvec3();
     let length = |d: [u32; 2]| at(d[0]).distance(at(d[1]));
@@ -578,13 +590,18 @@ fn the_polygon_kernel_matches_its_twin() {
     // `cc_leaf_keys` item for item and `cc_polygon` leaf for leaf against their CPU
     // twins, on the GPU's own leaves, first splits and vertex ids: the items' keys and
     // vertices, the side counts, and every polygon vertex (id and grid point). The
-    // pyramid has seams inside faces (triangles) as well as between them.
+    // pyramid has seams inside faces (triangles) as well as between them; the bishop,
+    // seen from far away in pixels, has face leaves beside patches that are not.
+    use tessera_core::catmull_clark::ViewTolerance;
+    use tessera_core::gpu_types::CC_CELL_FACE;
+    use tessera_tests::{view, Stand};
     let gpu = gpu();
-    let (mut side_points, mut across) = (0, 0);
-    for (name, rel) in [
-        ("opensubdiv/catmark_xord_boundary.obj", 3e-3),
-        ("opensubdiv/catmark_xord_interior.obj", 3e-4),
-        ("opensubdiv/catmark_pyramid.obj", 3e-4),
+    let (mut side_points, mut across, mut faces) = (0, 0, 0);
+    for (name, rel, far) in [
+        ("opensubdiv/catmark_xord_boundary.obj", 3e-3, None),
+        ("opensubdiv/catmark_xord_interior.obj", 3e-4, None),
+        ("opensubdiv/catmark_pyramid.obj", 3e-4, None),
+        ("opensubdiv/catmark_bishop.obj", 1.0, Some(1.0)),
     ] {
         let model = model(name);
         let params = CcParams {
@@ -595,6 +612,17 @@ fn the_polygon_kernel_matches_its_twin() {
         };
         let mut stage =
             CcStage::new(&gpu.device, &gpu.queue, &kernels(&gpu), &model, &params).expect("stage");
+        if let Some(px) = far {
+            let v = ViewTolerance {
+                view: view(&model, Stand::Far),
+                pixels: Some(px),
+                cull: true,
+                cull_backfaces: false,
+                max_triangles: None,
+                face_leaves: true,
+            };
+            stage.set_view(&gpu.queue, Some(&v)).expect("view");
+        }
         let status = stage.run_blocking(&gpu.device, &gpu.queue).expect("run");
         gpu.check().expect("no wgpu errors");
         let gpu_polys = stage
@@ -610,7 +638,8 @@ fn the_polygon_kernel_matches_its_twin() {
         // across seams): the twin's, with the GPU's ids.
         let mut id_of = HashMap::new();
         for (l, leaf) in gpu_polys.leaves.iter().enumerate() {
-            let (keys, vertices) = leaf_items(&topo, &homes, points, n, leaf);
+            let (keys, vertices) =
+                leaf_items(&topo, &homes, points, n, &gpu_polys.first_trial, leaf);
             let at = 8 * l..8 * l + 8;
             assert_eq!(
                 keys,
@@ -636,11 +665,19 @@ fn the_polygon_kernel_matches_its_twin() {
                     "{name}: two ids for one vertex"
                 );
             }
-            // The corners' ids are the polygon's.
+            // The corners' ids are the polygon's: a face leaf's corner s is vertex s of
+            // its face, corner (0, 0) of the face's patch s.
+            let face = leaf.trial_depth & CC_CELL_FACE != 0;
+            faces += usize::from(face);
             let mut at = gpu_polys.offsets[l] as usize;
             for s in 0..4 {
                 let v = &gpu_polys.verts[at];
-                assert_eq!(id_of[&key(leaf.patch_id, v)], v[0], "{name}: leaf {l}");
+                let corner = if face {
+                    key(leaf.patch_id + s as u32, &[0; 4])
+                } else {
+                    key(leaf.patch_id, v)
+                };
+                assert_eq!(id_of[&corner], v[0], "{name}: leaf {l}");
                 at += 1 + gpu_polys.side_counts[l][s] as usize;
             }
         }
@@ -685,6 +722,7 @@ fn the_polygon_kernel_matches_its_twin() {
         "only {side_points} side points to compare"
     );
     assert!(across > 100, "only {across} copies across seams");
+    assert!(faces > 10, "only {faces} face leaves");
 }
 
 #[test]

@@ -1455,7 +1455,7 @@ mod tests {
             let key = |p: usize, (a, b): (u32, u32)| split_key(chart_key(mesh, p, a, b, n));
             let mut marked: Vec<[u32; 2]> = cells
                 .iter()
-                .flat_map(|c| leaf_items(&topo, &homes, points, n, c).0)
+                .flat_map(|c| leaf_items(&topo, &homes, points, n, &marking.first_split, c).0)
                 .filter(|&k| k != CC_NO_KEY)
                 .collect();
             marked.sort_unstable();

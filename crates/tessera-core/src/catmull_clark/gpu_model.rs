@@ -19,8 +19,8 @@ use super::topology::PatchMesh;
 use super::vertex_hash::split_key;
 use crate::gpu_types::{
     CcCell, CcCorner, CcNode, CcPatchTopo, CcPoint, CcRoot, CcVertexPoint, GpuPatch, OutVertex,
-    CC_NODE_BEZIER, CC_NODE_KIND_MASK, CC_NODE_SPLIT, CC_NO_HOME, CC_NO_KEY, CC_NO_NEIGHBOUR,
-    CC_PARAM_ONE,
+    CC_CELL_FACE, CC_CHOSEN_FACE_LEAF, CC_NODE_BEZIER, CC_NODE_KIND_MASK, CC_NODE_SPLIT,
+    CC_NO_HOME, CC_NO_KEY, CC_NO_NEIGHBOUR, CC_PARAM_ONE,
 };
 
 /// Flattened quadtrees of all patches.
@@ -271,18 +271,25 @@ pub fn grid_fixed(i: u32, grid: u32) -> u32 {
 /// chart; item `4 + k` is the same point in the chart across, where corner `k` lies on a
 /// seam edge of the patch (inside the edge: a level-1 point is a corner of a leaf in
 /// every chart around it), else [`CC_NO_KEY`]. The polygons of the patch across then
-/// find the point in their own chart.
+/// find the point in their own chart. A face leaf ([`CC_CELL_FACE`]) has the items of
+/// [`face_items`]; `chosen` is the trial each patch chose, as marking leaves it
+/// ([`CC_CHOSEN_FACE_LEAF`] on the patches of face leaves).
 pub fn leaf_items(
     topo: &[CcPatchTopo],
     homes: &[u32],
     points: u32,
     grid: u32,
+    chosen: &[u32],
     cell: &CcCell,
 ) -> ([[u32; 2]; 8], [CcVertexPoint; 8]) {
     let p = cell.patch_id;
     let t = &topo[p as usize];
     let mut keys = [CC_NO_KEY; 8];
     let mut out = [CcVertexPoint::default(); 8];
+    if cell.trial_depth & CC_CELL_FACE != 0 {
+        face_items(topo, homes, points, grid, chosen, p, &mut keys, &mut out);
+        return (keys, out);
+    }
     for k in 0..4 {
         let (i, j) = cell_corner(grid, cell, k as u32);
         let (hp, hi, hj) = home_point(t, homes, points, p, (i, j), grid);
@@ -311,6 +318,49 @@ pub fn leaf_items(
         }
     }
     (keys, out)
+}
+
+/// Twin of `face_items` in `cc_leaf_keys`: a face leaf of the quad face whose first patch
+/// is `first`. Item `k` is vertex `k` (corner `(0, 0)` of patch `first + k`), item
+/// `4 + k` the level-1 edge point at the end of that patch's side `v = 0` (its corner
+/// `(n, 0)`), in its chart, where the face across is not a face leaf too, else
+/// [`CC_NO_KEY`].
+#[allow(clippy::too_many_arguments)]
+fn face_items(
+    topo: &[CcPatchTopo],
+    homes: &[u32],
+    points: u32,
+    grid: u32,
+    chosen: &[u32],
+    first: u32,
+    keys: &mut [[u32; 2]; 8],
+    out: &mut [CcVertexPoint; 8],
+) {
+    let vertex = |t: &CcPatchTopo, p: u32, q: (u32, u32)| {
+        let (hp, hi, hj) = home_point(t, homes, points, p, q, grid);
+        let (face, uv) = topo_face_uv(t, q.0, q.1, grid);
+        CcVertexPoint {
+            patch_id: hp,
+            u: grid_fixed(hi, grid),
+            v: grid_fixed(hj, grid),
+            face,
+            face_u: uv[0],
+            face_v: uv[1],
+        }
+    };
+    for k in 0..4 {
+        let p = first + k as u32;
+        let t = &topo[p as usize];
+        let across = t.across[0];
+        let needed =
+            across != CC_NO_NEIGHBOUR && chosen[(across >> 2) as usize] & CC_CHOSEN_FACE_LEAF == 0;
+        keys[k] = split_key(topo_chart_key(t, p as usize, 0, 0, grid));
+        out[k] = vertex(t, p, (0, 0));
+        if needed {
+            keys[4 + k] = split_key(topo_chart_key(t, p as usize, grid, 0, grid));
+            out[4 + k] = vertex(t, p, (grid, 0));
+        }
+    }
 }
 
 /// Per patch: its level-1 points and edges, and the patch (and its edge) across each

@@ -9,6 +9,9 @@
 //! come from the patch across the edge, whose first split may differ: its root cells
 //! divide the edge in steps of `grid / k`, and inside each step the same search applies.
 //!
+//! A face leaf's sides each run along two patches of its face, through the level-1 edge
+//! point where it is marked, and its points are in the face's grid ([`face_grid`]).
+//!
 //! The CPU reference ([`super::adaptive`], step 2) builds the same polygons another way,
 //! from sorted lines of marked points; a test checks that both agree.
 
@@ -55,6 +58,21 @@ struct Walk<'k, 'a> {
     line: Line,
     line_topo: CcPatchTopo,
     found: Vec<PolyVert>,
+    /// In a face leaf's polygon: the patch of the face whose grid the points are in
+    /// (they go out in the face's grid, [`face_grid`]); 4 in a leaf's own.
+    face_k: u32,
+}
+
+/// Point `q` of the patch at corner `k` of a quad face in the face's grid: units of
+/// `1/(2n)` of its side, `(0, 0)` at its first vertex (`cc_face_grid`).
+pub fn face_grid(grid: u32, k: u32, (i, j): (u32, u32)) -> (u32, u32) {
+    let m = 2 * grid;
+    match k {
+        0 => (i, j),
+        1 => (m - j, i),
+        2 => (m - i, m - j),
+        _ => (j, m - i),
+    }
 }
 
 /// Width and height of a cell in grid units (`cc_cell_size`).
@@ -112,8 +130,50 @@ impl Walk<'_, '_> {
     }
 
     fn found_point(&mut self, x: u32, id: u32) {
-        let (i, j) = self.line_point(x);
+        self.found_at(self.line_point(x), id);
+    }
+
+    fn found_at(&mut self, q: (u32, u32), id: u32) {
+        let (i, j) = if self.face_k < 4 {
+            face_grid(self.kernel.grid, self.face_k, q)
+        } else {
+            q
+        };
         self.found.push([id, i, j, 0]);
+    }
+
+    /// Side s of a face leaf (the quad face whose first patch is `first`), from vertex s
+    /// to vertex s + 1: along patch s's side v = 0 to the level-1 edge point, the point
+    /// itself where it is marked, then along patch s + 1's side u = 0
+    /// (`face_side_walk`).
+    fn face_side_walk(&mut self, first: u32, s: u32) {
+        let n = self.kernel.grid;
+        let (p, q) = (first + s, first + (s + 1) % 4);
+        let whole = |patch_id| CcCell {
+            patch_id,
+            trial_depth: 0,
+            i: 0,
+            j: 0,
+        };
+        self.line_topo = self.kernel.topo[p as usize];
+        self.face_k = s;
+        self.side_walk(&whole(p), 0);
+        let key = topo_chart_key(&self.line_topo, p as usize, n, 0, n);
+        if let Some(id) = (self.kernel.vertex_of)(split_key(key)) {
+            self.found_at((n, 0), id);
+        }
+        self.line_topo = self.kernel.topo[q as usize];
+        self.face_k = (s + 1) % 4;
+        self.side_walk(&whole(q), 3);
+    }
+
+    /// The points on side s of leaf `cell` (`leaf_side_walk`).
+    fn leaf_side_walk(&mut self, cell: &CcCell, s: u32) {
+        if cell.trial_depth & CC_CELL_FACE != 0 {
+            self.face_side_walk(cell.patch_id, s);
+        } else {
+            self.side_walk(cell, s);
+        }
     }
 
     /// The marked points strictly inside (lo, hi) among the dyadic subdivisions of the
@@ -226,6 +286,7 @@ impl<'a> PolygonKernel<'a> {
             line: Line::default(),
             line_topo: self.topo[cell.patch_id as usize],
             found: Vec::new(),
+            face_k: 4,
         }
     }
 
@@ -236,7 +297,7 @@ impl<'a> PolygonKernel<'a> {
         let mut counts = [0; 4];
         for s in 0..4 {
             walk.found.clear();
-            walk.side_walk(cell, s);
+            walk.leaf_side_walk(cell, s);
             counts[s as usize] = walk.found.len() as u32;
         }
         counts
@@ -254,12 +315,18 @@ impl<'a> PolygonKernel<'a> {
         out: &mut Vec<PolyVert>,
     ) {
         let mut walk = self.walk(cell);
+        let face = cell.trial_depth & CC_CELL_FACE != 0;
         for s in 0..4 {
-            let (i, j) = cell_corner(self.grid, cell, s);
+            // A face leaf's corner s is vertex s of the face, in the face's grid.
+            let (i, j) = if face {
+                face_grid(self.grid, s, (0, 0))
+            } else {
+                cell_corner(self.grid, cell, s)
+            };
             out.push([corner_ids[s as usize], i, j, 0]);
             if counts[s as usize] > 0 {
                 walk.found.clear();
-                walk.side_walk(cell, s);
+                walk.leaf_side_walk(cell, s);
                 out.extend_from_slice(&walk.found);
             }
         }
