@@ -1370,7 +1370,7 @@ fn creased_surfaces_tessellate_on_the_gpu_as_on_the_cpu() {
 fn the_tie_count_catches_a_quad_cut_against_its_diagonals() {
     // A square cut along its other diagonal is a tie. With one corner moved toward the
     // opposite one it is not, and a triangle with a vertex swapped is no quad cut
-    // either way.
+    // either way; likewise a polygon of five points zipped between either pair.
     let model = model("opensubdiv/catmark_cube.obj");
     let s = size(&model);
     let mut mesh = tessera_core::catmull_clark::tessellate_uniform(&model, 1)
@@ -1398,6 +1398,28 @@ fn the_tie_count_catches_a_quad_cut_against_its_diagonals() {
     let mut moved = mesh.clone();
     moved.indices.swap(0, 3);
     assert!(same_mesh_up_to_ties(&moved, &mesh, s).is_err());
+    // A face leaf's polygon with a point on a side, a e b c d, zipped between a and c or
+    // between b and d: a tie on a square, not once a is moved in.
+    let vertex = mesh.vertices[0];
+    let square = |a: [f32; 2]| Mesh {
+        vertices: [a, [0.05, 0.0], [0.1, 0.0], [0.1, 0.1], [0.0, 0.1]]
+            .map(|[x, y]| tessera_core::gpu_types::OutVertex {
+                position: [x, y, 5.0],
+                ..vertex
+            })
+            .to_vec(),
+        // a e d, e b d, b c d: ears a and c.
+        indices: vec![0, 1, 4, 1, 2, 4, 2, 3, 4],
+    };
+    let zipped_bd = |m: &Mesh| Mesh {
+        // e b c, a e c, a c d: ears b and d.
+        indices: vec![1, 2, 3, 0, 1, 3, 0, 3, 4],
+        ..m.clone()
+    };
+    let even = square([0.0, 0.0]);
+    assert_eq!(same_mesh_up_to_ties(&zipped_bd(&even), &even, s), Ok(1));
+    let uneven = square([0.03, 0.03]);
+    assert!(same_mesh_up_to_ties(&zipped_bd(&uneven), &uneven, s).is_err());
 }
 
 /// One frame of a render loop: a `prepare`, submitted and waited for, and the newest
