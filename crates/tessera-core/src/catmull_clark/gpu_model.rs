@@ -271,8 +271,8 @@ pub fn grid_fixed(i: u32, grid: u32) -> u32 {
 /// chart; item `4 + k` is the same point in the chart across, where corner `k` lies on a
 /// seam edge of the patch (inside the edge: a level-1 point is a corner of a leaf in
 /// every chart around it), else [`CC_NO_KEY`]. The polygons of the patch across then
-/// find the point in their own chart. A face leaf ([`CC_CELL_FACE`]) has the items of
-/// [`face_items`]; `chosen` is the trial each patch chose, as marking leaves it
+/// find the point in their own chart. A face leaf ([`CC_CELL_FACE`]) has items of its own
+/// (`face_items`); `chosen` is the trial each patch chose, as marking leaves it
 /// ([`CC_CHOSEN_FACE_LEAF`] on the patches of face leaves).
 pub fn leaf_items(
     topo: &[CcPatchTopo],
