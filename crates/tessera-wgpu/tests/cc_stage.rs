@@ -526,6 +526,26 @@ fn gpu_midpoint_splits_match_the_cpu_reference() {
         gpu.check().expect("no wgpu errors");
         assert!((status.max_bound() as f64 - cpu.max_bound).abs() <= 1e-5 * cpu.max_bound);
         same_mesh(&switched, &cpu.mesh, size(&model)).unwrap_or_else(|e| panic!("{name}: {e}"));
+        // And one built for midpoint splits, whose marks hold one trial per patch,
+        // switched to the search: its marks grow, and it makes the search's mesh.
+        let mut stage =
+            CcStage::new(&gpu.device, &gpu.queue, &kernels(&gpu), &model, &params).expect("stage");
+        stage
+            .run_blocking(&gpu.device, &gpu.queue)
+            .expect("midpoint");
+        let searching = CcParams {
+            first_split: FirstSplit::Search,
+            ..params
+        };
+        stage
+            .set_params(&gpu.device, &gpu.queue, &searching)
+            .expect("set_params");
+        let status = stage.run_blocking(&gpu.device, &gpu.queue).expect("search");
+        let grown = stage
+            .read_mesh(&gpu.device, &gpu.queue, &status)
+            .expect("read");
+        gpu.check().expect("no wgpu errors");
+        same_mesh(&grown, &search.mesh, size(&model)).unwrap_or_else(|e| panic!("{name}: {e}"));
     }
 }
 

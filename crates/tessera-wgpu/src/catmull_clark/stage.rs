@@ -76,7 +76,7 @@ use tessera_core::catmull_clark::stencil::CcStencils;
 use glam::Vec3;
 use tessera_core::catmull_clark::{CcParams, LeafBound, PatchMesh, SurfaceModel, ViewTolerance};
 use tessera_core::gpu_types::{
-    CcCell, CcHashStatus, CcState, CcTessParams, CcVertexPoint, CcView, OutVertex, CC_TRIALS,
+    CcCell, CcHashStatus, CcState, CcTessParams, CcVertexPoint, CcView, OutVertex,
     CC_VIEW_CULL_BACKFACES, CC_VIEW_CULL_FRUSTUM,
 };
 use tessera_core::Mesh;
@@ -258,6 +258,8 @@ impl CcStatus {
 /// Buffers that depend on the capacities.
 struct Buffers {
     caps: CcCapacities,
+    /// The first-split trials the marks have room for.
+    trials: u32,
     params: wgpu::Buffer,
     leaves: wgpu::Buffer,
     keys: wgpu::Buffer,
@@ -344,14 +346,14 @@ pub struct CcStage {
 }
 
 /// Words of the marks buffer (`shaders/shared/cc_tess.wgsl`) for `patches` patches and
-/// `leaves` leaves, any first split: per patch the key of its best trial (scanned into
+/// `leaves` leaves, `trials` first splits tried: per patch the key of its best trial (scanned into
 /// its first leaf; the total after them), the same key kept, the key of the best trial
 /// cut short, the trial chosen, its root bound and its face's bound (kept); per patch
 /// and trial three words of what its leaves guarantee (and how many are culled) and a
 /// block of 32 decisions; then the pool of blocks ([`pool_blocks`]).
-fn marks_words(patches: u32, leaves: u32) -> u64 {
+fn marks_words(patches: u32, leaves: u32, trials: u32) -> u64 {
     let p = patches.max(1) as u64;
-    let trials = CC_TRIALS as u64;
+    let trials = trials as u64;
     6 * p + 1 + 3 * p * trials + 2 * (p * trials + pool_blocks(patches, leaves))
 }
 
@@ -503,16 +505,46 @@ impl CcStage {
     /// The tolerance, depth and first split of the next runs, written through `queue`.
     /// A finer tolerance or a greater depth can need larger buffers: the `prepare` after
     /// the overflowing run grows them (or call [`run_blocking`](Self::run_blocking)).
+    /// A search after midpoint splits alone takes new marks at once (through `device`).
     pub fn set_params(
         &mut self,
-        _device: &wgpu::Device,
+        device: &wgpu::Device,
         queue: &wgpu::Queue,
         params: &CcParams,
     ) -> Result<()> {
         params.validate_for(&self.patches, self.depth)?;
         gpu_leaf_bound(params)?;
+        let trials = params.first_split.trials();
+        if trials > self.buffers.trials {
+            self.grow_marks(device, trials)?;
+        }
         self.params = *params;
         self.write_params(queue);
+        Ok(())
+    }
+
+    /// New marks with room for `trials` first splits (a search after midpoint splits
+    /// alone): the marks take five words per patch and trial, so they are sized for the
+    /// trials of the params, not for every trial there is. Only the bounds kept in them
+    /// are lost (computed again).
+    fn grow_marks(&mut self, device: &wgpu::Device, trials: u32) -> Result<()> {
+        let (patches, leaves) = (self.patch_count, self.buffers.caps.leaves);
+        let words = marks_words(patches, leaves, trials);
+        check_size(device, "patch marks", 4 * words)?;
+        let b = &mut self.buffers;
+        b.marks = storage(device, "tessera cc patch marks", 4 * words);
+        b.marks_scan =
+            PrefixSum::of_keys(device, &self.kernels.scan, &b.marks, patches + 1, (!0, 5));
+        b.trials = trials;
+        let fixed = Fixed {
+            topo: &self.topo,
+            homes: &self.homes,
+            state: &self.state,
+            args: &self.args,
+            passes: &self.passes,
+            stencil: &self.stencil,
+        };
+        self.binds = Binds::new(device, &self.kernels, &self.model, &fixed, &self.buffers);
         Ok(())
     }
 
@@ -1286,6 +1318,7 @@ impl Buffers {
         params: (&CcParams, f64, CcView),
         caps: CcCapacities,
     ) -> Result<Self> {
+        let trials = params.0.first_split.trials();
         let caps = CcCapacities {
             leaves: caps.leaves.max(1),
             poly: caps.poly.max(4),
@@ -1306,7 +1339,10 @@ impl Buffers {
                 caps.vertices as u64 * std::mem::size_of::<OutVertex>() as u64,
             ),
             ("vertex hash", caps.hash_slots as u64 * 12),
-            ("patch marks", 4 * marks_words(counts.0, caps.leaves)),
+            (
+                "patch marks",
+                4 * marks_words(counts.0, caps.leaves, trials),
+            ),
         ] {
             check_size(device, what, bytes)?;
         }
@@ -1337,12 +1373,13 @@ impl Buffers {
         let marks = storage(
             device,
             "tessera cc patch marks",
-            4 * marks_words(counts.0, caps.leaves),
+            4 * marks_words(counts.0, caps.leaves, trials),
         );
         // Each patch's leaves, from the key of its best trial, and the total after them.
         let marks_scan = PrefixSum::of_keys(device, &kernels.scan, &marks, counts.0 + 1, (!0, 5));
         Ok(Buffers {
             caps,
+            trials,
             params,
             leaves: storage(device, "tessera cc leaves", cell_bytes * caps.leaves as u64),
             keys: storage(device, "tessera cc keys", 8 * items as u64),
