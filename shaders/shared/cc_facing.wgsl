@@ -34,14 +34,33 @@ fn cc_faces_away(f: CcFacing, n: vec3f) -> bool {
     return (most < 0.0) | all(n == vec3f(0.0));
 }
 
+// `facing::NEGLIGIBLE_SINE`, squared.
+const CC_NEGLIGIBLE_SINE_SQ: f32 = 1e-10;
+
+// The extent of the patch's box squared, as `facing::patch_back_facing` takes it, for
+// the products' test.
+var<private> cc_net_size_sq: f32;
+
+// `facing::product_normal`, tested: `a × b` faces away, or `a` and `b` are parallel to
+// within the negligible sine, or one is shorter than that fraction of the patch's box
+// (their product is rounding noise and spans nothing).
+fn cc_product_faces_away(f: CcFacing, a: vec3f, b: vec3f) -> bool {
+    let n = cross(a, b);
+    let a2 = dot(a, a);
+    let b2 = dot(b, b);
+    let l2 = CC_NEGLIGIBLE_SINE_SQ * cc_net_size_sq;
+    let negligible = dot(n, n) <= CC_NEGLIGIBLE_SINE_SQ * a2 * b2 || a2 <= l2 || b2 <= l2;
+    return cc_faces_away(f, n) | negligible;
+}
+
 // The twelve products of one u-difference `a` with the net's v-differences `b`.
 fn cc_row_faces_away(f: CcFacing, a: vec3f, b: array<vec3f, 12>) -> bool {
-    return cc_faces_away(f, cross(a, b[0])) & cc_faces_away(f, cross(a, b[1]))
-        & cc_faces_away(f, cross(a, b[2])) & cc_faces_away(f, cross(a, b[3]))
-        & cc_faces_away(f, cross(a, b[4])) & cc_faces_away(f, cross(a, b[5]))
-        & cc_faces_away(f, cross(a, b[6])) & cc_faces_away(f, cross(a, b[7]))
-        & cc_faces_away(f, cross(a, b[8])) & cc_faces_away(f, cross(a, b[9]))
-        & cc_faces_away(f, cross(a, b[10])) & cc_faces_away(f, cross(a, b[11]));
+    return cc_product_faces_away(f, a, b[0]) & cc_product_faces_away(f, a, b[1])
+        & cc_product_faces_away(f, a, b[2]) & cc_product_faces_away(f, a, b[3])
+        & cc_product_faces_away(f, a, b[4]) & cc_product_faces_away(f, a, b[5])
+        & cc_product_faces_away(f, a, b[6]) & cc_product_faces_away(f, a, b[7])
+        & cc_product_faces_away(f, a, b[8]) & cc_product_faces_away(f, a, b[9])
+        & cc_product_faces_away(f, a, b[10]) & cc_product_faces_away(f, a, b[11]);
 }
 
 // `facing::net_normals` of net k, tested: point 0 is absolute and the rest offsets from
@@ -68,6 +87,7 @@ fn cc_net_faces_away(f: CcFacing, k: u32) -> bool {
 // the cap on steps only guards against a corrupt upload.
 fn cc_patch_back_facing(p: u32, lo: vec3f, hi: vec3f) -> bool {
     let c = cc_view_corners(lo, hi);
+    cc_net_size_sq = dot(hi - lo, hi - lo);
     let f0 = cc_facing_at(c[0]);
     let f = CcFacing(f0, array<vec3f, 3>(cc_facing_at(c[1]) - f0, cc_facing_at(c[2]) - f0,
         cc_facing_at(c[4]) - f0));

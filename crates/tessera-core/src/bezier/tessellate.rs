@@ -139,8 +139,11 @@ pub fn patch_thresholds(
             let away = v.cull_backfaces && {
                 let net: Net = net.map(|p| p.as_dvec3());
                 let sign = if flipped { -1.0 } else { 1.0 };
-                v.view
-                    .box_back_facing(lo, hi, net_normals(&net).map(|n| sign * n))
+                v.view.box_back_facing(
+                    lo,
+                    hi,
+                    net_normals(&net, (hi - lo).length()).map(|n| sign * n),
+                )
             };
             if (v.cull && v.view.box_outside(lo, hi)) || away {
                 -th

@@ -17,13 +17,37 @@ use super::patch::{Node, PatchSurface};
 use crate::view::View;
 
 /// The 144 products `a × b` of a net's u-differences and v-differences (point `4j + i`
-/// at `(i, j)`), u-difference by u-difference, as the kernel takes them.
-pub fn net_normals(net: &Net) -> impl Iterator<Item = DVec3> + '_ {
+/// at `(i, j)`), u-difference by u-difference, as the kernel takes them; each
+/// [`product_normal`] at `size`, the extent of the box the surface lies in.
+pub fn net_normals(net: &Net, size: f64) -> impl Iterator<Item = DVec3> + '_ {
     let du = (0..12).map(move |k| {
         let (j, i) = (k / 3, k % 3);
         net[4 * j + i + 1] - net[4 * j + i]
     });
-    du.flat_map(move |a| (0..12).map(move |k| a.cross(net[k + 4] - net[k])))
+    du.flat_map(move |a| (0..12).map(move |k| product_normal(a, net[k + 4] - net[k], size)))
+}
+
+/// Differences closer to parallel than this sine, or shorter than this fraction of the
+/// surface's box, give no normal ([`product_normal`]).
+pub const NEGLIGIBLE_SINE: f64 = 1e-5;
+
+/// `a × b`, or zero where `a` and `b` are parallel to within [`NEGLIGIBLE_SINE`] or one
+/// of them is shorter than that fraction of `size` (the extent of the surface's box).
+/// Exactly parallel differences (a flat strip) and zero ones (a side or a whole piece
+/// collapsed to a point) span no normal, but the nets'
+/// rounding, in single precision on the GPU and in double here, leaves their product as
+/// noise in any direction: taken as zero on both sides alike, so that noise decides
+/// nothing. A product dropped so is a sliver of surface turned by less than that angle,
+/// and back-face culling is outside the guarantee.
+pub fn product_normal(a: DVec3, b: DVec3, size: f64) -> DVec3 {
+    let n = a.cross(b);
+    let s2 = NEGLIGIBLE_SINE * NEGLIGIBLE_SINE;
+    let (a2, b2, l2) = (a.length_squared(), b.length_squared(), size * size);
+    if n.length_squared() <= s2 * a2 * b2 || a2 <= s2 * l2 || b2 <= s2 * l2 {
+        DVec3::ZERO
+    } else {
+        n
+    }
 }
 
 /// Nodes the walk keeps pending at most, as the kernel's stack: past it the patch is
@@ -38,6 +62,7 @@ pub fn patch_back_facing(view: &View, surface: &PatchSurface, lo: DVec3, hi: DVe
         return false;
     }
     let f = view.box_facing(lo, hi);
+    let size = (hi - lo).length();
     let mut stack = vec![0u32];
     while let Some(k) = stack.pop() {
         let away = match &surface.nodes[k as usize] {
@@ -48,7 +73,7 @@ pub fn patch_back_facing(view: &View, surface: &PatchSurface, lo: DVec3, hi: DVe
                 stack.extend(children);
                 continue;
             }
-            Node::Bezier(net) => net_normals(net).all(|n| f.faces_away(n)),
+            Node::Bezier(net) => net_normals(net, size).all(|n| f.faces_away(n)),
             Node::Corner(c) => f.faces_away(c.normal),
         };
         if !away {
