@@ -150,21 +150,19 @@ pub fn run(assets: &Path, out_dir: &Path, quick: bool) {
                 false,
                 repeats,
             );
-            let (px_gpu_ms, px_gpu_triangles) = gpu_in_view(
-                &gpu,
-                &kernels,
-                &model,
-                &ViewTolerance {
+            let on_gpu = |face_leaves| {
+                let at = ViewTolerance {
                     view,
                     pixels: Some(pixels),
                     cull: true,
                     cull_backfaces: false,
                     max_triangles: None,
-                    face_leaves: false,
-                },
-                repeats,
-            )
-            .expect("the close-up fits the device");
+                    face_leaves,
+                };
+                gpu_in_view(&gpu, &kernels, &model, &at, repeats)
+                    .expect("the close-up fits the device")
+            };
+            let (px_gpu_ms, px_gpu_triangles) = on_gpu(false);
             let (faces_ms, faces) = cpu_in_view(
                 &model,
                 view,
@@ -174,21 +172,7 @@ pub fn run(assets: &Path, out_dir: &Path, quick: bool) {
                 true,
                 repeats,
             );
-            let (faces_gpu_ms, faces_gpu_triangles) = gpu_in_view(
-                &gpu,
-                &kernels,
-                &model,
-                &ViewTolerance {
-                    view,
-                    pixels: Some(pixels),
-                    cull: true,
-                    cull_backfaces: false,
-                    max_triangles: None,
-                    face_leaves: true,
-                },
-                repeats,
-            )
-            .expect("the close-up fits the device");
+            let (faces_gpu_ms, faces_gpu_triangles) = on_gpu(true);
             let world_tolerance = pixels * nearest / focal();
             let (world_ms, world) = run(Tolerance::Absolute(world_tolerance), None);
             let err = |m| max_error_px(&samples, m, &view).unwrap_or(0.0);

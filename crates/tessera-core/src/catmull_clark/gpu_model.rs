@@ -287,23 +287,13 @@ pub fn leaf_items(
     let mut keys = [CC_NO_KEY; 8];
     let mut out = [CcVertexPoint::default(); 8];
     if cell.trial_depth & CC_CELL_FACE != 0 {
-        face_items(topo, homes, points, grid, chosen, p, &mut keys, &mut out);
-        return (keys, out);
+        return face_items(topo, homes, points, grid, chosen, p);
     }
     for k in 0..4 {
         let (i, j) = cell_corner(grid, cell, k as u32);
-        let (hp, hi, hj) = home_point(t, homes, points, p, (i, j), grid);
-        let vertex = |face: u32, uv: [f32; 2]| CcVertexPoint {
-            patch_id: hp,
-            u: grid_fixed(hi, grid),
-            v: grid_fixed(hj, grid),
-            face,
-            face_u: uv[0],
-            face_v: uv[1],
-        };
+        let home = home_point(t, homes, points, p, (i, j), grid);
         keys[k] = split_key(topo_chart_key(t, p as usize, i, j, grid));
-        let (face, uv) = topo_face_uv(t, i, j, grid);
-        out[k] = vertex(face, uv);
+        out[k] = vertex_point(home, t, (i, j), grid);
         if let GridPlace::Edge(e, local) = grid_place(i, j, grid) {
             let across = t.across[e];
             if seam(t.face_corner, e) && across != CC_NO_NEIGHBOUR {
@@ -312,12 +302,25 @@ pub fn leaf_items(
                 let (qi, qj) = edge_point(eq, grid - local, grid);
                 let tq = &topo[q as usize];
                 keys[4 + k] = split_key(topo_chart_key(tq, q as usize, qi, qj, grid));
-                let (face, uv) = topo_face_uv(tq, qi, qj, grid);
-                out[4 + k] = vertex(face, uv);
+                out[4 + k] = vertex_point(home, tq, (qi, qj), grid);
             }
         }
     }
     (keys, out)
+}
+
+/// The vertex of grid point `q` of the patch with topology `t` (its face and face
+/// coordinates), evaluated at `home` (`vertex_point` in `cc_leaf_keys`).
+fn vertex_point(home: (u32, u32, u32), t: &CcPatchTopo, q: (u32, u32), grid: u32) -> CcVertexPoint {
+    let (face, uv) = topo_face_uv(t, q.0, q.1, grid);
+    CcVertexPoint {
+        patch_id: home.0,
+        u: grid_fixed(home.1, grid),
+        v: grid_fixed(home.2, grid),
+        face,
+        face_u: uv[0],
+        face_v: uv[1],
+    }
 }
 
 /// Twin of `face_items` in `cc_leaf_keys`: a face leaf of the quad face whose first patch
@@ -325,7 +328,6 @@ pub fn leaf_items(
 /// `4 + k` the level-1 edge point at the end of that patch's side `v = 0` (its corner
 /// `(n, 0)`), in its chart, where the face across is not a face leaf too, else
 /// [`CC_NO_KEY`].
-#[allow(clippy::too_many_arguments)]
 fn face_items(
     topo: &[CcPatchTopo],
     homes: &[u32],
@@ -333,34 +335,30 @@ fn face_items(
     grid: u32,
     chosen: &[u32],
     first: u32,
-    keys: &mut [[u32; 2]; 8],
-    out: &mut [CcVertexPoint; 8],
-) {
-    let vertex = |t: &CcPatchTopo, p: u32, q: (u32, u32)| {
-        let (hp, hi, hj) = home_point(t, homes, points, p, q, grid);
-        let (face, uv) = topo_face_uv(t, q.0, q.1, grid);
-        CcVertexPoint {
-            patch_id: hp,
-            u: grid_fixed(hi, grid),
-            v: grid_fixed(hj, grid),
-            face,
-            face_u: uv[0],
-            face_v: uv[1],
-        }
-    };
+) -> ([[u32; 2]; 8], [CcVertexPoint; 8]) {
+    let mut keys = [CC_NO_KEY; 8];
+    let mut out = [CcVertexPoint::default(); 8];
     for k in 0..4 {
         let p = first + k as u32;
         let t = &topo[p as usize];
         let across = t.across[0];
         let needed =
             across != CC_NO_NEIGHBOUR && chosen[(across >> 2) as usize] & CC_CHOSEN_FACE_LEAF == 0;
+        let corner = (0, 0);
         keys[k] = split_key(topo_chart_key(t, p as usize, 0, 0, grid));
-        out[k] = vertex(t, p, (0, 0));
+        out[k] = vertex_point(
+            home_point(t, homes, points, p, corner, grid),
+            t,
+            corner,
+            grid,
+        );
         if needed {
+            let edge = (grid, 0);
             keys[4 + k] = split_key(topo_chart_key(t, p as usize, grid, 0, grid));
-            out[4 + k] = vertex(t, p, (grid, 0));
+            out[4 + k] = vertex_point(home_point(t, homes, points, p, edge, grid), t, edge, grid);
         }
     }
+    (keys, out)
 }
 
 /// Per patch: its level-1 points and edges, and the patch (and its edge) across each

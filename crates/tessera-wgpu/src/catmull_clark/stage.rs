@@ -536,6 +536,12 @@ impl CcStage {
         b.marks_scan =
             PrefixSum::of_keys(device, &self.kernels.scan, &b.marks, patches + 1, (!0, 5));
         b.trials = trials;
+        self.rebind(device);
+        Ok(())
+    }
+
+    /// The bind groups again, after buffers were replaced.
+    fn rebind(&mut self, device: &wgpu::Device) {
         let fixed = Fixed {
             topo: &self.topo,
             homes: &self.homes,
@@ -545,7 +551,6 @@ impl CcStage {
             stencil: &self.stencil,
         };
         self.binds = Binds::new(device, &self.kernels, &self.model, &fixed, &self.buffers);
-        Ok(())
     }
 
     /// The view of the next runs, written through `queue` (no reallocation: once per
@@ -1046,16 +1051,8 @@ impl CcStage {
             (&self.params, self.epsilon(), self.view),
             caps,
         )?;
-        let fixed = Fixed {
-            topo: &self.topo,
-            homes: &self.homes,
-            state: &self.state,
-            args: &self.args,
-            passes: &self.passes,
-            stencil: &self.stencil,
-        };
-        self.binds = Binds::new(device, &self.kernels, &self.model, &fixed, &buffers);
         let old = std::mem::replace(&mut self.buffers, buffers);
+        self.rebind(device);
         self.readback.new_generation();
         self.latest = self.latest.map(|(s, _)| (s, false));
         self.growths += 1;
