@@ -21,7 +21,11 @@
 @group(0) @binding(77) var<storage, read> tables: array<CcStencilTable>;
 @group(0) @binding(78) var<storage, read> records: array<CcPieceRecord>;
 @group(0) @binding(79) var<storage, read> weights: array<f32>;
-@group(0) @binding(80) var nets_out: texture_storage_2d<rgba32float, write>;
+// The nets' four pages (`cc_patch.wgsl` reads them).
+@group(0) @binding(80) var nets_out_0: texture_storage_2d<rgba32float, write>;
+@group(0) @binding(83) var nets_out_1: texture_storage_2d<rgba32float, write>;
+@group(0) @binding(84) var nets_out_2: texture_storage_2d<rgba32float, write>;
+@group(0) @binding(85) var nets_out_3: texture_storage_2d<rgba32float, write>;
 @group(0) @binding(81) var<storage, read_write> corners_out: array<CcCorner>;
 // [0, records of all patches, level-1 points, 0].
 @group(0) @binding(82) var<uniform> step: vec4u;
@@ -83,17 +87,35 @@ fn record_patch(r: u32) -> u32 {
     return lo;
 }
 
+// A texel of a page (a storage texture is stored to through its global only).
+fn store_texel(page: u32, at: vec2u, texel: vec4f) {
+    if page == 0u {
+        textureStore(nets_out_0, at, texel);
+    } else if page == 1u {
+        textureStore(nets_out_1, at, texel);
+    } else if page == 2u {
+        textureStore(nets_out_2, at, texel);
+    } else {
+        textureStore(nets_out_3, at, texel);
+    }
+}
+
+// Net k into its page (`CcNetLayout::texel_of`, as `cc_net_page` and `cc_net_at`), in
+// the texel order of `cc_page_net`.
 fn store_net(k: u32, a: array<vec3f, 16>) {
-    let at = vec2u((k % NET_TEXTURE_PATCHES_PER_ROW) * 12u, k / NET_TEXTURE_PATCHES_PER_ROW);
+    let per_page = CC_NETS_PER_ROW * CC_NET_PAGE_ROWS;
+    let page = k / per_page;
+    let i = k % per_page;
+    let at = vec2u((i % CC_NETS_PER_ROW) * 12u, i / CC_NETS_PER_ROW);
     for (var j = 0u; j < 4u; j++) {
         let p0 = a[4u * j];
         let p1 = a[4u * j + 1u];
         let p2 = a[4u * j + 2u];
         let p3 = a[4u * j + 3u];
         let t = at + vec2u(3u * j, 0u);
-        textureStore(nets_out, t, vec4f(p0, p1.x));
-        textureStore(nets_out, t + vec2u(1u, 0u), vec4f(p1.yz, p2.xy));
-        textureStore(nets_out, t + vec2u(2u, 0u), vec4f(p2.z, p3));
+        store_texel(page, t, vec4f(p0, p1.x));
+        store_texel(page, t + vec2u(1u, 0u), vec4f(p1.yz, p2.xy));
+        store_texel(page, t + vec2u(2u, 0u), vec4f(p2.z, p3));
     }
 }
 

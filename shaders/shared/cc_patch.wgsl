@@ -9,10 +9,15 @@
 @group(0) @binding(20) var<storage, read> cc_roots: array<CcRoot>;
 @group(0) @binding(21) var<storage, read> cc_nodes: array<CcNode>;
 @group(0) @binding(22) var<storage, read> cc_splits: array<vec4u>;
-// The Bézier nets as a read-only storage texture (`tessera_core::gpu_types::NetTexture`:
-// 12 rgba32float texels per net): a storage buffer read at per-lane addresses is a loop
-// over the lanes on a CPU device, a texel fetch a plain load.
-@group(0) @binding(23) var cc_nets: texture_storage_2d<rgba32float, read>;
+// The Bézier nets as read-only storage textures, four pages of them
+// (`tessera_core::gpu_types::CcNetLayout`: 12 rgba32float texels per net): a storage
+// buffer read at per-lane addresses is a loop over the lanes on a CPU device, a texel
+// fetch a plain load. Pages, because one texture of a large model's nets would be
+// taller than a device allows, or larger than it can allocate at once.
+@group(0) @binding(23) var cc_nets_0: texture_storage_2d<rgba32float, read>;
+@group(0) @binding(25) var cc_nets_1: texture_storage_2d<rgba32float, read>;
+@group(0) @binding(26) var cc_nets_2: texture_storage_2d<rgba32float, read>;
+@group(0) @binding(27) var cc_nets_3: texture_storage_2d<rgba32float, read>;
 @group(0) @binding(24) var<storage, read> cc_corners: array<CcCorner>;
 
 struct CcSample {
@@ -36,27 +41,53 @@ struct CcDerivs {
     pv: vec3f,
 }
 
-// The 16 points of net k, `x y z` each, from its 12 texels.
-fn cc_net_points(k: u32) -> array<vec3f, 16> {
-    let at = vec2u((k % NET_TEXTURE_PATCHES_PER_ROW) * 12u, k / NET_TEXTURE_PATCHES_PER_ROW);
-    let t0 = textureLoad(cc_nets, at);
-    let t1 = textureLoad(cc_nets, at + vec2u(1u, 0u));
-    let t2 = textureLoad(cc_nets, at + vec2u(2u, 0u));
-    let t3 = textureLoad(cc_nets, at + vec2u(3u, 0u));
-    let t4 = textureLoad(cc_nets, at + vec2u(4u, 0u));
-    let t5 = textureLoad(cc_nets, at + vec2u(5u, 0u));
-    let t6 = textureLoad(cc_nets, at + vec2u(6u, 0u));
-    let t7 = textureLoad(cc_nets, at + vec2u(7u, 0u));
-    let t8 = textureLoad(cc_nets, at + vec2u(8u, 0u));
-    let t9 = textureLoad(cc_nets, at + vec2u(9u, 0u));
-    let t10 = textureLoad(cc_nets, at + vec2u(10u, 0u));
-    let t11 = textureLoad(cc_nets, at + vec2u(11u, 0u));
+// Net k's page, and its first texel there (twin: `CcNetLayout::texel_of`).
+fn cc_net_page(k: u32) -> u32 {
+    return k / (CC_NETS_PER_ROW * CC_NET_PAGE_ROWS);
+}
+
+fn cc_net_at(k: u32) -> vec2u {
+    let i = k % (CC_NETS_PER_ROW * CC_NET_PAGE_ROWS);
+    return vec2u((i % CC_NETS_PER_ROW) * 12u, i / CC_NETS_PER_ROW);
+}
+
+// The 16 points of the net at texel `at` of `page`, `x y z` each, from its 12 texels.
+fn cc_page_net(page: texture_storage_2d<rgba32float, read>, at: vec2u) -> array<vec3f, 16> {
+    let t0 = textureLoad(page, at);
+    let t1 = textureLoad(page, at + vec2u(1u, 0u));
+    let t2 = textureLoad(page, at + vec2u(2u, 0u));
+    let t3 = textureLoad(page, at + vec2u(3u, 0u));
+    let t4 = textureLoad(page, at + vec2u(4u, 0u));
+    let t5 = textureLoad(page, at + vec2u(5u, 0u));
+    let t6 = textureLoad(page, at + vec2u(6u, 0u));
+    let t7 = textureLoad(page, at + vec2u(7u, 0u));
+    let t8 = textureLoad(page, at + vec2u(8u, 0u));
+    let t9 = textureLoad(page, at + vec2u(9u, 0u));
+    let t10 = textureLoad(page, at + vec2u(10u, 0u));
+    let t11 = textureLoad(page, at + vec2u(11u, 0u));
     return array<vec3f, 16>(
         t0.xyz, vec3f(t0.w, t1.xy), vec3f(t1.zw, t2.x), t2.yzw,
         t3.xyz, vec3f(t3.w, t4.xy), vec3f(t4.zw, t5.x), t5.yzw,
         t6.xyz, vec3f(t6.w, t7.xy), vec3f(t7.zw, t8.x), t8.yzw,
         t9.xyz, vec3f(t9.w, t10.xy), vec3f(t10.zw, t11.x), t11.yzw,
     );
+}
+
+// The 16 points of net k. One branch per net, not per texel: most models need page 0
+// only, and a branch no lane takes is skipped.
+fn cc_net_points(k: u32) -> array<vec3f, 16> {
+    let page = cc_net_page(k);
+    let at = cc_net_at(k);
+    if page == 0u {
+        return cc_page_net(cc_nets_0, at);
+    }
+    if page == 1u {
+        return cc_page_net(cc_nets_1, at);
+    }
+    if page == 2u {
+        return cc_page_net(cc_nets_2, at);
+    }
+    return cc_page_net(cc_nets_3, at);
 }
 
 // One offset's terms of the sums (point `c` weighted by bu_i bv_j, du_i bv_j, bu_i dv_j).

@@ -5,6 +5,10 @@
 const MAP_RES: u32 = 16u;
 const MAP_ATLAS_TILES_PER_ROW: u32 = 256u;
 const NET_TEXTURE_PATCHES_PER_ROW: u32 = 512u;
+// The Catmull-Clark nets' pages (`tessera_core::gpu_types::CcNetLayout`): replaced by the
+// device's layout when a kernel is built; these are WebGPU's default limits' values.
+const CC_NETS_PER_ROW: u32 = 512u;
+const CC_NET_PAGE_ROWS: u32 = 8192u;
 const TOPOLOGY_TEXTURE_WIDTH: u32 = 1024u;
 const TOPO_TEXELS: u32 = 3u;
 const COARSE_SEGMENTS: u32 = 3u;

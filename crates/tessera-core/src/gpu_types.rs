@@ -268,6 +268,100 @@ impl NetTexture {
     }
 }
 
+/// Textures the Catmull-Clark nets are spread over: WebGPU's default limit of storage
+/// textures per kernel, so every kernel that reads nets binds all of them.
+pub const CC_NET_PAGES: u32 = 4;
+
+/// The largest side of one page of Catmull-Clark nets: 16384 rows of 512 nets are 1.6 GB,
+/// under the 2 GiB a single allocation may take on some devices (lavapipe among them),
+/// where one texture as large as the device's side allows could not be allocated.
+pub const CC_NET_PAGE_SIDE: u32 = 16384;
+
+/// Where the Catmull-Clark stages keep their Bézier nets: [`CC_NET_PAGES`] `rgba32float`
+/// textures ("pages"), each [`nets_per_row`](Self::nets_per_row) nets of 12 texels across
+/// (as in [`NetTexture`]) and up to [`rows`](Self::rows) rows down. Net `k` lies in page
+/// `k / nets_per_page`. The sides follow the device's largest texture side, so a model
+/// may derive four times the nets one texture holds; the kernels are built with the same
+/// layout (their constants `CC_NETS_PER_ROW` and `CC_NET_PAGE_ROWS`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct CcNetLayout {
+    /// Nets per texel row: [`NET_TEXTURE_PATCHES_PER_ROW`], fewer on a device whose
+    /// textures are narrower than its 6144 texels.
+    pub nets_per_row: u32,
+    /// Rows of a full page.
+    pub rows: u32,
+}
+
+impl CcNetLayout {
+    /// The layout for a device whose 2D textures have sides of at most `max_side`.
+    pub fn new(max_side: u32) -> Self {
+        let side = max_side.min(CC_NET_PAGE_SIDE);
+        CcNetLayout {
+            nets_per_row: (side / NetTexture::TEXELS_PER_PATCH)
+                .clamp(1, NET_TEXTURE_PATCHES_PER_ROW),
+            rows: side.max(1),
+        }
+    }
+
+    /// Nets a full page holds.
+    pub fn nets_per_page(&self) -> u64 {
+        self.nets_per_row as u64 * self.rows as u64
+    }
+
+    /// Nets the pages hold together.
+    pub fn capacity(&self) -> u64 {
+        CC_NET_PAGES as u64 * self.nets_per_page()
+    }
+
+    /// Page and texel coordinates of texel `t` (0..12) of net `k`: twin of the kernels'
+    /// `cc_net_page` and `cc_net_at`.
+    pub fn texel_of(&self, k: u32, t: u32) -> (u32, u32, u32) {
+        let per_page = self.nets_per_page() as u32;
+        let (page, i) = (k / per_page, k % per_page);
+        (
+            page,
+            (i % self.nets_per_row) * NetTexture::TEXELS_PER_PATCH + t,
+            i / self.nets_per_row,
+        )
+    }
+
+    /// Nets of `nets` that page `page` holds.
+    pub fn page_nets(&self, nets: usize, page: u32) -> usize {
+        let per_page = self.nets_per_page() as usize;
+        nets.saturating_sub(page as usize * per_page).min(per_page)
+    }
+
+    /// Size (width, height) in texels of each page for `nets` nets; a page without nets
+    /// is one texel (a binding is never empty).
+    pub fn page_sizes(&self, nets: usize) -> [(u32, u32); CC_NET_PAGES as usize] {
+        std::array::from_fn(|page| match self.page_nets(nets, page as u32) {
+            0 => (1, 1),
+            n => {
+                let (columns, rows) = tile_grid(n, self.nets_per_row);
+                (columns * NetTexture::TEXELS_PER_PATCH, rows)
+            }
+        })
+    }
+
+    /// The texels of each page holding `nets` (row-major, without padding; past the
+    /// last net, zero).
+    pub fn pages(&self, nets: &[GpuPatch]) -> Vec<Vec<[f32; 4]>> {
+        let sizes = self.page_sizes(nets.len());
+        let mut pages: Vec<Vec<[f32; 4]>> = sizes
+            .iter()
+            .map(|&(w, h)| vec![[0.0; 4]; w as usize * h as usize])
+            .collect();
+        for (k, net) in nets.iter().enumerate() {
+            for (t, texel) in net.cp.chunks_exact(4).enumerate() {
+                let (page, x, y) = self.texel_of(k as u32, t as u32);
+                let width = sizes[page as usize].0;
+                pages[page as usize][(y * width + x) as usize].copy_from_slice(texel);
+            }
+        }
+        pages
+    }
+}
+
 /// Texels per row of the [`TopologyTexture`] (a power of two, like
 /// [`MAP_ATLAS_TILES_PER_ROW`]).
 pub const TOPOLOGY_TEXTURE_WIDTH: u32 = 1024;
@@ -630,6 +724,44 @@ mod tests {
             NetTexture::bytes(row as usize) as usize,
             row as usize * std::mem::size_of::<GpuPatch>()
         );
+    }
+
+    #[test]
+    fn the_net_pages_hold_each_net_once_in_page_order() {
+        // A device of 40-texel sides: 3 nets per row, 40 rows, 120 nets per page.
+        let layout = CcNetLayout::new(40);
+        assert_eq!((layout.nets_per_row, layout.rows), (3, 40));
+        assert_eq!(layout.capacity(), 480);
+        let nets: Vec<GpuPatch> = (0..250)
+            .map(|p| GpuPatch {
+                cp: std::array::from_fn(|k| (p * 48 + k) as f32),
+            })
+            .collect();
+        assert_eq!(
+            layout.page_sizes(nets.len()),
+            [(36, 40), (36, 40), (36, 4), (1, 1)]
+        );
+        let pages = layout.pages(&nets);
+        let mut texels = std::collections::HashSet::new();
+        for (k, net) in nets.iter().enumerate() {
+            for w in 0..48 {
+                let (page, x, y) = layout.texel_of(k as u32, w as u32 / 4);
+                let width = layout.page_sizes(nets.len())[page as usize].0;
+                assert_eq!(
+                    pages[page as usize][(y * width + x) as usize][w % 4],
+                    net.cp[w]
+                );
+                texels.insert((page, x, y));
+            }
+        }
+        // No net shares a texel with another.
+        assert_eq!(texels.len(), 250 * 12);
+        assert_eq!(layout.texel_of(120, 0), (1, 0, 0));
+        assert_eq!(layout.texel_of(241, 11), (2, 23, 0));
+        // A full-size device: 512 nets of 6144 texels per row, pages capped at 1.6 GB.
+        let big = CcNetLayout::new(32768);
+        assert_eq!((big.nets_per_row, big.rows), (512, CC_NET_PAGE_SIDE));
+        assert_eq!(big.nets_per_page() * 192, 1_610_612_736);
     }
 
     #[test]

@@ -61,6 +61,15 @@ pub enum Error {
         /// The device's largest texture side.
         limit: u32,
     },
+    /// A Catmull-Clark model derives more Bézier nets than the stage's four textures of
+    /// the device's largest size hold ([`tessera_core::gpu_types::CcNetLayout`]).
+    #[error("the model's quadtrees need {nets} Bézier nets, over the {capacity} that four textures of the device's largest size hold; tessellate it with --backend cpu or split the mesh")]
+    TooManyNets {
+        /// Nets the model derives.
+        nets: u64,
+        /// Nets the device's textures hold.
+        capacity: u64,
+    },
     /// Waiting for the GPU or mapping a buffer failed.
     #[error("GPU readback failed: {0}")]
     Readback(String),

@@ -1,6 +1,8 @@
 //! The WGSL sources, embedded at build time, with `#include "shared/NAME.wgsl"` lines
 //! replaced by the named shared file (each file included at most once per module).
 
+use tessera_core::gpu_types::CcNetLayout;
+
 /// Every shader file under `shaders/`, by its path relative to that folder.
 pub const SOURCES: &[(&str, &str)] = &[
     (
@@ -234,11 +236,28 @@ pub fn source_with_consts(name: &str, consts: &[(&str, u32)]) -> String {
     src
 }
 
-/// A shader module for `name`, with `consts` as in [`source_with_consts`].
+/// A shader module for `name`, with `consts` as in [`source_with_consts`], and the
+/// Catmull-Clark nets' pages laid out for `device` ([`CcNetLayout`], as the stages
+/// allocate them).
+///
+/// [`CcNetLayout`]: tessera_core::gpu_types::CcNetLayout
 pub fn module(device: &wgpu::Device, name: &str, consts: &[(&str, u32)]) -> wgpu::ShaderModule {
+    let layout = CcNetLayout::new(device.limits().max_texture_dimension_2d);
+    let pages = [
+        ("CC_NETS_PER_ROW", layout.nets_per_row),
+        ("CC_NET_PAGE_ROWS", layout.rows),
+    ];
+    // Every kernel that includes the shared types declares them; the others (scan,
+    // render) read no nets.
+    let declared = source(name).contains("const CC_NETS_PER_ROW: u32 = ");
+    let consts: Vec<(&str, u32)> = consts
+        .iter()
+        .copied()
+        .chain(pages.into_iter().filter(|_| declared))
+        .collect();
     device.create_shader_module(wgpu::ShaderModuleDescriptor {
         label: Some(name),
-        source: wgpu::ShaderSource::Wgsl(source_with_consts(name, consts).into()),
+        source: wgpu::ShaderSource::Wgsl(source_with_consts(name, &consts).into()),
     })
 }
 

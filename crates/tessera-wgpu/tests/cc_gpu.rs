@@ -6,9 +6,7 @@ use tessera_core::catmull_clark::gpu_model::{fixed_param, vertex_eval, CcGpuMode
 use tessera_core::catmull_clark::stencil::CcStencils;
 use tessera_core::catmull_clark::vertex_hash::{number_keys, split_key};
 use tessera_core::catmull_clark::{tessellate_uniform, SurfaceModel};
-use tessera_core::gpu_types::{
-    CcCorner, CcHashStatus, CcVertexPoint, GpuPatch, NetTexture, OutVertex,
-};
+use tessera_core::gpu_types::{CcCorner, CcHashStatus, CcVertexPoint, GpuPatch, OutVertex};
 use tessera_wgpu::catmull_clark::{
     CcHashKernels, CcModelBuffers, CcStencilBuffers, CcVertexEval, CcVertexHash,
 };
@@ -148,13 +146,13 @@ fn gpu_evaluation_matches_its_twin_and_the_exact_surface() {
 /// A device whose textures cannot hold the nets refuses the model with an error that
 /// says so, before wgpu sees an oversized texture.
 #[test]
-fn nets_past_the_texture_limit_are_an_error() {
+fn nets_past_the_pages_capacity_are_an_error() {
+    // A device of 24-texel sides: pages of 2 nets per row and 24 rows, 192 nets in all.
     let gpu = Gpu::with_limits(|adapter| wgpu::Limits {
-        max_texture_dimension_2d: 256,
+        max_texture_dimension_2d: 24,
         ..tessera_wgpu::bezier::required_limits(adapter)
     })
     .expect("device");
-    // The cube's 2160 nets (its quadtrees' pieces) take rows of 512 nets, 6144 texels.
     let flat = CcGpuModel::new(&model("opensubdiv/catmark_cube.obj"));
     assert_eq!(flat.nets.len(), 2160);
     let err = CcModelBuffers::new(&gpu.device, &gpu.queue, &flat)
@@ -163,19 +161,24 @@ fn nets_past_the_texture_limit_are_an_error() {
     assert!(
         matches!(
             err,
-            tessera_wgpu::Error::TextureTooLarge {
-                width: 6144,
-                height: 5,
-                limit: 256,
-                ..
+            tessera_wgpu::Error::TooManyNets {
+                nets: 2160,
+                capacity: 192,
             }
         ),
         "{err}"
     );
-    // Twenty-one nets fit (252 texels).
     let mut small = flat.clone();
-    small.nets.truncate(21);
-    CcModelBuffers::new(&gpu.device, &gpu.queue, &small).expect("21 nets fit");
+    small.nets.truncate(193);
+    assert!(CcModelBuffers::new(&gpu.device, &gpu.queue, &small).is_err());
+    small.nets.truncate(192);
+    let buffers = CcModelBuffers::new(&gpu.device, &gpu.queue, &small).expect("192 nets fit");
+    // Every page is full, and reads back the nets uploaded into it.
+    assert!(buffers.nets.iter().all(|page| page.size().height == 24));
+    let (nets, _) = read_model(&gpu, &buffers, small.nets.len(), 0);
+    for (k, (a, b)) in nets.iter().zip(&small.nets).enumerate() {
+        assert_eq!(a.cp, b.cp, "net {k}: the pages hold the nets uploaded");
+    }
     gpu.check().expect("no wgpu validation errors");
 }
 
@@ -315,7 +318,7 @@ fn the_hash_twin_catches_a_planted_collision() {
     assert_eq!((g_ids, g_unique), (ids.clone(), unique));
 }
 
-/// The nets texture and the corners of `buffers`, read back.
+/// The nets (from their pages) and the corners of `buffers`, read back.
 fn read_model(
     gpu: &Gpu,
     buffers: &CcModelBuffers,
@@ -323,44 +326,56 @@ fn read_model(
     corners: usize,
 ) -> (Vec<GpuPatch>, Vec<CcCorner>) {
     let device = &gpu.device;
-    let size = buffers.nets.size();
-    let row = 16 * size.width;
-    let texels = device.create_buffer(&wgpu::BufferDescriptor {
-        label: None,
-        size: (row * size.height) as u64,
-        usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
-        mapped_at_creation: false,
-    });
-    let mut encoder = device.create_command_encoder(&Default::default());
-    encoder.copy_texture_to_buffer(
-        buffers.nets.as_image_copy(),
-        wgpu::TexelCopyBufferInfo {
-            buffer: &texels,
-            layout: wgpu::TexelCopyBufferLayout {
-                offset: 0,
-                bytes_per_row: Some(row),
-                rows_per_image: None,
-            },
-        },
-        size,
-    );
-    gpu.queue.submit([encoder.finish()]);
-    let texels: Vec<[f32; 4]> =
-        bytemuck::pod_collect_to_vec(&gpu.map_and_copy(&texels).expect("texels"));
+    let pages: Vec<(u32, Vec<[f32; 4]>)> = buffers
+        .nets
+        .iter()
+        .map(|page| {
+            let size = page.size();
+            // Rows of a copy are padded to 256 bytes.
+            let row = (16 * size.width).next_multiple_of(256);
+            let texels = device.create_buffer(&wgpu::BufferDescriptor {
+                label: None,
+                size: (row * size.height) as u64,
+                usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+                mapped_at_creation: false,
+            });
+            let mut encoder = device.create_command_encoder(&Default::default());
+            encoder.copy_texture_to_buffer(
+                page.as_image_copy(),
+                wgpu::TexelCopyBufferInfo {
+                    buffer: &texels,
+                    layout: wgpu::TexelCopyBufferLayout {
+                        offset: 0,
+                        bytes_per_row: Some(row),
+                        rows_per_image: None,
+                    },
+                },
+                size,
+            );
+            gpu.queue.submit([encoder.finish()]);
+            let texels: Vec<[f32; 4]> =
+                bytemuck::pod_collect_to_vec(&gpu.map_and_copy(&texels).expect("texels"));
+            (row / 16, texels)
+        })
+        .collect();
     let out_nets = (0..nets as u32)
         .map(|k| {
             let mut cp = [0f32; 48];
             for t in 0..12 {
-                let (x, y) = NetTexture::texel_of(k, t);
+                let (page, x, y) = buffers.layout.texel_of(k, t);
+                let (stride, texels) = &pages[page as usize];
                 cp[4 * t as usize..4 * t as usize + 4]
-                    .copy_from_slice(&texels[(y * size.width + x) as usize]);
+                    .copy_from_slice(&texels[(y * stride + x) as usize]);
             }
             GpuPatch { cp }
         })
         .collect();
-    let out_corners = gpu
-        .read_pod::<CcCorner>(&buffers.corners, corners)
-        .expect("corners");
+    let out_corners = match corners {
+        0 => Vec::new(),
+        _ => gpu
+            .read_pod::<CcCorner>(&buffers.corners, corners)
+            .expect("corners"),
+    };
     (out_nets, out_corners)
 }
 
@@ -370,14 +385,36 @@ fn the_stencil_kernels_derive_their_twins_quadtrees_from_the_control_points() {
     // corner, on meshes with valences 3 to 5, boundaries, holes and triangles; moved
     // points (not the loaded ones) on the second run. Single-precision sums in the same
     // order: equal up to the rounding of a fused multiply-add.
-    let gpu = gpu();
+    derive_as_the_twin_does(
+        &gpu(),
+        &[
+            "opensubdiv/catmark_pyramid.obj",
+            "opensubdiv/catmark_edgecorner.obj",
+            "opensubdiv/catmark_hole_test1.obj",
+            "catmull_clark/spot_control_mesh.obj",
+        ],
+    );
+}
+
+#[test]
+fn the_stencil_kernels_write_the_nets_across_pages() {
+    // A device of 84-texel sides: pages of 7 nets per row and 84 rows (588 nets), so the
+    // cube's 2160 nets fill three pages and part of the fourth.
+    let gpu = Gpu::with_limits(|adapter| wgpu::Limits {
+        max_texture_dimension_2d: 84,
+        ..tessera_wgpu::bezier::required_limits(adapter)
+    })
+    .expect("device");
+    let pages = derive_as_the_twin_does(&gpu, &["opensubdiv/catmark_cube.obj"]);
+    assert_eq!(pages, 4);
+}
+
+/// Derives each model's quadtrees on `gpu` and compares them with the twin's; the pages
+/// the last model's nets took.
+fn derive_as_the_twin_does(gpu: &Gpu, names: &[&str]) -> usize {
     let kernels = tessera_wgpu::Kernels::new(&gpu.device);
-    for name in [
-        "opensubdiv/catmark_pyramid.obj",
-        "opensubdiv/catmark_edgecorner.obj",
-        "opensubdiv/catmark_hole_test1.obj",
-        "catmull_clark/spot_control_mesh.obj",
-    ] {
+    let mut pages = 0;
+    for name in names {
         let m = model(name);
         let stencils = CcStencils::new(&m.mesh, m.depth);
         let loaded = m.mesh.control_points_f32();
@@ -393,7 +430,7 @@ fn the_stencil_kernels_derive_their_twins_quadtrees_from_the_control_points() {
         steps.run(&gpu.device, &gpu.queue, &kernels, &buffers);
         gpu.check().expect("no wgpu errors");
         let want = stencils.model(&control);
-        let (nets, corners) = read_model(&gpu, &buffers, want.nets.len(), want.corners.len());
+        let (nets, corners) = read_model(gpu, &buffers, want.nets.len(), want.corners.len());
         // The second run did derive the moved surface.
         assert_ne!(
             nets,
@@ -431,5 +468,10 @@ fn the_stencil_kernels_derive_their_twins_quadtrees_from_the_control_points() {
                 "{name}: corner {k} radius"
             );
         }
+        pages = (0..want.nets.len() as u32)
+            .map(|k| buffers.layout.texel_of(k, 0).0 as usize + 1)
+            .max()
+            .unwrap_or(0);
     }
+    pages
 }

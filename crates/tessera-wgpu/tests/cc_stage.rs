@@ -288,8 +288,9 @@ fn spots_triangulation_tessellates_on_the_gpu_as_on_the_cpu() {
 #[test]
 fn a_ten_thousand_face_triangle_mesh_tessellates_on_the_gpu_as_on_the_cpu() {
     // A generated torus of 10 000 triangles: 30 000 patches, each with two extraordinary
-    // corners, whose derived nets need more texture rows than WebGPU's default 8192 (the
-    // headless device asks for the adapter's). At 1.5e-4 the tube's curvature splits
+    // corners, whose 5.2 million derived nets are more than one page holds on a device
+    // of WebGPU's default limits (the headless device asks for the adapter's, 16384
+    // rows on lavapipe). At 1.5e-4 the tube's curvature splits
     // some patches and not others. The leaves are the CPU reference's but for counted
     // ties (a cell whose bound is within single-precision rounding of ε), and with none
     // the mesh is the reference's.
@@ -1132,6 +1133,39 @@ fn an_overflowing_run_leaves_the_last_mesh_drawn() {
     same_mesh(&mesh, &cpu.mesh, size(&model)).expect("the grown run draws 1e-3");
     assert!(same_mesh(&before, &cpu.mesh, size(&model)).is_err());
     gpu.check().expect("no wgpu errors");
+}
+
+#[test]
+fn nets_spread_over_pages_give_the_same_meshes() {
+    // A device of 84-texel sides keeps 7 nets to a row and 588 to a page: the cube's
+    // 2160 nets take all four pages, which every kernel reads (the walks down to the
+    // extraordinary vertices included). The adaptive stage gives the CPU reference's
+    // mesh there, and the uniform stage the mesh it gives on a device with one page.
+    let small = Gpu::with_limits(|adapter| wgpu::Limits {
+        max_texture_dimension_2d: 84,
+        ..tessera_wgpu::bezier::required_limits(adapter)
+    })
+    .expect("device");
+    let model = model("opensubdiv/catmark_cube.obj");
+    let nets = tessera_core::catmull_clark::gpu_model::CcGpuModel::new(&model)
+        .nets
+        .len();
+    assert!(nets > 3 * 588, "{nets} nets take four pages");
+    let params = CcParams {
+        tolerance: Tolerance::Absolute(1e-3 * size(&model)),
+        max_depth: 8,
+        first_split: Default::default(),
+        leaf_bound: Default::default(),
+    };
+    let (mesh, status) = run(&small, &model, &params, None);
+    assert_eq!(status.state.unmet, 0);
+    let cpu = tessellate_adaptive(&model, &params).expect("cpu");
+    same_mesh(&mesh, &cpu.mesh, size(&model)).expect("the CPU reference's mesh");
+    let uniform = run_uniform(&small, &model, 6);
+    assert!(
+        uniform == run_uniform(&gpu(), &model, 6),
+        "the uniform stage's mesh changed with the pages"
+    );
 }
 
 #[test]

@@ -371,6 +371,16 @@ fn catmull_clark_parameters_and_counters_match_their_rust_twins() {
             "CC_FACING_STACK",
             tessera_core::catmull_clark::facing::FACING_STACK as u32,
         ),
+        // The nets' pages as laid out for WebGPU's default limits (a device's own layout
+        // replaces them when a kernel is built).
+        (
+            "CC_NETS_PER_ROW",
+            CcNetLayout::new(wgpu::Limits::default().max_texture_dimension_2d).nets_per_row,
+        ),
+        (
+            "CC_NET_PAGE_ROWS",
+            CcNetLayout::new(wgpu::Limits::default().max_texture_dimension_2d).rows,
+        ),
     ] {
         assert_eq!(wgsl_u32(&module, name), rust, "{name}");
     }
@@ -418,8 +428,9 @@ fn catmull_clark_parameters_and_counters_match_their_rust_twins() {
 #[test]
 fn every_kernel_fits_webgpu_default_limits() {
     // An embedding application may bring a device with WebGPU's default limits: at most
-    // 8 storage buffers per stage (and one bind group).
+    // 8 storage buffers and 4 storage textures per stage (and one bind group).
     let default = wgpu::Limits::default().max_storage_buffers_per_shader_stage as usize;
+    let default_textures = wgpu::Limits::default().max_storage_textures_per_shader_stage as usize;
     for name in shaders::entry_files().filter(|n| *n != "render_mesh.wgsl") {
         let (module, _) = parse(name);
         for ep in &module.entry_points {
@@ -441,6 +452,29 @@ fn every_kernel_fits_webgpu_default_limits() {
             assert!(
                 storage <= default,
                 "{name} {} uses {storage} storage buffers, over the default {default}",
+                ep.name
+            );
+            let textures = module
+                .global_variables
+                .iter()
+                .filter(|(_, g)| {
+                    matches!(
+                        module.types[g.ty].inner,
+                        naga::TypeInner::Image {
+                            class: naga::ImageClass::Storage { .. },
+                            ..
+                        }
+                    )
+                })
+                .filter(|(_, g)| {
+                    g.binding
+                        .as_ref()
+                        .is_some_and(|b| used.contains(&b.binding))
+                })
+                .count();
+            assert!(
+                textures <= default_textures,
+                "{name} {} uses {textures} storage textures, over the default {default_textures}",
                 ep.name
             );
             let groups: Vec<u32> = module

@@ -23,27 +23,35 @@ pub(crate) use uniform::CcUniformKernels;
 pub use uniform::{CcUniformStage, UniformParams};
 
 use tessera_core::catmull_clark::gpu_model::CcGpuModel;
-use tessera_core::gpu_types::{CcHashSlot, CcHashStatus, NetTexture};
+use tessera_core::gpu_types::{CcHashSlot, CcHashStatus, CcNetLayout, CC_NET_PAGES};
 use wgpu::util::DeviceExt;
 
 use crate::error::{Error, Result};
-use crate::kernel::{check_size, check_upload, storage, storage_texture, upload_texture, Kernel};
+use crate::kernel::{check_size, check_upload, storage, storage_texture, Kernel};
 use crate::scan::{PrefixSum, ScanKernels};
 
-/// The flattened quadtrees on the GPU (bindings 20–24 of the Catmull-Clark kernels).
+/// The flattened quadtrees on the GPU (bindings 20–27 of the Catmull-Clark kernels).
 #[doc(hidden)]
 pub struct CcModelBuffers {
     pub roots: wgpu::Buffer,
     pub nodes: wgpu::Buffer,
     pub splits: wgpu::Buffer,
-    /// The Bézier nets ([`NetTexture`], binding 23): a read-only `rgba32float` storage
-    /// texture, where a storage buffer read at per-lane addresses is a loop over the
-    /// lanes on a CPU device, and the mark kernel reads nets more than anything else.
-    pub nets: wgpu::Texture,
-    nets_view: wgpu::TextureView,
+    /// The Bézier nets in [`CC_NET_PAGES`] pages laid out as [`layout`](Self::layout)
+    /// says (bindings 23, 25, 26, 27): read-only `rgba32float` storage textures, where a
+    /// storage buffer read at per-lane addresses is a loop over the lanes on a CPU
+    /// device, and the mark kernel reads nets more than anything else.
+    pub nets: [wgpu::Texture; CC_NET_PAGES as usize],
+    /// Where each net lies in the pages: the layout the kernels of this device read.
+    pub layout: CcNetLayout,
+    nets_views: [wgpu::TextureView; CC_NET_PAGES as usize],
     pub corners: wgpu::Buffer,
     sizes: [usize; 5],
 }
+
+/// Binding numbers of the nets' pages where the kernels read them, and where the
+/// stencil step writes them.
+const NET_PAGE_SLOTS: [u32; CC_NET_PAGES as usize] = [23, 25, 26, 27];
+const NET_OUT_SLOTS: [u32; CC_NET_PAGES as usize] = [80, 83, 84, 85];
 
 fn byte_sizes(model: &CcGpuModel) -> [usize; 5] {
     use std::mem::size_of_val;
@@ -58,8 +66,8 @@ fn byte_sizes(model: &CcGpuModel) -> [usize; 5] {
 
 impl CcModelBuffers {
     /// Uploads `model`; [`Error::ModelTooLarge`] if one of its arrays is larger than a
-    /// storage buffer the device can bind, or its nets than a texture the device can
-    /// create (before anything is created).
+    /// storage buffer the device can bind, [`Error::TooManyNets`] if its nets are more
+    /// than the pages hold (before anything is created).
     pub fn new(device: &wgpu::Device, queue: &wgpu::Queue, model: &CcGpuModel) -> Result<Self> {
         Self::create(device, queue, model, true)
     }
@@ -89,14 +97,11 @@ impl CcModelBuffers {
                 check_upload(device, what, bytes as u64)?;
             }
         }
-        let (width, height) = NetTexture::size(model.nets.len());
-        let max_side = device.limits().max_texture_dimension_2d;
-        if width > max_side || height > max_side {
-            return Err(Error::TextureTooLarge {
-                what: "Bézier nets",
-                width,
-                height,
-                limit: max_side,
+        let layout = CcNetLayout::new(device.limits().max_texture_dimension_2d);
+        if model.nets.len() as u64 > layout.capacity() {
+            return Err(Error::TooManyNets {
+                nets: model.nets.len() as u64,
+                capacity: layout.capacity(),
             });
         }
         let init = |label: &str, bytes: &[u8]| {
@@ -110,25 +115,18 @@ impl CcModelBuffers {
             })
         };
         let format = wgpu::TextureFormat::Rgba32Float;
-        let nets = if geometry {
-            upload_texture(
-                device,
-                queue,
-                "tessera cc net texture",
-                format,
-                (width, height),
-                bytemuck::cast_slice(&NetTexture::new(&model.nets).texels),
-            )
-        } else {
+        let sizes = layout.page_sizes(model.nets.len());
+        // Written through the queue when uploaded; read back by the tests that compare
+        // the stencil step with its twin.
+        let nets: [wgpu::Texture; CC_NET_PAGES as usize] = std::array::from_fn(|page| {
             storage_texture(
                 device,
-                "tessera cc net texture",
+                "tessera cc net page",
                 format,
-                (width, height),
-                // Read back by the tests that compare the stencil step with its twin.
-                wgpu::TextureUsages::COPY_SRC,
+                sizes[page],
+                wgpu::TextureUsages::COPY_SRC | wgpu::TextureUsages::COPY_DST,
             )
-        };
+        });
         let corners = if geometry {
             init("tessera cc corners", bytemuck::cast_slice(&model.corners))
         } else {
@@ -137,15 +135,20 @@ impl CcModelBuffers {
                 .max(std::mem::size_of::<tessera_core::gpu_types::CcCorner>());
             storage(device, "tessera cc corners", bytes as u64)
         };
-        Ok(CcModelBuffers {
+        let buffers = CcModelBuffers {
             roots: init("tessera cc roots", bytemuck::cast_slice(&model.roots)),
             nodes: init("tessera cc nodes", bytemuck::cast_slice(&model.nodes)),
             splits: init("tessera cc splits", bytemuck::cast_slice(&model.splits)),
-            nets_view: nets.create_view(&Default::default()),
+            nets_views: std::array::from_fn(|page| nets[page].create_view(&Default::default())),
             nets,
+            layout,
             corners,
             sizes: byte_sizes(model),
-        })
+        };
+        if geometry {
+            buffers.write_nets(queue, &model.nets);
+        }
+        Ok(buffers)
     }
 
     /// Re-uploads a model of the same shape (the control points moved, the topology did
@@ -165,18 +168,23 @@ impl CcModelBuffers {
         write(&self.nodes, bytemuck::cast_slice(&model.nodes));
         write(&self.splits, bytemuck::cast_slice(&model.splits));
         write(&self.corners, bytemuck::cast_slice(&model.corners));
-        let texels = NetTexture::new(&model.nets);
-        queue.write_texture(
-            self.nets.as_image_copy(),
-            bytemuck::cast_slice(&texels.texels),
-            wgpu::TexelCopyBufferLayout {
-                offset: 0,
-                bytes_per_row: Some(16 * texels.width),
-                rows_per_image: None,
-            },
-            self.nets.size(),
-        );
+        self.write_nets(queue, &model.nets);
         Ok(())
+    }
+
+    fn write_nets(&self, queue: &wgpu::Queue, nets: &[tessera_core::gpu_types::GpuPatch]) {
+        for (texture, texels) in self.nets.iter().zip(self.layout.pages(nets)) {
+            queue.write_texture(
+                texture.as_image_copy(),
+                bytemuck::cast_slice(&texels),
+                wgpu::TexelCopyBufferLayout {
+                    offset: 0,
+                    bytes_per_row: Some(16 * texture.width()),
+                    rows_per_image: None,
+                },
+                texture.size(),
+            );
+        }
     }
 
     /// Bytes on the GPU.
@@ -193,8 +201,13 @@ impl CcModelBuffers {
         ]
     }
 
-    fn textures(&self) -> [(u32, &wgpu::TextureView); 1] {
-        [(23, &self.nets_view)]
+    fn textures(&self) -> [(u32, &wgpu::TextureView); CC_NET_PAGES as usize] {
+        std::array::from_fn(|page| (NET_PAGE_SLOTS[page], &self.nets_views[page]))
+    }
+
+    /// The pages where the stencil step writes them.
+    fn net_outputs(&self) -> [(u32, &wgpu::TextureView); CC_NET_PAGES as usize] {
+        std::array::from_fn(|page| (NET_OUT_SLOTS[page], &self.nets_views[page]))
     }
 }
 

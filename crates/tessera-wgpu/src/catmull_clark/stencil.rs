@@ -165,7 +165,7 @@ impl CcStencilBuffers {
             (81, &model.corners),
             (82, &self.step),
         ]);
-        let nets = [(80, &model.nets_view)];
+        let nets = model.net_outputs();
         [
             kernels.level1.bind(device, &entries),
             kernels.pieces.bind_with_textures(device, &entries, &nets),
