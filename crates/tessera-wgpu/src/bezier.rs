@@ -59,7 +59,9 @@ use tessera_core::Mesh;
 use wgpu::util::DeviceExt;
 
 use crate::error::{Error, Result};
-use crate::kernel::{check_size, check_upload, storage, storage_texture, upload_texture, Kernel};
+use crate::kernel::{
+    allocating, check_size, check_upload, storage, storage_texture, upload_texture, Kernel,
+};
 use crate::output::MeshBuffers;
 use crate::readback::{read_buffer, read_texture};
 use crate::scan::{PrefixSum, ScanKernels};
@@ -509,6 +511,19 @@ impl BezierStage {
     /// the tests that grow from one-element buffers.
     #[doc(hidden)]
     pub fn with_capacity(
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        kernels: &Kernels,
+        prepared: &PreparedBezier,
+        params: &AdaptiveParams,
+        capacity: (u32, u32),
+    ) -> Result<Self> {
+        allocating(device, "the stage's model and buffers", || {
+            Self::create(device, queue, kernels, prepared, params, capacity)
+        })
+    }
+
+    fn create(
         device: &wgpu::Device,
         queue: &wgpu::Queue,
         kernels: &Kernels,
@@ -1065,13 +1080,17 @@ impl BezierStage {
             vertices as u64 * std::mem::size_of::<OutVertex>() as u64,
         )?;
         check_size(device, "index", indices as u64 * 4)?;
-        self.buffers.output = MeshBuffers::with_capacity(device, vertices, indices);
-        self.buffers.records = storage(
-            device,
-            "tessera vertex records",
-            self.buffers.output.vertex_capacity() as u64
-                * std::mem::size_of::<VertexRecord>() as u64,
-        );
+        let (output, records) = allocating(device, "the stage's grown buffers", || {
+            let output = MeshBuffers::with_capacity(device, vertices, indices);
+            let records = storage(
+                device,
+                "tessera vertex records",
+                output.vertex_capacity() as u64 * std::mem::size_of::<VertexRecord>() as u64,
+            );
+            Ok((output, records))
+        })?;
+        self.buffers.output = output;
+        self.buffers.records = records;
         self.rebind(device);
         self.readback.new_generation();
         self.latest = self.latest.map(|(s, _)| (s, false));

@@ -70,6 +70,15 @@ pub enum Error {
         /// Nets the device's textures hold.
         capacity: u64,
     },
+    /// The device could not allocate what a stage needs (its memory, or the most one
+    /// allocation may take).
+    #[error("the device could not allocate {what} ({detail}); tessellate it with --backend cpu or split the mesh")]
+    OutOfMemory {
+        /// What was being allocated.
+        what: &'static str,
+        /// The device's answer.
+        detail: String,
+    },
     /// Waiting for the GPU or mapping a buffer failed.
     #[error("GPU readback failed: {0}")]
     Readback(String),

@@ -225,3 +225,72 @@ pub(crate) fn upload_texture(
     );
     texture
 }
+
+/// Runs `make` in an out-of-memory error scope: an allocation the device cannot make is
+/// [`Error::OutOfMemory`] naming `what`, not a stage that later runs on invalid buffers.
+/// Native devices answer at once; where the answer would come later (a browser's), it is
+/// not waited for and `make`'s result stands.
+pub(crate) fn allocating<T>(
+    device: &wgpu::Device,
+    what: &'static str,
+    make: impl FnOnce() -> Result<T>,
+) -> Result<T> {
+    let scope = device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
+    let made = make();
+    use std::future::Future as _;
+    let mut answer = std::pin::pin!(scope.pop());
+    let mut context = std::task::Context::from_waker(std::task::Waker::noop());
+    match answer.as_mut().poll(&mut context) {
+        std::task::Poll::Ready(Some(e)) => Err(Error::OutOfMemory {
+            what,
+            detail: e.to_string(),
+        }),
+        _ => made,
+    }
+}
+
+#[cfg(all(test, feature = "headless"))]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn an_allocation_the_device_cannot_make_is_an_error() {
+        let gpu = crate::headless::Gpu::new().expect("device");
+        // Within every limit, and a terabyte: no device allocates it.
+        let side = gpu.device.limits().max_texture_dimension_2d;
+        let layers = gpu.device.limits().max_texture_array_layers;
+        let made = allocating(&gpu.device, "a terabyte texture", || {
+            Ok(gpu.device.create_texture(&wgpu::TextureDescriptor {
+                label: None,
+                size: wgpu::Extent3d {
+                    width: side,
+                    height: side,
+                    depth_or_array_layers: layers,
+                },
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format: wgpu::TextureFormat::Rgba32Float,
+                usage: wgpu::TextureUsages::STORAGE_BINDING,
+                view_formats: &[],
+            }))
+        });
+        let err = made.map(|_| ()).expect_err("out of memory");
+        assert!(
+            matches!(
+                err,
+                Error::OutOfMemory {
+                    what: "a terabyte texture",
+                    ..
+                }
+            ),
+            "{err}"
+        );
+        // What fits is made, and the scope is gone: the device reports nothing more.
+        let small = allocating(&gpu.device, "a small buffer", || {
+            Ok(storage(&gpu.device, "small", 256))
+        });
+        assert!(small.is_ok());
+        gpu.check().expect("no wgpu errors left over");
+    }
+}

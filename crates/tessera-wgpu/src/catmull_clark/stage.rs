@@ -85,7 +85,7 @@ use wgpu::util::DeviceExt;
 use super::stencil::{CcStencilBuffers, CcStencilKernels};
 use super::{CcHashBinds, CcHashKernels, CcModelBuffers, CcVertexEval, CcVertexHash};
 use crate::error::{Error, Result};
-use crate::kernel::{check_size, storage, storage_limit, Kernel};
+use crate::kernel::{allocating, check_size, storage, storage_limit, Kernel};
 use crate::output::MeshBuffers;
 use crate::scan::{PrefixSum, ScanKernels};
 use crate::stage::{GrowingStage, Passes, RunTimestamps, StatusReadback};
@@ -405,6 +405,19 @@ impl CcStage {
     /// As [`new`](Self::new) with given capacities (the tests grow from tiny ones).
     #[doc(hidden)]
     pub fn with_capacity(
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        kernels: &Kernels,
+        model: &SurfaceModel,
+        params: &CcParams,
+        caps: CcCapacities,
+    ) -> Result<Self> {
+        allocating(device, "the stage's model and buffers", || {
+            Self::create(device, queue, kernels, model, params, caps)
+        })
+    }
+
+    fn create(
         device: &wgpu::Device,
         queue: &wgpu::Queue,
         kernels: &Kernels,
@@ -1044,13 +1057,15 @@ impl CcStage {
                 "the run overflowed but reports nothing larger than the buffers".into(),
             ));
         }
-        let buffers = Buffers::new(
-            device,
-            &self.kernels,
-            ((self.patch_count, self.point_count), &self.state),
-            (&self.params, self.epsilon(), self.view),
-            caps,
-        )?;
+        let buffers = allocating(device, "the stage's grown buffers", || {
+            Buffers::new(
+                device,
+                &self.kernels,
+                ((self.patch_count, self.point_count), &self.state),
+                (&self.params, self.epsilon(), self.view),
+                caps,
+            )
+        })?;
         let old = std::mem::replace(&mut self.buffers, buffers);
         self.rebind(device);
         self.readback.new_generation();

@@ -30,7 +30,7 @@ use wgpu::util::DeviceExt;
 
 use super::{CcModelBuffers, CcStencilBuffers, CcStencilKernels, CcVertexEval};
 use crate::error::{Error, Result};
-use crate::kernel::{check_size, storage, Kernel};
+use crate::kernel::{allocating, check_size, storage, Kernel};
 use crate::output::MeshBuffers;
 use crate::stage::{Passes, RunTimestamps};
 use crate::Kernels;
@@ -99,6 +99,18 @@ impl CcUniformStage {
     /// Uploads `model` through `queue` and sizes the buffers for `params.segments` per
     /// patch side; compiles the stage's kernels into `kernels` if no stage has.
     pub fn new(
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        kernels: &Kernels,
+        model: &SurfaceModel,
+        params: &UniformParams,
+    ) -> Result<Self> {
+        allocating(device, "the stage's model and buffers", || {
+            Self::create(device, queue, kernels, model, params)
+        })
+    }
+
+    fn create(
         device: &wgpu::Device,
         queue: &wgpu::Queue,
         kernels: &Kernels,
