@@ -212,7 +212,7 @@ struct Creased {
 
 /// A triangle mesh (every patch with two extraordinary corners) on the GPU stage against
 /// the CPU reference: Spot's published triangulation and a generated torus of 10 000
-/// triangles, whose derived nets need more than WebGPU's default 8192 texture rows.
+/// triangles, whose derived nets are more than one page holds at WebGPU's default limits.
 #[derive(Serialize)]
 struct TriangleMesh {
     model: String,
@@ -226,7 +226,7 @@ struct TriangleMesh {
     cpu_ms: f64,
     gpu_over_cpu: f64,
     upload_bytes: usize,
-    /// Nets the stencil step derives into the nets texture (12 texels of 16 bytes each).
+    /// Nets the stencil step derives into the nets' pages (12 texels of 16 bytes each).
     derived_nets: usize,
 }
 

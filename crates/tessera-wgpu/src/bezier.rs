@@ -69,8 +69,8 @@ use crate::stage::{GrowingStage, Passes, RunTimestamps, StatusReadback};
 use crate::Kernels;
 
 /// Limits the stages need, within what `adapter` offers: large storage buffers and 2D
-/// textures for big models (the Catmull-Clark nets texture holds 512 nets per row, so
-/// its rows bound the nets a model may derive); no more than 8 storage buffers and 4
+/// textures for big models (the Catmull-Clark nets lie in four pages whose sides follow
+/// the device's, so its side bounds the nets a model may derive); no more than 8 storage buffers and 4
 /// storage textures per kernel, so WebGPU's defaults suffice there.
 pub fn required_limits(adapter: &wgpu::Limits) -> wgpu::Limits {
     wgpu::Limits {

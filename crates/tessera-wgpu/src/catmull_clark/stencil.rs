@@ -142,7 +142,7 @@ impl CcStencilBuffers {
         self.table_bytes
     }
 
-    /// Nets the step derives into the nets texture (device memory, not upload).
+    /// Nets the step derives into the nets' pages (device memory, not upload).
     pub fn derived_nets(&self) -> usize {
         self.derived_nets
     }
