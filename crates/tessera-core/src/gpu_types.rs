@@ -810,7 +810,7 @@ pub struct CcNode {
     /// ([`CC_NODE_KIND_MASK`]); for a split, `1 +` its ball's index above
     /// [`CC_NODE_BALL_SHIFT`] (0: no ball).
     pub kind: u32,
-    /// Index into the nets (binding 23), the child quadruples (binding 22) or the
+    /// Index into the nets (bindings 23, 25–27), the child quadruples (binding 22) or the
     /// corners (binding 24), by kind.
     pub index: u32,
 }
@@ -843,7 +843,7 @@ pub struct CcCorner {
 pub struct CcRoot {
     /// Root node.
     pub node: u32,
-    /// First net (binding 23).
+    /// First net (bindings 23, 25–27).
     pub nets: u32,
     /// First corner (binding 24).
     pub corners: u32,
@@ -871,7 +871,7 @@ pub struct CcPatchStencil {
     pub ring: u32,
     /// Its table.
     pub table: u32,
-    /// Its first net (binding 23).
+    /// Its first net (bindings 23, 25–27).
     pub nets: u32,
     /// Its first corner record (binding 24).
     pub corners: u32,

@@ -1062,6 +1062,17 @@ impl BezierStage {
     /// for more than the device holds; `prepare` calls it.
     #[doc(hidden)]
     pub fn grow(&mut self, device: &wgpu::Device, status: &BezierStatus) -> Result<bool> {
+        let grown = self.grow_buffers(device, status);
+        if grown.is_err() {
+            // Reported once, by the call that grew: the statuses of the runs recorded so
+            // far are dropped, and the stage goes on with the buffers it has.
+            self.readback.new_generation();
+            self.latest = self.latest.map(|(s, _)| (s, false));
+        }
+        grown
+    }
+
+    fn grow_buffers(&mut self, device: &wgpu::Device, status: &BezierStatus) -> Result<bool> {
         if status.overflow == 0 {
             return Ok(false);
         }

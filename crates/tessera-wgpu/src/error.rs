@@ -17,7 +17,7 @@ pub enum Error {
     #[error("wgpu error: {0}")]
     Wgpu(String),
     /// A run needs an output buffer larger than the device allows.
-    #[error("the {what} buffer would need {bytes} bytes, over the device's limit of {limit}; raise the threshold or lower the depth")]
+    #[error("the {what} buffer would need {bytes} bytes, over the device's limit of {limit}; a coarser tolerance or threshold, or a smaller depth, needs less")]
     OutputTooLarge {
         /// Which buffer.
         what: &'static str,
@@ -49,21 +49,10 @@ pub enum Error {
         /// The device's largest texture side.
         limit: u32,
     },
-    /// Part of a model needs a texture larger than the device allows.
-    #[error("the model's {what} need a {width}×{height} texture, over the device's texture limit of {limit}; tessellate it with --backend cpu or split the mesh")]
-    TextureTooLarge {
-        /// Which part of the model.
-        what: &'static str,
-        /// Texels across.
-        width: u32,
-        /// Texels down.
-        height: u32,
-        /// The device's largest texture side.
-        limit: u32,
-    },
-    /// A Catmull-Clark model derives more Bézier nets than the stage's four textures of
-    /// the device's largest size hold ([`tessera_core::gpu_types::CcNetLayout`]).
-    #[error("the model's quadtrees need {nets} Bézier nets, over the {capacity} that four textures of the device's largest size hold; tessellate it with --backend cpu or split the mesh")]
+    /// A Catmull-Clark model derives more Bézier nets than the stage's four pages hold
+    /// ([`tessera_core::gpu_types::CcNetLayout`]: textures as large as the device allows,
+    /// up to 16384 texels a side).
+    #[error("the model's quadtrees need {nets} Bézier nets, over the {capacity} that the stage's four net textures hold on this device; tessellate it with --backend cpu or split the mesh")]
     TooManyNets {
         /// Nets the model derives.
         nets: u64,

@@ -226,8 +226,10 @@ pub(crate) fn upload_texture(
     texture
 }
 
-/// Runs `make` in an out-of-memory error scope: an allocation the device cannot make is
+/// Runs `make` in error scopes: an allocation the device cannot make is
 /// [`Error::OutOfMemory`] naming `what`, not a stage that later runs on invalid buffers.
+/// What the invalid resource then fails (views, bind groups: validation errors) is part of
+/// that error, not reported apart; a validation error without one is [`Error::Wgpu`].
 /// Native devices answer at once; where the answer would come later (a browser's), it is
 /// not waited for and `make`'s result stands.
 pub(crate) fn allocating<T>(
@@ -235,17 +237,28 @@ pub(crate) fn allocating<T>(
     what: &'static str,
     make: impl FnOnce() -> Result<T>,
 ) -> Result<T> {
-    let scope = device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
+    let validation = device.push_error_scope(wgpu::ErrorFilter::Validation);
+    let memory = device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
     let made = make();
+    let (memory, validation) = (answer(memory), answer(validation));
+    match (memory, validation) {
+        (Some(e), _) => Err(Error::OutOfMemory {
+            what,
+            detail: e.to_string(),
+        }),
+        (None, Some(e)) => Err(Error::Wgpu(e.to_string())),
+        (None, None) => made,
+    }
+}
+
+/// The error `scope` caught, where the device has answered (popping it either way).
+fn answer(scope: wgpu::ErrorScopeGuard) -> Option<wgpu::Error> {
     use std::future::Future as _;
     let mut answer = std::pin::pin!(scope.pop());
     let mut context = std::task::Context::from_waker(std::task::Waker::noop());
     match answer.as_mut().poll(&mut context) {
-        std::task::Poll::Ready(Some(e)) => Err(Error::OutOfMemory {
-            what,
-            detail: e.to_string(),
-        }),
-        _ => made,
+        std::task::Poll::Ready(e) => e,
+        std::task::Poll::Pending => None,
     }
 }
 
@@ -260,7 +273,7 @@ mod tests {
         let side = gpu.device.limits().max_texture_dimension_2d;
         let layers = gpu.device.limits().max_texture_array_layers;
         let made = allocating(&gpu.device, "a terabyte texture", || {
-            Ok(gpu.device.create_texture(&wgpu::TextureDescriptor {
+            let texture = gpu.device.create_texture(&wgpu::TextureDescriptor {
                 label: None,
                 size: wgpu::Extent3d {
                     width: side,
@@ -273,7 +286,10 @@ mod tests {
                 format: wgpu::TextureFormat::Rgba32Float,
                 usage: wgpu::TextureUsages::STORAGE_BINDING,
                 view_formats: &[],
-            }))
+            });
+            // A view of the texture that could not be made fails validation too: part of
+            // the same error, not one left for the device's handler.
+            Ok(texture.create_view(&Default::default()))
         });
         let err = made.map(|_| ()).expect_err("out of memory");
         assert!(

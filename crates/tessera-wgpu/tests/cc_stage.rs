@@ -1169,6 +1169,64 @@ fn nets_spread_over_pages_give_the_same_meshes() {
 }
 
 #[test]
+fn a_run_the_device_cannot_hold_is_an_error_once_and_the_stage_goes_on() {
+    // A device whose storage buffers hold 1 MiB: the cube fits at a coarse tolerance and
+    // not at a fine one (every patch split to depth 6, 98 304 leaves). The fine run's growth fails once; back at the coarse tolerance
+    // the stage runs again and gives the same mesh as before.
+    let gpu = tessera_wgpu::headless::Gpu::with_limits(|adapter| wgpu::Limits {
+        max_storage_buffer_binding_size: 1 << 20,
+        max_buffer_size: 1 << 20,
+        ..tessera_wgpu::bezier::required_limits(adapter)
+    })
+    .expect("device");
+    let model = model("opensubdiv/catmark_cube.obj");
+    let params = |rel: f64| CcParams {
+        tolerance: Tolerance::Absolute(rel * size(&model)),
+        max_depth: 6,
+        first_split: FirstSplit::Midpoint,
+        leaf_bound: Default::default(),
+    };
+    let mut stage = CcStage::new(
+        &gpu.device,
+        &gpu.queue,
+        &kernels(&gpu),
+        &model,
+        &params(3e-3),
+    )
+    .expect("stage");
+    let coarse = stage
+        .run_blocking(&gpu.device, &gpu.queue)
+        .expect("coarse fits");
+    let before = stage
+        .read_mesh(&gpu.device, &gpu.queue, &coarse)
+        .expect("read");
+    stage
+        .set_params(&gpu.device, &gpu.queue, &params(1e-6))
+        .expect("params");
+    let err = stage
+        .run_blocking(&gpu.device, &gpu.queue)
+        .expect_err("the fine run does not fit");
+    assert!(
+        matches!(
+            err,
+            tessera_wgpu::Error::OutputTooLarge { limit: 1048576, .. }
+        ),
+        "{err}"
+    );
+    stage
+        .set_params(&gpu.device, &gpu.queue, &params(3e-3))
+        .expect("params");
+    let again = stage
+        .run_blocking(&gpu.device, &gpu.queue)
+        .expect("the coarse run fits again");
+    let after = stage
+        .read_mesh(&gpu.device, &gpu.queue, &again)
+        .expect("read");
+    assert!(after == before, "the coarse mesh again");
+    gpu.check().expect("no wgpu errors");
+}
+
+#[test]
 fn a_model_larger_than_the_device_allows_is_an_error_not_a_wgpu_failure() {
     // A device whose storage buffers hold 64 KiB: Spot's patch data does not fit, and
     // the stage says so before creating anything (no wgpu validation error).

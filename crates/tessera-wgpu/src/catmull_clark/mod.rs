@@ -84,7 +84,7 @@ impl CcModelBuffers {
         model: &CcGpuModel,
         geometry: bool,
     ) -> Result<Self> {
-        // The nets are a texture: its sides are what the device limits, not its bytes.
+        // The nets are textures: their count is what the device limits (`CcNetLayout`).
         let names = [
             Some("patch roots"),
             Some("quadtree nodes"),

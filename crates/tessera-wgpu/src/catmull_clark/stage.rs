@@ -389,7 +389,9 @@ impl CcStage {
     /// Uploads `model` through `queue`, sizes the buffers with a first guess (grown on
     /// demand), and compiles the stage's kernels into `kernels` if no stage has. A
     /// relative tolerance is resolved against the model's control box, now and for the
-    /// stage's lifetime.
+    /// stage's lifetime. A model larger than the device's limits is refused before
+    /// anything is allocated ([`Error::ModelTooLarge`], [`Error::TooManyNets`]), and one
+    /// the device cannot allocate is [`Error::OutOfMemory`].
     pub fn new(
         device: &wgpu::Device,
         queue: &wgpu::Queue,
@@ -544,11 +546,13 @@ impl CcStage {
         let (patches, leaves) = (self.patch_count, self.buffers.caps.leaves);
         let words = marks_words(patches, leaves, trials);
         check_size(device, "patch marks", 4 * words)?;
+        let (marks, marks_scan) = allocating(device, "the stage's grown marks", || {
+            let marks = storage(device, "tessera cc patch marks", 4 * words);
+            let scan = PrefixSum::of_keys(device, &self.kernels.scan, &marks, patches + 1, (!0, 5));
+            Ok((marks, scan))
+        })?;
         let b = &mut self.buffers;
-        b.marks = storage(device, "tessera cc patch marks", 4 * words);
-        b.marks_scan =
-            PrefixSum::of_keys(device, &self.kernels.scan, &b.marks, patches + 1, (!0, 5));
-        b.trials = trials;
+        (b.marks, b.marks_scan, b.trials) = (marks, marks_scan, trials);
         self.rebind(device);
         Ok(())
     }
@@ -995,6 +999,22 @@ impl CcStage {
     /// headroom). Returns the buffers replaced, if any; an error if the device cannot
     /// hold what is needed.
     fn grow(&mut self, device: &wgpu::Device, status: &CcStatus) -> Result<Option<Buffers>> {
+        let grown = self.grow_buffers(device, status);
+        if grown.is_err() {
+            // Reported once, by the call that grew: the statuses of the runs recorded so
+            // far are dropped, and the stage goes on with the buffers it has (a run that
+            // needs less, at other parameters or in another view, fits them).
+            self.readback.new_generation();
+            self.latest = self.latest.map(|(s, _)| (s, false));
+        }
+        grown
+    }
+
+    fn grow_buffers(
+        &mut self,
+        device: &wgpu::Device,
+        status: &CcStatus,
+    ) -> Result<Option<Buffers>> {
         if !status.overflowed() {
             return Ok(None);
         }
@@ -1450,7 +1470,7 @@ impl Binds {
         };
         let count = common(&f.passes[0]);
         let emit = common(&f.passes[1]);
-        // The nets are a texture (see `CcModelBuffers::nets`).
+        // The nets are textures (see `CcModelBuffers::nets`).
         let bind = |kernel: &Kernel, entries: &[(u32, &wgpu::Buffer)]| {
             kernel.bind_with_textures(device, entries, &model.textures())
         };

@@ -179,14 +179,16 @@ impl CcUniformStage {
         if params == self.params {
             return Ok(());
         }
-        self.sized = Sized::new(
-            device,
-            &self.kernels,
-            &self.model,
-            &self.patches,
-            &self.params_buffer,
-            &params,
-        )?;
+        self.sized = allocating(device, "the stage's resized output", || {
+            Sized::new(
+                device,
+                &self.kernels,
+                &self.model,
+                &self.patches,
+                &self.params_buffer,
+                &params,
+            )
+        })?;
         queue.write_buffer(&self.params_buffer, 0, bytemuck::bytes_of(&params));
         self.params = params;
         Ok(())
