@@ -89,7 +89,7 @@ fn record_patch(r: u32) -> u32 {
 
 // A texel of a page (a storage texture is stored to through its global only).
 fn store_texel(page: u32, at: vec2u, texel: vec4f) {
-    if page == 0u {
+    if CC_NET_PAGES_USED == 1u || page == 0u {
         textureStore(nets_out_0, at, texel);
     } else if page == 1u {
         textureStore(nets_out_1, at, texel);

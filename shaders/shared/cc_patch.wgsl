@@ -73,12 +73,11 @@ fn cc_page_net(page: texture_storage_2d<rgba32float, read>, at: vec2u) -> array<
     );
 }
 
-// The 16 points of net k. One branch per net, not per texel: most models need page 0
-// only, and a branch no lane takes is skipped.
+// The 16 points of net k. A kernel compiled for one page reads it without a branch.
 fn cc_net_points(k: u32) -> array<vec3f, 16> {
     let page = cc_net_page(k);
     let at = cc_net_at(k);
-    if page == 0u {
+    if CC_NET_PAGES_USED == 1u || page == 0u {
         return cc_page_net(cc_nets_0, at);
     }
     if page == 1u {

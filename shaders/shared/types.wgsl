@@ -9,6 +9,10 @@ const NET_TEXTURE_PATCHES_PER_ROW: u32 = 512u;
 // device's layout when a kernel is built; these are WebGPU's default limits' values.
 const CC_NETS_PER_ROW: u32 = 512u;
 const CC_NET_PAGE_ROWS: u32 = 8192u;
+// Pages the model's nets take: 1 (most models), or 4 for the kernels that read any page.
+// A kernel compiled for one page has no branch on the page: lavapipe pays about a fifth
+// of the marking's time for the branches, taken or not.
+const CC_NET_PAGES_USED: u32 = 4u;
 const TOPOLOGY_TEXTURE_WIDTH: u32 = 1024u;
 const TOPO_TEXELS: u32 = 3u;
 const COARSE_SEGMENTS: u32 = 3u;

@@ -3,7 +3,7 @@
 use std::sync::{Arc, OnceLock};
 
 use crate::bezier::BezierKernels;
-use crate::catmull_clark::{CcKernels, CcStencilKernels, CcUniformKernels};
+use crate::catmull_clark::{CcKernels, CcStencilKernels, CcUniformKernels, NetPages};
 
 /// The compute pipelines of one device. Compiling them is the slow part of creating a
 /// stage (seconds on a CPU driver), so they are compiled once, each family the first
@@ -21,9 +21,10 @@ pub struct Kernels(Arc<Inner>);
 struct Inner {
     device: wgpu::Device,
     bezier: OnceLock<BezierKernels>,
-    cc: OnceLock<Arc<CcKernels>>,
-    cc_uniform: OnceLock<Arc<CcUniformKernels>>,
-    cc_stencil: OnceLock<Arc<CcStencilKernels>>,
+    /// The Catmull-Clark families, each for one net page and for four ([`NetPages`]).
+    cc: [OnceLock<Arc<CcKernels>>; 2],
+    cc_uniform: [OnceLock<Arc<CcUniformKernels>>; 2],
+    cc_stencil: [OnceLock<Arc<CcStencilKernels>>; 2],
 }
 
 impl Kernels {
@@ -32,9 +33,9 @@ impl Kernels {
         Kernels(Arc::new(Inner {
             device: device.clone(),
             bezier: OnceLock::new(),
-            cc: OnceLock::new(),
-            cc_uniform: OnceLock::new(),
-            cc_stencil: OnceLock::new(),
+            cc: Default::default(),
+            cc_uniform: Default::default(),
+            cc_stencil: Default::default(),
         }))
     }
 
@@ -55,25 +56,28 @@ impl Kernels {
             .get_or_init(|| BezierKernels::new(&self.0.device))
     }
 
-    pub(crate) fn cc(&self) -> Arc<CcKernels> {
-        self.0
-            .cc
-            .get_or_init(|| Arc::new(CcKernels::new(&self.0.device, self.cc_stencil())))
+    pub(crate) fn cc(&self, pages: NetPages) -> Arc<CcKernels> {
+        self.0.cc[pages.index()]
+            .get_or_init(|| {
+                Arc::new(CcKernels::new(
+                    &self.0.device,
+                    self.cc_stencil(pages),
+                    pages,
+                ))
+            })
             .clone()
     }
 
     /// The stencil step both Catmull-Clark stages run first.
-    pub(crate) fn cc_stencil(&self) -> Arc<CcStencilKernels> {
-        self.0
-            .cc_stencil
-            .get_or_init(|| Arc::new(CcStencilKernels::new(&self.0.device)))
+    pub(crate) fn cc_stencil(&self, pages: NetPages) -> Arc<CcStencilKernels> {
+        self.0.cc_stencil[pages.index()]
+            .get_or_init(|| Arc::new(CcStencilKernels::new(&self.0.device, pages)))
             .clone()
     }
 
-    pub(crate) fn cc_uniform(&self) -> Arc<CcUniformKernels> {
-        self.0
-            .cc_uniform
-            .get_or_init(|| Arc::new(CcUniformKernels::new(&self.0.device)))
+    pub(crate) fn cc_uniform(&self, pages: NetPages) -> Arc<CcUniformKernels> {
+        self.0.cc_uniform[pages.index()]
+            .get_or_init(|| Arc::new(CcUniformKernels::new(&self.0.device, pages)))
             .clone()
     }
 }

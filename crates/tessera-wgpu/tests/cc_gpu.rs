@@ -51,7 +51,7 @@ fn points(model: &SurfaceModel) -> Vec<CcVertexPoint> {
 fn run_gpu(gpu: &Gpu, model: &CcGpuModel, points: &[CcVertexPoint]) -> Vec<OutVertex> {
     let device = &gpu.device;
     let buffers = CcModelBuffers::new(device, &gpu.queue, model).expect("upload fits");
-    let eval = CcVertexEval::new(device);
+    let eval = CcVertexEval::new(device, buffers.pages);
     let storage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC;
     let point_buf = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
         label: None,
@@ -173,6 +173,7 @@ fn nets_past_the_pages_capacity_are_an_error() {
     assert!(CcModelBuffers::new(&gpu.device, &gpu.queue, &small).is_err());
     small.nets.truncate(192);
     let buffers = CcModelBuffers::new(&gpu.device, &gpu.queue, &small).expect("192 nets fit");
+    assert_eq!(buffers.pages, tessera_wgpu::catmull_clark::CcNetPages::Four);
     // Every page is full, and reads back the nets uploaded into it.
     assert!(buffers.nets.iter().all(|page| page.size().height == 24));
     let (nets, _) = read_model(&gpu, &buffers, small.nets.len(), 0);

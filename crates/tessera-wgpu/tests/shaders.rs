@@ -381,6 +381,7 @@ fn catmull_clark_parameters_and_counters_match_their_rust_twins() {
             "CC_NET_PAGE_ROWS",
             CcNetLayout::new(wgpu::Limits::default().max_texture_dimension_2d).rows,
         ),
+        ("CC_NET_PAGES_USED", CC_NET_PAGES),
     ] {
         assert_eq!(wgsl_u32(&module, name), rust, "{name}");
     }

@@ -21,6 +21,8 @@ pub use stencil::CcStencilBuffers;
 pub(crate) use stencil::CcStencilKernels;
 pub(crate) use uniform::CcUniformKernels;
 pub use uniform::{CcUniformStage, UniformParams};
+#[doc(hidden)]
+pub use NetPages as CcNetPages;
 
 use tessera_core::catmull_clark::gpu_model::CcGpuModel;
 use tessera_core::gpu_types::{CcHashSlot, CcHashStatus, CcNetLayout, CC_NET_PAGES};
@@ -43,9 +45,46 @@ pub struct CcModelBuffers {
     pub nets: [wgpu::Texture; CC_NET_PAGES as usize],
     /// Where each net lies in the pages: the layout the kernels of this device read.
     pub layout: CcNetLayout,
+    /// The pages the nets take, which the kernels reading them are compiled for.
+    pub pages: NetPages,
     nets_views: [wgpu::TextureView; CC_NET_PAGES as usize],
     pub corners: wgpu::Buffer,
     sizes: [usize; 5],
+}
+
+/// The net pages a model takes, as the kernels that read them are compiled: kernels for
+/// one page read it without a branch (the branches on the page cost lavapipe's marking
+/// about a fifth of its time), kernels for four read any.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum NetPages {
+    /// Every net in the first page.
+    One,
+    /// Nets past the first page.
+    Four,
+}
+
+impl NetPages {
+    fn of(layout: &CcNetLayout, nets: usize) -> Self {
+        if nets as u64 <= layout.nets_per_page() {
+            NetPages::One
+        } else {
+            NetPages::Four
+        }
+    }
+
+    /// Index of the kernels compiled for these pages.
+    pub(crate) fn index(self) -> usize {
+        self as usize
+    }
+
+    /// The kernels' constant.
+    pub(crate) fn consts(self) -> [(&'static str, u32); 1] {
+        let used = match self {
+            NetPages::One => 1,
+            NetPages::Four => CC_NET_PAGES,
+        };
+        [("CC_NET_PAGES_USED", used)]
+    }
 }
 
 /// Binding numbers of the nets' pages where the kernels read them, and where the
@@ -142,6 +181,7 @@ impl CcModelBuffers {
             nets_views: std::array::from_fn(|page| nets[page].create_view(&Default::default())),
             nets,
             layout,
+            pages: NetPages::of(&layout, model.nets.len()),
             corners,
             sizes: byte_sizes(model),
         };
@@ -219,9 +259,15 @@ pub struct CcVertexEval {
 }
 
 impl CcVertexEval {
-    pub fn new(device: &wgpu::Device) -> Self {
+    pub fn new(device: &wgpu::Device, pages: NetPages) -> Self {
         CcVertexEval {
-            kernel: Kernel::new(device, "cc_vertex_eval.wgsl", "main"),
+            kernel: Kernel::specialised(
+                device,
+                "cc_vertex_eval.wgsl",
+                "main",
+                &[],
+                &pages.consts(),
+            ),
         }
     }
 

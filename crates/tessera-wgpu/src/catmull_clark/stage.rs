@@ -83,7 +83,7 @@ use tessera_core::Mesh;
 use wgpu::util::DeviceExt;
 
 use super::stencil::{CcStencilBuffers, CcStencilKernels};
-use super::{CcHashBinds, CcHashKernels, CcModelBuffers, CcVertexEval, CcVertexHash};
+use super::{CcHashBinds, CcHashKernels, CcModelBuffers, CcVertexEval, CcVertexHash, NetPages};
 use crate::error::{Error, Result};
 use crate::kernel::{allocating, check_size, storage, storage_limit, Kernel};
 use crate::output::MeshBuffers;
@@ -140,8 +140,13 @@ pub(crate) struct CcKernels {
 }
 
 impl CcKernels {
-    pub fn new(device: &wgpu::Device, stencil: std::sync::Arc<CcStencilKernels>) -> Self {
-        let k = |file, entry| Kernel::new(device, file, entry);
+    pub fn new(
+        device: &wgpu::Device,
+        stencil: std::sync::Arc<CcStencilKernels>,
+        pages: NetPages,
+    ) -> Self {
+        let k = |file, entry| Kernel::specialised(device, file, entry, &[], &pages.consts());
+        let [used] = pages.consts();
         CcKernels {
             // Its walk feeds the face's sums: the one kernel compiled with them.
             face_bound: Kernel::specialised(
@@ -149,7 +154,7 @@ impl CcKernels {
                 "cc_face_bound.wgsl",
                 "main",
                 &[],
-                &[("CC_FACE_SINK", 1)],
+                &[("CC_FACE_SINK", 1), used],
             ),
             traverse: k("cc_traverse.wgsl", "main"),
             leaf_keys: k("cc_leaf_keys.wgsl", "main"),
@@ -158,7 +163,7 @@ impl CcKernels {
             polygon_emit: k("cc_polygon.wgsl", "emit"),
             triangulate: k("cc_triangulate.wgsl", "main"),
             hash: CcHashKernels::new(device),
-            eval: CcVertexEval::new(device),
+            eval: CcVertexEval::new(device, pages),
             scan: ScanKernels::new(device),
             stencil,
         }
@@ -430,12 +435,12 @@ impl CcStage {
         kernels.check_device(device)?;
         params.validate(model)?;
         gpu_leaf_bound(params)?;
-        let kernels = kernels.cc();
         let patch_count = model.mesh.patch_count() as u32;
         // Built once per topology; every run's first step derives the quadtrees from
         // the control points through them.
         let stencils = CcStencils::new(&model.mesh, model.depth);
         let model_buffers = CcModelBuffers::derived(device, queue, &stencils.structure)?;
+        let kernels = kernels.cc(model_buffers.pages);
         let control = model.mesh.control_points_f32();
         let stencil = CcStencilBuffers::new(device, &stencils, &control)?;
         let topo = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {

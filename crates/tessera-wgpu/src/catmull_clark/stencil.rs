@@ -10,7 +10,7 @@ use glam::Vec3;
 use tessera_core::catmull_clark::stencil::CcStencils;
 use wgpu::util::DeviceExt;
 
-use super::CcModelBuffers;
+use super::{CcModelBuffers, NetPages};
 use crate::error::{Error, Result};
 use crate::kernel::{check_upload, groups_2d, storage, Kernel};
 
@@ -21,10 +21,11 @@ pub(crate) struct CcStencilKernels {
 }
 
 impl CcStencilKernels {
-    pub fn new(device: &wgpu::Device) -> Self {
+    pub fn new(device: &wgpu::Device, pages: NetPages) -> Self {
+        let k = |entry| Kernel::specialised(device, "cc_stencil.wgsl", entry, &[], &pages.consts());
         CcStencilKernels {
-            level1: Kernel::new(device, "cc_stencil.wgsl", "level1"),
-            pieces: Kernel::new(device, "cc_stencil.wgsl", "pieces"),
+            level1: k("level1"),
+            pieces: k("pieces"),
         }
     }
 }
@@ -197,7 +198,7 @@ impl CcStencilBuffers {
         kernels: &crate::Kernels,
         model: &CcModelBuffers,
     ) -> u32 {
-        let stencil = kernels.cc_stencil();
+        let stencil = kernels.cc_stencil(model.pages);
         let binds = self.bind(device, &stencil, model);
         let mut encoder = device.create_command_encoder(&Default::default());
         let dispatches = {

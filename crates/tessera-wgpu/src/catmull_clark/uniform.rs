@@ -28,7 +28,7 @@ use tessera_core::gpu_types::{CcUniformParams, CcVertexPoint, OutVertex};
 use tessera_core::Mesh;
 use wgpu::util::DeviceExt;
 
-use super::{CcModelBuffers, CcStencilBuffers, CcStencilKernels, CcVertexEval};
+use super::{CcModelBuffers, CcStencilBuffers, CcStencilKernels, CcVertexEval, NetPages};
 use crate::error::{Error, Result};
 use crate::kernel::{allocating, check_size, storage, Kernel};
 use crate::output::MeshBuffers;
@@ -54,10 +54,10 @@ pub(crate) struct CcUniformKernels {
 }
 
 impl CcUniformKernels {
-    pub fn new(device: &wgpu::Device) -> Self {
+    pub fn new(device: &wgpu::Device, pages: NetPages) -> Self {
         CcUniformKernels {
             points: Kernel::new(device, "cc_uniform_points.wgsl", "main"),
-            eval: CcVertexEval::new(device),
+            eval: CcVertexEval::new(device, pages),
             cells: Kernel::new(device, "cc_uniform_cells.wgsl", "main"),
         }
     }
@@ -120,12 +120,12 @@ impl CcUniformStage {
         kernels.check_device(device)?;
         let layout = uniform_patches(&model.mesh);
         let params = layout.params(params.segments)?;
-        let stencil_kernels = kernels.cc_stencil();
-        let kernels = kernels.cc_uniform();
         // As the adaptive stage: the tables once per topology, the quadtrees derived from
         // the control points by the first dispatches of a run after they move.
         let stencils = CcStencils::new(&model.mesh, model.depth);
         let model_buffers = CcModelBuffers::derived(device, queue, &stencils.structure)?;
+        let stencil_kernels = kernels.cc_stencil(model_buffers.pages);
+        let kernels = kernels.cc_uniform(model_buffers.pages);
         let stencil = CcStencilBuffers::new(device, &stencils, &model.mesh.control_points_f32())?;
         let stencil_binds = stencil.bind(device, &stencil_kernels, &model_buffers);
         // Never empty: a model of holes only binds one zeroed patch it never reads.
