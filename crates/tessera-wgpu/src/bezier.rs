@@ -56,11 +56,11 @@ use tessera_core::gpu_types::{
     VertexRecord, EDGE_BIT_WORDS, MAP_CELLS, MAX_DEPTH_LIMIT,
 };
 use tessera_core::Mesh;
-use wgpu::util::DeviceExt;
 
 use crate::error::{Error, Result};
 use crate::kernel::{
-    allocating, check_size, check_upload, storage, storage_texture, upload_texture, Kernel,
+    allocating, check_size, check_upload, init_buffer, storage, storage_texture, upload_texture,
+    Kernel,
 };
 use crate::output::MeshBuffers;
 use crate::readback::{read_buffer, read_texture};
@@ -476,14 +476,17 @@ fn upload(device: &wgpu::Device, label: &str, bytes: &[u8]) -> wgpu::Buffer {
     } else {
         bytes
     };
-    device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-        label: Some(label),
-        contents,
-        // COPY_DST: moved patches write them again (`update_model`).
-        usage: wgpu::BufferUsages::STORAGE
-            | wgpu::BufferUsages::COPY_SRC
-            | wgpu::BufferUsages::COPY_DST,
-    })
+    init_buffer(
+        device,
+        &wgpu::util::BufferInitDescriptor {
+            label: Some(label),
+            contents,
+            // COPY_DST: moved patches write them again (`update_model`).
+            usage: wgpu::BufferUsages::STORAGE
+                | wgpu::BufferUsages::COPY_SRC
+                | wgpu::BufferUsages::COPY_DST,
+        },
+    )
 }
 
 impl BezierStage {

@@ -226,6 +226,33 @@ pub(crate) fn upload_texture(
     texture
 }
 
+/// A buffer holding `desc.contents`, as wgpu's `create_buffer_init`, which panics when the
+/// device could not create the buffer (out of memory): here the buffer is left unwritten,
+/// and the device's error (caught by [`allocating`] around a stage's allocations) says why.
+pub(crate) fn init_buffer(
+    device: &wgpu::Device,
+    desc: &wgpu::util::BufferInitDescriptor<'_>,
+) -> wgpu::Buffer {
+    // A mapped buffer's size is a multiple of 4 and never zero.
+    let len = desc.contents.len() as u64;
+    let size = len
+        .next_multiple_of(wgpu::COPY_BUFFER_ALIGNMENT)
+        .max(wgpu::COPY_BUFFER_ALIGNMENT);
+    let buffer = device.create_buffer(&wgpu::BufferDescriptor {
+        label: desc.label,
+        size,
+        usage: desc.usage,
+        mapped_at_creation: true,
+    });
+    if let Ok(mut range) = buffer.get_mapped_range_mut(..) {
+        range
+            .slice(..desc.contents.len())
+            .copy_from_slice(desc.contents);
+    }
+    buffer.unmap();
+    buffer
+}
+
 /// Runs `make` in error scopes: an allocation the device cannot make is
 /// [`Error::OutOfMemory`] naming `what`, not a stage that later runs on invalid buffers.
 /// What the invalid resource then fails (views, bind groups: validation errors) is part of
@@ -307,6 +334,44 @@ mod tests {
             Ok(storage(&gpu.device, "small", 256))
         });
         assert!(small.is_ok());
+        gpu.check().expect("no wgpu errors left over");
+    }
+
+    #[test]
+    fn a_buffer_the_device_cannot_create_is_an_error_not_a_panic() {
+        // A device whose buffers hold 256 bytes: a kilobyte of contents cannot be
+        // uploaded, where wgpu's `create_buffer_init` would panic.
+        let gpu = crate::headless::Gpu::with_limits(|adapter| wgpu::Limits {
+            max_buffer_size: 256,
+            max_storage_buffer_binding_size: 256,
+            ..crate::bezier::required_limits(adapter)
+        })
+        .expect("device");
+        let contents = [7u8; 1024];
+        let made = allocating(&gpu.device, "a kilobyte", || {
+            Ok(init_buffer(
+                &gpu.device,
+                &wgpu::util::BufferInitDescriptor {
+                    label: None,
+                    contents: &contents,
+                    usage: wgpu::BufferUsages::STORAGE,
+                },
+            ))
+        });
+        let err = made.map(|_| ()).expect_err("over the device's buffers");
+        assert!(matches!(err, Error::Wgpu(_)), "{err}");
+        // What fits holds its contents (an odd length, padded).
+        let fits = init_buffer(
+            &gpu.device,
+            &wgpu::util::BufferInitDescriptor {
+                label: None,
+                contents: &contents[..13],
+                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+            },
+        );
+        assert_eq!(fits.size(), 16);
+        let read = gpu.read_buffer(&fits, 0, 16).expect("read");
+        assert_eq!(&read[..13], &contents[..13]);
         gpu.check().expect("no wgpu errors left over");
     }
 }

@@ -1,8 +1,8 @@
 //! The buffers a tessellation stage leaves on the GPU, ready for any render pass.
 
+use crate::kernel::init_buffer;
 use tessera_core::gpu_types::{DrawIndexedIndirectArgs, OutVertex};
 use tessera_core::Mesh;
-use wgpu::util::DeviceExt;
 
 /// Vertex buffer ([`OutVertex`]: position, normal, `u v` on the face, face id; 36
 /// bytes, [`VERTEX_LAYOUT`](Self::VERTEX_LAYOUT)), `u32` index buffer, and one
@@ -165,11 +165,14 @@ impl MeshBuffers {
     /// Uploads a mesh made on the CPU (the CPU reference backend, uniform tessellation).
     pub fn from_mesh(device: &wgpu::Device, mesh: &Mesh) -> Self {
         let init = |label, contents: &[u8], usage| {
-            device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some(label),
-                contents,
-                usage,
-            })
+            init_buffer(
+                device,
+                &wgpu::util::BufferInitDescriptor {
+                    label: Some(label),
+                    contents,
+                    usage,
+                },
+            )
         };
         let dummy_vertex = [OutVertex::zeroed_array()];
         let vertices: &[OutVertex] = if mesh.vertices.is_empty() {

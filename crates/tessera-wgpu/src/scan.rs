@@ -3,9 +3,8 @@
 //! chunks before it (`shaders/scan.wgsl`). CPU twin: [`tessera_core::scan`].
 
 use tessera_core::scan::{scan_groups, SCAN_GROUPS};
-use wgpu::util::DeviceExt;
 
-use crate::kernel::{storage, Kernel};
+use crate::kernel::{init_buffer, storage, Kernel};
 
 /// The two scan kernels of one device.
 pub struct ScanKernels {
@@ -112,11 +111,14 @@ impl PrefixSum {
             Some((d, n, live)) => (d, n, live, 2),
             None => (&unused, 0, (&unused_live, u32::MAX), 1),
         };
-        let uniform = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("tessera scan params"),
-            contents: bytemuck::bytes_of(&[n, slot, n_b, slot_b, lists, xor, shift, 0]),
-            usage: wgpu::BufferUsages::UNIFORM,
-        });
+        let uniform = init_buffer(
+            device,
+            &wgpu::util::BufferInitDescriptor {
+                label: Some("tessera scan params"),
+                contents: bytemuck::bytes_of(&[n, slot, n_b, slot_b, lists, xor, shift, 0]),
+                usage: wgpu::BufferUsages::UNIFORM,
+            },
+        );
         let sums = storage(device, "tessera scan sums", 4 * SCAN_GROUPS as u64);
         let entries = [
             (0, &uniform),

@@ -26,10 +26,9 @@ pub use NetPages as CcNetPages;
 
 use tessera_core::catmull_clark::gpu_model::CcGpuModel;
 use tessera_core::gpu_types::{CcHashSlot, CcHashStatus, CcNetLayout, CC_NET_PAGES};
-use wgpu::util::DeviceExt;
 
 use crate::error::{Error, Result};
-use crate::kernel::{check_size, check_upload, storage, storage_texture, Kernel};
+use crate::kernel::{check_size, check_upload, init_buffer, storage, storage_texture, Kernel};
 use crate::scan::{PrefixSum, ScanKernels};
 
 /// The flattened quadtrees on the GPU (bindings 20–27 of the Catmull-Clark kernels).
@@ -147,11 +146,14 @@ impl CcModelBuffers {
             // Bindings are never empty: an empty array (a model without extraordinary
             // vertices has no corners) binds one zeroed element of any of the types.
             let zero = [0u8; 256];
-            device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some(label),
-                contents: if bytes.is_empty() { &zero } else { bytes },
-                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
-            })
+            init_buffer(
+                device,
+                &wgpu::util::BufferInitDescriptor {
+                    label: Some(label),
+                    contents: if bytes.is_empty() { &zero } else { bytes },
+                    usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+                },
+            )
         };
         let format = wgpu::TextureFormat::Rgba32Float;
         let sizes = layout.page_sizes(model.nets.len());

@@ -80,12 +80,11 @@ use tessera_core::gpu_types::{
     CC_VIEW_CULL_BACKFACES, CC_VIEW_CULL_FRUSTUM,
 };
 use tessera_core::Mesh;
-use wgpu::util::DeviceExt;
 
 use super::stencil::{CcStencilBuffers, CcStencilKernels};
 use super::{CcHashBinds, CcHashKernels, CcModelBuffers, CcVertexEval, CcVertexHash, NetPages};
 use crate::error::{Error, Result};
-use crate::kernel::{allocating, check_size, storage, storage_limit, Kernel};
+use crate::kernel::{allocating, check_size, init_buffer, storage, storage_limit, Kernel};
 use crate::output::MeshBuffers;
 use crate::scan::{PrefixSum, ScanKernels};
 use crate::stage::{GrowingStage, Passes, RunTimestamps, StatusReadback};
@@ -443,17 +442,23 @@ impl CcStage {
         let kernels = kernels.cc(model_buffers.pages);
         let control = model.mesh.control_points_f32();
         let stencil = CcStencilBuffers::new(device, &stencils, &control)?;
-        let topo = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("tessera cc topology"),
-            contents: bytemuck::cast_slice(&patch_topology(&model.mesh)),
-            usage: wgpu::BufferUsages::STORAGE,
-        });
+        let topo = init_buffer(
+            device,
+            &wgpu::util::BufferInitDescriptor {
+                label: Some("tessera cc topology"),
+                contents: bytemuck::cast_slice(&patch_topology(&model.mesh)),
+                usage: wgpu::BufferUsages::STORAGE,
+            },
+        );
         let point_count = model.mesh.points.len() as u32;
-        let homes = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("tessera cc homes"),
-            contents: bytemuck::cast_slice(&point_homes(&model.mesh)),
-            usage: wgpu::BufferUsages::STORAGE,
-        });
+        let homes = init_buffer(
+            device,
+            &wgpu::util::BufferInitDescriptor {
+                label: Some("tessera cc homes"),
+                contents: bytemuck::cast_slice(&point_homes(&model.mesh)),
+                usage: wgpu::BufferUsages::STORAGE,
+            },
+        );
         let state = storage(
             device,
             "tessera cc state",
@@ -469,11 +474,14 @@ impl CcStage {
             mapped_at_creation: false,
         });
         let passes = [0u32, 1].map(|pass| {
-            device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some("tessera cc traverse pass"),
-                contents: bytemuck::cast_slice(&[pass, 0, 0, 0]),
-                usage: wgpu::BufferUsages::UNIFORM,
-            })
+            init_buffer(
+                device,
+                &wgpu::util::BufferInitDescriptor {
+                    label: Some("tessera cc traverse pass"),
+                    contents: bytemuck::cast_slice(&[pass, 0, 0, 0]),
+                    usage: wgpu::BufferUsages::UNIFORM,
+                },
+            )
         });
         let eps = params.epsilon(model);
         let counts = (patch_count, point_count);
@@ -1383,11 +1391,14 @@ impl Buffers {
         ] {
             check_size(device, what, bytes)?;
         }
-        let params = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("tessera cc params"),
-            contents: bytemuck::bytes_of(&tess_params(counts, params, caps)),
-            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-        });
+        let params = init_buffer(
+            device,
+            &wgpu::util::BufferInitDescriptor {
+                label: Some("tessera cc params"),
+                contents: bytemuck::bytes_of(&tess_params(counts, params, caps)),
+                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            },
+        );
         let cell_bytes = std::mem::size_of::<CcCell>() as u64;
         let poly_offsets = storage(
             device,

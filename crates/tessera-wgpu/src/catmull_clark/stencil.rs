@@ -8,11 +8,10 @@
 
 use glam::Vec3;
 use tessera_core::catmull_clark::stencil::CcStencils;
-use wgpu::util::DeviceExt;
 
 use super::{CcModelBuffers, NetPages};
 use crate::error::{Error, Result};
-use crate::kernel::{check_upload, groups_2d, storage, Kernel};
+use crate::kernel::{check_upload, groups_2d, init_buffer, storage, Kernel};
 
 /// The step's two kernels, compiled once per device.
 pub(crate) struct CcStencilKernels {
@@ -77,12 +76,15 @@ impl CcStencilBuffers {
         check_upload(device, "control points", 12 * control.len() as u64)?;
         let zero = [0u8; 16];
         let init = |label: &str, bytes: &[u8]| {
-            device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some(label),
-                // A binding is never empty.
-                contents: if bytes.is_empty() { &zero } else { bytes },
-                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
-            })
+            init_buffer(
+                device,
+                &wgpu::util::BufferInitDescriptor {
+                    label: Some(label),
+                    // A binding is never empty.
+                    contents: if bytes.is_empty() { &zero } else { bytes },
+                    usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+                },
+            )
         };
         let tables = parts
             .iter()
@@ -90,20 +92,26 @@ impl CcStencilBuffers {
             .collect();
         let control_buffer = init("tessera cc control points", cast_slice(control));
         let level1_count = stencils.level1_count() as u32;
-        let step = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("tessera cc stencil step"),
-            contents: cast_slice(&[0u32, stencils.record_count, level1_count, 0]),
-            usage: wgpu::BufferUsages::UNIFORM,
-        });
+        let step = init_buffer(
+            device,
+            &wgpu::util::BufferInitDescriptor {
+                label: Some("tessera cc stencil step"),
+                contents: cast_slice(&[0u32, stencils.record_count, level1_count, 0]),
+                usage: wgpu::BufferUsages::UNIFORM,
+            },
+        );
         let (l1x, l1y) = groups_2d(level1_count.max(1), 64);
         let (px, py) = groups_2d(stencils.record_count.max(1), 64);
         let dispatch_args = [l1x, l1y, 1, px, py, 1];
         // The first run derives the quadtrees.
-        let args = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("tessera cc stencil dispatch args"),
-            contents: cast_slice(&dispatch_args),
-            usage: wgpu::BufferUsages::INDIRECT | wgpu::BufferUsages::COPY_DST,
-        });
+        let args = init_buffer(
+            device,
+            &wgpu::util::BufferInitDescriptor {
+                label: Some("tessera cc stencil dispatch args"),
+                contents: cast_slice(&dispatch_args),
+                usage: wgpu::BufferUsages::INDIRECT | wgpu::BufferUsages::COPY_DST,
+            },
+        );
         Ok(CcStencilBuffers {
             control: control_buffer,
             step,

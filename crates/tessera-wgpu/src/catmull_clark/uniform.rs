@@ -26,11 +26,10 @@ use tessera_core::catmull_clark::stencil::CcStencils;
 use tessera_core::catmull_clark::{PatchMesh, SurfaceModel};
 use tessera_core::gpu_types::{CcUniformParams, CcVertexPoint, OutVertex};
 use tessera_core::Mesh;
-use wgpu::util::DeviceExt;
 
 use super::{CcModelBuffers, CcStencilBuffers, CcStencilKernels, CcVertexEval, NetPages};
 use crate::error::{Error, Result};
-use crate::kernel::{allocating, check_size, storage, Kernel};
+use crate::kernel::{allocating, check_size, init_buffer, storage, Kernel};
 use crate::output::MeshBuffers;
 use crate::stage::{Passes, RunTimestamps};
 use crate::Kernels;
@@ -130,20 +129,26 @@ impl CcUniformStage {
         let stencil_binds = stencil.bind(device, &stencil_kernels, &model_buffers);
         // Never empty: a model of holes only binds one zeroed patch it never reads.
         let zero = [tessera_core::gpu_types::CcUniformPatch::default()];
-        let patches = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("tessera cc uniform patches"),
-            contents: bytemuck::cast_slice(if layout.patches.is_empty() {
-                &zero
-            } else {
-                &layout.patches
-            }),
-            usage: wgpu::BufferUsages::STORAGE,
-        });
-        let params_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("tessera cc uniform params"),
-            contents: bytemuck::bytes_of(&params),
-            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-        });
+        let patches = init_buffer(
+            device,
+            &wgpu::util::BufferInitDescriptor {
+                label: Some("tessera cc uniform patches"),
+                contents: bytemuck::cast_slice(if layout.patches.is_empty() {
+                    &zero
+                } else {
+                    &layout.patches
+                }),
+                usage: wgpu::BufferUsages::STORAGE,
+            },
+        );
+        let params_buffer = init_buffer(
+            device,
+            &wgpu::util::BufferInitDescriptor {
+                label: Some("tessera cc uniform params"),
+                contents: bytemuck::bytes_of(&params),
+                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            },
+        );
         let sized = Sized::new(
             device,
             &kernels,
