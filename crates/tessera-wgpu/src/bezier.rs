@@ -69,9 +69,9 @@ use crate::stage::{GrowingStage, Passes, RunTimestamps, StatusReadback};
 use crate::Kernels;
 
 /// Limits the stages need, within what `adapter` offers: large storage buffers and 2D
-/// textures for big models (the Catmull-Clark nets lie in four pages whose sides follow
-/// the device's, so its side bounds the nets a model may derive); no more than 8 storage buffers and 4
-/// storage textures per kernel, so WebGPU's defaults suffice there.
+/// textures for big models (the Catmull-Clark nets lie in four pages as large as the
+/// device's side allows, so it bounds the nets a model may derive); no more than 8
+/// storage buffers and 4 storage textures per kernel, so WebGPU's defaults suffice there.
 pub fn required_limits(adapter: &wgpu::Limits) -> wgpu::Limits {
     wgpu::Limits {
         max_storage_buffer_binding_size: adapter.max_storage_buffer_binding_size,
@@ -468,25 +468,12 @@ impl Scratch {
     }
 }
 
+/// Never empty (`init_buffer` pads to 4 bytes). COPY_DST: moved patches write them again
+/// (`update_model`).
 fn upload(device: &wgpu::Device, label: &str, bytes: &[u8]) -> wgpu::Buffer {
-    let padded;
-    let contents = if bytes.is_empty() {
-        padded = [0u8; 4];
-        &padded[..]
-    } else {
-        bytes
-    };
-    init_buffer(
-        device,
-        &wgpu::util::BufferInitDescriptor {
-            label: Some(label),
-            contents,
-            // COPY_DST: moved patches write them again (`update_model`).
-            usage: wgpu::BufferUsages::STORAGE
-                | wgpu::BufferUsages::COPY_SRC
-                | wgpu::BufferUsages::COPY_DST,
-        },
-    )
+    let usage =
+        wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST;
+    init_buffer(device, label, bytes, usage)
 }
 
 impl BezierStage {
@@ -519,176 +506,165 @@ impl BezierStage {
         kernels: &Kernels,
         prepared: &PreparedBezier,
         params: &AdaptiveParams,
-        capacity: (u32, u32),
-    ) -> Result<Self> {
-        allocating(device, "the stage's model and buffers", || {
-            Self::create(device, queue, kernels, prepared, params, capacity)
-        })
-    }
-
-    fn create(
-        device: &wgpu::Device,
-        queue: &wgpu::Queue,
-        kernels: &Kernels,
-        prepared: &PreparedBezier,
-        params: &AdaptiveParams,
         (vertex_capacity, index_capacity): (u32, u32),
     ) -> Result<Self> {
-        kernels.check_device(device)?;
-        params.validate()?;
-        let l = prepared.layout;
-        let counts_len = l.coarse_edges + 2 * l.coarse_triangles + 1;
-        let pipelines = kernels.bezier().clone();
-        let test_kernels = pipelines.for_params(device, params);
-        // The scan's values, then the emit order and each triangle's bucket in it.
-        let counts_bytes = 4 * (counts_len as u64 + 2 * l.coarse_triangles as u64);
-        check_size(device, "count", counts_bytes)?;
-        let counts = storage(device, "tessera counts", counts_bytes);
-        let scan = PrefixSum::new(device, &pipelines.0.scan, &counts, counts_len);
-        let uniform = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("tessera bezier params"),
-            size: std::mem::size_of::<BezierParams>() as u64,
-            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
-        let vertex_capacity = vertex_capacity.max(l.coarse_vertices);
-        let output = MeshBuffers::with_capacity(device, vertex_capacity, index_capacity);
-        let status = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("tessera bezier status"),
-            size: std::mem::size_of::<BezierStatus>() as u64,
-            usage: wgpu::BufferUsages::STORAGE
-                | wgpu::BufferUsages::INDIRECT
-                | wgpu::BufferUsages::COPY_SRC
-                | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
-        let coarse_records = prepared.coarse_vertex_records();
-        for (what, bytes) in [
-            (
-                "patch topology",
-                TopologyTexture::bytes(prepared.topo.len(), prepared.curves.len()) as usize,
-            ),
-            (
-                "coarse vertices",
-                std::mem::size_of_val(coarse_records.as_slice()),
-            ),
-            (
-                "displacement maps",
-                MapHalves::bytes(prepared.maps.len()) as usize,
-            ),
-        ] {
-            check_upload(device, what, bytes as u64)?;
-        }
-        let (width, height) = MapAtlas::size(prepared.maps.len());
-        let max_side = device.limits().max_texture_dimension_2d;
-        if width > max_side || height > max_side {
-            return Err(Error::MapAtlasTooLarge {
-                patches: l.patches,
-                width,
-                height,
-                limit: max_side,
-            });
-        }
-        // The atlas is built on the device from the maps as uploaded (`MapHalves`, 512
-        // of its 1800 bytes per patch), by `bezier_map_cells` at the start of each run:
-        // written by it, read by the kernels, a storage texture both ways.
-        let map_atlas = storage_texture(
-            device,
-            "tessera displacement-map atlas",
-            wgpu::TextureFormat::Rgba16Float,
-            (width, height),
-            wgpu::TextureUsages::COPY_SRC,
-        );
-        let map_atlas_view = map_atlas.create_view(&Default::default());
-        let halves = MapHalves::new(&prepared.maps, prepared.map_scale);
-        let map_halves = upload(
-            device,
-            "tessera displacement maps",
-            bytemuck::cast_slice(&halves.words),
-        );
-        let map_cells = pipelines.0.map_cells.bind_with_textures(
-            device,
-            &[(slot::PARAMS, &uniform), (slot::MAP_HALVES, &map_halves)],
-            &[(slot::MAP_ATLAS_STORE, &map_atlas_view)],
-        );
-        // Smaller than the atlas both ways: its size check covers this one.
-        let nets = NetTexture::new(&prepared.patches);
-        let nets_texture = upload_texture(
-            device,
-            queue,
-            "tessera control-net texture",
-            wgpu::TextureFormat::Rgba32Float,
-            (nets.width, nets.height),
-            bytemuck::cast_slice(&nets.texels),
-        );
-        // Narrower than the atlas and fewer rows (at most 7 texels per patch, 1024 per
-        // row, where the atlas has 15 rows per 256 patches): its size check covers it.
-        let topology = TopologyTexture::new(&prepared.topo, &prepared.curves);
-        let topology_texture = upload_texture(
-            device,
-            queue,
-            "tessera topology texture",
-            wgpu::TextureFormat::Rgba32Uint,
-            (topology.width, topology.height),
-            bytemuck::cast_slice(&topology.texels),
-        );
-        let buffers = Buffers {
-            uniform,
-            nets: nets_texture.create_view(&Default::default()),
-            map_atlas: map_atlas_view,
-            map_atlas_texture: map_atlas,
-            topology: topology_texture.create_view(&Default::default()),
-            coarse_records: upload(
-                device,
-                "tessera coarse vertices",
-                bytemuck::cast_slice(&coarse_records),
-            ),
-            counts,
-            scan,
-            scratch: Scratch::new(device, ScratchLayout::new(params.max_depth, l))?,
-            records: storage(
-                device,
-                "tessera vertex records",
-                vertex_capacity as u64 * std::mem::size_of::<VertexRecord>() as u64,
-            ),
-            status,
-            map_halves,
-            tally: storage(
-                device,
-                "tessera tally",
-                4 * tally::words(l.coarse_vertices) as u64,
-            ),
-            thresholds: device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("tessera bezier thresholds"),
-                size: 4 * l.patches.max(1) as u64,
-                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+        allocating(device, "the stage's model and buffers", || {
+            kernels.check_device(device)?;
+            params.validate()?;
+            let l = prepared.layout;
+            let counts_len = l.coarse_edges + 2 * l.coarse_triangles + 1;
+            let pipelines = kernels.bezier().clone();
+            let test_kernels = pipelines.for_params(device, params);
+            // The scan's values, then the emit order and each triangle's bucket in it.
+            let counts_bytes = 4 * (counts_len as u64 + 2 * l.coarse_triangles as u64);
+            check_size(device, "count", counts_bytes)?;
+            let counts = storage(device, "tessera counts", counts_bytes);
+            let scan = PrefixSum::new(device, &pipelines.0.scan, &counts, counts_len);
+            let uniform = device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("tessera bezier params"),
+                size: std::mem::size_of::<BezierParams>() as u64,
+                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
                 mapped_at_creation: false,
-            }),
-            output,
-        };
-        let mut stage = BezierStage {
-            map_scale: prepared.map_scale,
-            map_cells,
-            written: None,
-            latest: None,
-            growths: 0,
-            readback: StatusReadback::new(
-                "tessera bezier status readback",
-                std::mem::size_of::<BezierStatus>() as u64,
-            ),
-            prepared_layout: l,
-            params: *params,
-            control_points: (0..l.patches).map(|p| prepared.control_points(p)).collect(),
-            flipped: prepared.topo.iter().map(|t| t.flipped()).collect(),
-            view: None,
-            bind_groups: BindGroups::new(device, &pipelines.0, &test_kernels, &buffers),
-            test_kernels,
-            buffers,
-            pipelines,
-        };
-        stage.write_params(queue);
-        stage.write_thresholds(queue)?;
-        Ok(stage)
+            });
+            let vertex_capacity = vertex_capacity.max(l.coarse_vertices);
+            let output = MeshBuffers::with_capacity(device, vertex_capacity, index_capacity);
+            let status = device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("tessera bezier status"),
+                size: std::mem::size_of::<BezierStatus>() as u64,
+                usage: wgpu::BufferUsages::STORAGE
+                    | wgpu::BufferUsages::INDIRECT
+                    | wgpu::BufferUsages::COPY_SRC
+                    | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            });
+            let coarse_records = prepared.coarse_vertex_records();
+            for (what, bytes) in [
+                (
+                    "patch topology",
+                    TopologyTexture::bytes(prepared.topo.len(), prepared.curves.len()) as usize,
+                ),
+                (
+                    "coarse vertices",
+                    std::mem::size_of_val(coarse_records.as_slice()),
+                ),
+                (
+                    "displacement maps",
+                    MapHalves::bytes(prepared.maps.len()) as usize,
+                ),
+            ] {
+                check_upload(device, what, bytes as u64)?;
+            }
+            let (width, height) = MapAtlas::size(prepared.maps.len());
+            let max_side = device.limits().max_texture_dimension_2d;
+            if width > max_side || height > max_side {
+                return Err(Error::MapAtlasTooLarge {
+                    patches: l.patches,
+                    width,
+                    height,
+                    limit: max_side,
+                });
+            }
+            // The atlas is built on the device from the maps as uploaded (`MapHalves`, 512
+            // of its 1800 bytes per patch), by `bezier_map_cells` at the start of each run:
+            // written by it, read by the kernels, a storage texture both ways.
+            let map_atlas = storage_texture(
+                device,
+                "tessera displacement-map atlas",
+                wgpu::TextureFormat::Rgba16Float,
+                (width, height),
+                wgpu::TextureUsages::COPY_SRC,
+            );
+            let map_atlas_view = map_atlas.create_view(&Default::default());
+            let halves = MapHalves::new(&prepared.maps, prepared.map_scale);
+            let map_halves = upload(
+                device,
+                "tessera displacement maps",
+                bytemuck::cast_slice(&halves.words),
+            );
+            let map_cells = pipelines.0.map_cells.bind_with_textures(
+                device,
+                &[(slot::PARAMS, &uniform), (slot::MAP_HALVES, &map_halves)],
+                &[(slot::MAP_ATLAS_STORE, &map_atlas_view)],
+            );
+            // Smaller than the atlas both ways: its size check covers this one.
+            let nets = NetTexture::new(&prepared.patches);
+            let nets_texture = upload_texture(
+                device,
+                queue,
+                "tessera control-net texture",
+                wgpu::TextureFormat::Rgba32Float,
+                (nets.width, nets.height),
+                bytemuck::cast_slice(&nets.texels),
+            );
+            // Narrower than the atlas and fewer rows (at most 7 texels per patch, 1024 per
+            // row, where the atlas has 15 rows per 256 patches): its size check covers it.
+            let topology = TopologyTexture::new(&prepared.topo, &prepared.curves);
+            let topology_texture = upload_texture(
+                device,
+                queue,
+                "tessera topology texture",
+                wgpu::TextureFormat::Rgba32Uint,
+                (topology.width, topology.height),
+                bytemuck::cast_slice(&topology.texels),
+            );
+            let buffers = Buffers {
+                uniform,
+                nets: nets_texture.create_view(&Default::default()),
+                map_atlas: map_atlas_view,
+                map_atlas_texture: map_atlas,
+                topology: topology_texture.create_view(&Default::default()),
+                coarse_records: upload(
+                    device,
+                    "tessera coarse vertices",
+                    bytemuck::cast_slice(&coarse_records),
+                ),
+                counts,
+                scan,
+                scratch: Scratch::new(device, ScratchLayout::new(params.max_depth, l))?,
+                records: storage(
+                    device,
+                    "tessera vertex records",
+                    vertex_capacity as u64 * std::mem::size_of::<VertexRecord>() as u64,
+                ),
+                status,
+                map_halves,
+                tally: storage(
+                    device,
+                    "tessera tally",
+                    4 * tally::words(l.coarse_vertices) as u64,
+                ),
+                thresholds: device.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some("tessera bezier thresholds"),
+                    size: 4 * l.patches.max(1) as u64,
+                    usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+                    mapped_at_creation: false,
+                }),
+                output,
+            };
+            let mut stage = BezierStage {
+                map_scale: prepared.map_scale,
+                map_cells,
+                written: None,
+                latest: None,
+                growths: 0,
+                readback: StatusReadback::new(
+                    "tessera bezier status readback",
+                    std::mem::size_of::<BezierStatus>() as u64,
+                ),
+                prepared_layout: l,
+                params: *params,
+                control_points: (0..l.patches).map(|p| prepared.control_points(p)).collect(),
+                flipped: prepared.topo.iter().map(|t| t.flipped()).collect(),
+                view: None,
+                bind_groups: BindGroups::new(device, &pipelines.0, &test_kernels, &buffers),
+                test_kernels,
+                buffers,
+                pipelines,
+            };
+            stage.write_params(queue);
+            stage.write_thresholds(queue)?;
+            Ok(stage)
+        })
     }
 
     /// The view of the next runs, or `None`: each patch's threshold becomes the smaller

@@ -226,31 +226,41 @@ pub(crate) fn upload_texture(
     texture
 }
 
-/// A buffer holding `desc.contents`, as wgpu's `create_buffer_init`, which panics when the
-/// device could not create the buffer (out of memory): here the buffer is left unwritten,
-/// and the device's error (caught by [`allocating`] around a stage's allocations) says why.
+/// A buffer holding `contents` (zero-padded to a multiple of 4 bytes, at least 4), as
+/// wgpu's `create_buffer_init`, which panics when the device could not create the buffer
+/// (out of memory): here the buffer is left unwritten, and the device's error (caught by
+/// [`allocating`] around a stage's allocations) says why.
 pub(crate) fn init_buffer(
     device: &wgpu::Device,
-    desc: &wgpu::util::BufferInitDescriptor<'_>,
+    label: &str,
+    contents: &[u8],
+    usage: wgpu::BufferUsages,
 ) -> wgpu::Buffer {
-    // A mapped buffer's size is a multiple of 4 and never zero.
-    let len = desc.contents.len() as u64;
-    let size = len
+    let size = (contents.len() as u64)
         .next_multiple_of(wgpu::COPY_BUFFER_ALIGNMENT)
         .max(wgpu::COPY_BUFFER_ALIGNMENT);
     let buffer = device.create_buffer(&wgpu::BufferDescriptor {
-        label: desc.label,
+        label: Some(label),
         size,
-        usage: desc.usage,
+        usage,
         mapped_at_creation: true,
     });
     if let Ok(mut range) = buffer.get_mapped_range_mut(..) {
-        range
-            .slice(..desc.contents.len())
-            .copy_from_slice(desc.contents);
+        range.slice(..contents.len()).copy_from_slice(contents);
     }
     buffer.unmap();
     buffer
+}
+
+/// A storage buffer holding `bytes`, written again through the queue when the points
+/// move; never empty: an empty array (a model without extraordinary vertices has no
+/// corners) binds 256 zero bytes, one element of any of the kernels' types.
+pub(crate) fn init_storage(device: &wgpu::Device, label: &str, bytes: &[u8]) -> wgpu::Buffer {
+    let usage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST;
+    match bytes {
+        [] => init_buffer(device, label, &[0; 256], usage),
+        _ => init_buffer(device, label, bytes, usage),
+    }
 }
 
 /// Runs `make` in error scopes: an allocation the device cannot make is
@@ -351,11 +361,9 @@ mod tests {
         let made = allocating(&gpu.device, "a kilobyte", || {
             Ok(init_buffer(
                 &gpu.device,
-                &wgpu::util::BufferInitDescriptor {
-                    label: None,
-                    contents: &contents,
-                    usage: wgpu::BufferUsages::STORAGE,
-                },
+                "a kilobyte",
+                &contents,
+                wgpu::BufferUsages::STORAGE,
             ))
         });
         let err = made.map(|_| ()).expect_err("over the device's buffers");
@@ -363,11 +371,9 @@ mod tests {
         // What fits holds its contents (an odd length, padded).
         let fits = init_buffer(
             &gpu.device,
-            &wgpu::util::BufferInitDescriptor {
-                label: None,
-                contents: &contents[..13],
-                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
-            },
+            "thirteen bytes",
+            &contents[..13],
+            wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
         );
         assert_eq!(fits.size(), 16);
         let read = gpu.read_buffer(&fits, 0, 16).expect("read");

@@ -164,16 +164,7 @@ impl MeshBuffers {
 
     /// Uploads a mesh made on the CPU (the CPU reference backend, uniform tessellation).
     pub fn from_mesh(device: &wgpu::Device, mesh: &Mesh) -> Self {
-        let init = |label, contents: &[u8], usage| {
-            init_buffer(
-                device,
-                &wgpu::util::BufferInitDescriptor {
-                    label: Some(label),
-                    contents,
-                    usage,
-                },
-            )
-        };
+        let init = |label, contents: &[u8], usage| init_buffer(device, label, contents, usage);
         let dummy_vertex = [OutVertex::zeroed_array()];
         let vertices: &[OutVertex] = if mesh.vertices.is_empty() {
             &dummy_vertex

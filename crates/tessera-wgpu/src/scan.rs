@@ -113,11 +113,9 @@ impl PrefixSum {
         };
         let uniform = init_buffer(
             device,
-            &wgpu::util::BufferInitDescriptor {
-                label: Some("tessera scan params"),
-                contents: bytemuck::bytes_of(&[n, slot, n_b, slot_b, lists, xor, shift, 0]),
-                usage: wgpu::BufferUsages::UNIFORM,
-            },
+            "tessera scan params",
+            bytemuck::bytes_of(&[n, slot, n_b, slot_b, lists, xor, shift, 0]),
+            wgpu::BufferUsages::UNIFORM,
         );
         let sums = storage(device, "tessera scan sums", 4 * SCAN_GROUPS as u64);
         let entries = [

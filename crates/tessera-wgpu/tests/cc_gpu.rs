@@ -173,7 +173,7 @@ fn nets_past_the_pages_capacity_are_an_error() {
     assert!(CcModelBuffers::new(&gpu.device, &gpu.queue, &small).is_err());
     small.nets.truncate(192);
     let buffers = CcModelBuffers::new(&gpu.device, &gpu.queue, &small).expect("192 nets fit");
-    assert_eq!(buffers.pages, tessera_wgpu::catmull_clark::CcNetPages::Four);
+    assert_eq!(buffers.pages, tessera_wgpu::catmull_clark::NetPages::Four);
     // Every page is full, and reads back the nets uploaded into it.
     assert!(buffers.nets.iter().all(|page| page.size().height == 24));
     let (nets, _) = read_model(&gpu, &buffers, small.nets.len(), 0);

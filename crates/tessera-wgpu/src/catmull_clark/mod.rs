@@ -21,14 +21,12 @@ pub use stencil::CcStencilBuffers;
 pub(crate) use stencil::CcStencilKernels;
 pub(crate) use uniform::CcUniformKernels;
 pub use uniform::{CcUniformStage, UniformParams};
-#[doc(hidden)]
-pub use NetPages as CcNetPages;
 
 use tessera_core::catmull_clark::gpu_model::CcGpuModel;
 use tessera_core::gpu_types::{CcHashSlot, CcHashStatus, CcNetLayout, CC_NET_PAGES};
 
 use crate::error::{Error, Result};
-use crate::kernel::{check_size, check_upload, init_buffer, storage, storage_texture, Kernel};
+use crate::kernel::{check_size, check_upload, init_storage, storage, storage_texture, Kernel};
 use crate::scan::{PrefixSum, ScanKernels};
 
 /// The flattened quadtrees on the GPU (bindings 20–27 of the Catmull-Clark kernels).
@@ -54,6 +52,7 @@ pub struct CcModelBuffers {
 /// The net pages a model takes, as the kernels that read them are compiled: kernels for
 /// one page read it without a branch (the branches on the page cost lavapipe's marking
 /// about a fifth of its time), kernels for four read any.
+#[doc(hidden)]
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum NetPages {
     /// Every net in the first page.
@@ -142,19 +141,7 @@ impl CcModelBuffers {
                 capacity: layout.capacity(),
             });
         }
-        let init = |label: &str, bytes: &[u8]| {
-            // Bindings are never empty: an empty array (a model without extraordinary
-            // vertices has no corners) binds one zeroed element of any of the types.
-            let zero = [0u8; 256];
-            init_buffer(
-                device,
-                &wgpu::util::BufferInitDescriptor {
-                    label: Some(label),
-                    contents: if bytes.is_empty() { &zero } else { bytes },
-                    usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
-                },
-            )
-        };
+        let init = |label: &str, bytes: &[u8]| init_storage(device, label, bytes);
         let format = wgpu::TextureFormat::Rgba32Float;
         let sizes = layout.page_sizes(model.nets.len());
         // Written through the queue when uploaded; read back by the tests that compare

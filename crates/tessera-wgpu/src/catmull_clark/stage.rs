@@ -419,114 +419,97 @@ impl CcStage {
         caps: CcCapacities,
     ) -> Result<Self> {
         allocating(device, "the stage's model and buffers", || {
-            Self::create(device, queue, kernels, model, params, caps)
-        })
-    }
-
-    fn create(
-        device: &wgpu::Device,
-        queue: &wgpu::Queue,
-        kernels: &Kernels,
-        model: &SurfaceModel,
-        params: &CcParams,
-        caps: CcCapacities,
-    ) -> Result<Self> {
-        kernels.check_device(device)?;
-        params.validate(model)?;
-        gpu_leaf_bound(params)?;
-        let patch_count = model.mesh.patch_count() as u32;
-        // Built once per topology; every run's first step derives the quadtrees from
-        // the control points through them.
-        let stencils = CcStencils::new(&model.mesh, model.depth);
-        let model_buffers = CcModelBuffers::derived(device, queue, &stencils.structure)?;
-        let kernels = kernels.cc(model_buffers.pages);
-        let control = model.mesh.control_points_f32();
-        let stencil = CcStencilBuffers::new(device, &stencils, &control)?;
-        let topo = init_buffer(
-            device,
-            &wgpu::util::BufferInitDescriptor {
-                label: Some("tessera cc topology"),
-                contents: bytemuck::cast_slice(&patch_topology(&model.mesh)),
-                usage: wgpu::BufferUsages::STORAGE,
-            },
-        );
-        let point_count = model.mesh.points.len() as u32;
-        let homes = init_buffer(
-            device,
-            &wgpu::util::BufferInitDescriptor {
-                label: Some("tessera cc homes"),
-                contents: bytemuck::cast_slice(&point_homes(&model.mesh)),
-                usage: wgpu::BufferUsages::STORAGE,
-            },
-        );
-        let state = storage(
-            device,
-            "tessera cc state",
-            std::mem::size_of::<CcState>() as u64,
-        );
-
-        let args = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("tessera cc dispatch args"),
-            size: 36,
-            usage: wgpu::BufferUsages::STORAGE
-                | wgpu::BufferUsages::INDIRECT
-                | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
-        let passes = [0u32, 1].map(|pass| {
-            init_buffer(
+            kernels.check_device(device)?;
+            params.validate(model)?;
+            gpu_leaf_bound(params)?;
+            let patch_count = model.mesh.patch_count() as u32;
+            // Built once per topology; every run's first step derives the quadtrees from
+            // the control points through them.
+            let stencils = CcStencils::new(&model.mesh, model.depth);
+            let model_buffers = CcModelBuffers::derived(device, queue, &stencils.structure)?;
+            let kernels = kernels.cc(model_buffers.pages);
+            let control = model.mesh.control_points_f32();
+            let stencil = CcStencilBuffers::new(device, &stencils, &control)?;
+            let topo = init_buffer(
                 device,
-                &wgpu::util::BufferInitDescriptor {
-                    label: Some("tessera cc traverse pass"),
-                    contents: bytemuck::cast_slice(&[pass, 0, 0, 0]),
-                    usage: wgpu::BufferUsages::UNIFORM,
-                },
-            )
-        });
-        let eps = params.epsilon(model);
-        let counts = (patch_count, point_count);
-        let view = CcView::default();
-        let buffers = Buffers::new(
-            device,
-            &kernels,
-            (counts, &state),
-            (params, eps, view),
-            caps,
-        )?;
-        let fixed = Fixed {
-            topo: &topo,
-            homes: &homes,
-            state: &state,
-            args: &args,
-            passes: &passes,
-            stencil: &stencil,
-        };
-        let binds = Binds::new(device, &kernels, &model_buffers, &fixed, &buffers);
-        Ok(CcStage {
-            kernels,
-            model: model_buffers,
-            stencil,
-            patches: model.mesh.clone(),
-            depth: model.depth,
-            patch_count,
-            point_count,
-            params: *params,
-            view,
-            view_set: None,
-            walk_floor: 0.0,
-            params_dirty: false,
-            topo,
-            homes,
-            state,
-            args,
-            passes,
-            readback: StatusReadback::new("tessera cc status readback", status_size()),
-            latest: None,
-            growths: 0,
-            dispatches: 0,
-            points_moved: false,
-            buffers,
-            binds,
+                "tessera cc topology",
+                bytemuck::cast_slice(&patch_topology(&model.mesh)),
+                wgpu::BufferUsages::STORAGE,
+            );
+            let point_count = model.mesh.points.len() as u32;
+            let homes = init_buffer(
+                device,
+                "tessera cc homes",
+                bytemuck::cast_slice(&point_homes(&model.mesh)),
+                wgpu::BufferUsages::STORAGE,
+            );
+            let state = storage(
+                device,
+                "tessera cc state",
+                std::mem::size_of::<CcState>() as u64,
+            );
+
+            let args = device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("tessera cc dispatch args"),
+                size: 36,
+                usage: wgpu::BufferUsages::STORAGE
+                    | wgpu::BufferUsages::INDIRECT
+                    | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            });
+            let passes = [0u32, 1].map(|pass| {
+                init_buffer(
+                    device,
+                    "tessera cc traverse pass",
+                    bytemuck::cast_slice(&[pass, 0, 0, 0]),
+                    wgpu::BufferUsages::UNIFORM,
+                )
+            });
+            let eps = params.epsilon(model);
+            let counts = (patch_count, point_count);
+            let view = CcView::default();
+            let buffers = Buffers::new(
+                device,
+                &kernels,
+                (counts, &state),
+                (params, eps, view),
+                caps,
+            )?;
+            let fixed = Fixed {
+                topo: &topo,
+                homes: &homes,
+                state: &state,
+                args: &args,
+                passes: &passes,
+                stencil: &stencil,
+            };
+            let binds = Binds::new(device, &kernels, &model_buffers, &fixed, &buffers);
+            Ok(CcStage {
+                kernels,
+                model: model_buffers,
+                stencil,
+                patches: model.mesh.clone(),
+                depth: model.depth,
+                patch_count,
+                point_count,
+                params: *params,
+                view,
+                view_set: None,
+                walk_floor: 0.0,
+                params_dirty: false,
+                topo,
+                homes,
+                state,
+                args,
+                passes,
+                readback: StatusReadback::new("tessera cc status readback", status_size()),
+                latest: None,
+                growths: 0,
+                dispatches: 0,
+                points_moved: false,
+                buffers,
+                binds,
+            })
         })
     }
 
@@ -1393,11 +1376,9 @@ impl Buffers {
         }
         let params = init_buffer(
             device,
-            &wgpu::util::BufferInitDescriptor {
-                label: Some("tessera cc params"),
-                contents: bytemuck::bytes_of(&tess_params(counts, params, caps)),
-                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-            },
+            "tessera cc params",
+            bytemuck::bytes_of(&tess_params(counts, params, caps)),
+            wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
         );
         let cell_bytes = std::mem::size_of::<CcCell>() as u64;
         let poly_offsets = storage(

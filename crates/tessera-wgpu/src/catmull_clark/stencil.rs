@@ -11,7 +11,7 @@ use tessera_core::catmull_clark::stencil::CcStencils;
 
 use super::{CcModelBuffers, NetPages};
 use crate::error::{Error, Result};
-use crate::kernel::{check_upload, groups_2d, init_buffer, storage, Kernel};
+use crate::kernel::{check_upload, groups_2d, init_buffer, init_storage, storage, Kernel};
 
 /// The step's two kernels, compiled once per device.
 pub(crate) struct CcStencilKernels {
@@ -74,18 +74,7 @@ impl CcStencilBuffers {
         }
         check_upload(device, "level-1 points", level1_bytes)?;
         check_upload(device, "control points", 12 * control.len() as u64)?;
-        let zero = [0u8; 16];
-        let init = |label: &str, bytes: &[u8]| {
-            init_buffer(
-                device,
-                &wgpu::util::BufferInitDescriptor {
-                    label: Some(label),
-                    // A binding is never empty.
-                    contents: if bytes.is_empty() { &zero } else { bytes },
-                    usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
-                },
-            )
-        };
+        let init = |label: &str, bytes: &[u8]| init_storage(device, label, bytes);
         let tables = parts
             .iter()
             .map(|(what, bytes)| init(what, bytes))
@@ -94,11 +83,9 @@ impl CcStencilBuffers {
         let level1_count = stencils.level1_count() as u32;
         let step = init_buffer(
             device,
-            &wgpu::util::BufferInitDescriptor {
-                label: Some("tessera cc stencil step"),
-                contents: cast_slice(&[0u32, stencils.record_count, level1_count, 0]),
-                usage: wgpu::BufferUsages::UNIFORM,
-            },
+            "tessera cc stencil step",
+            cast_slice(&[0u32, stencils.record_count, level1_count, 0]),
+            wgpu::BufferUsages::UNIFORM,
         );
         let (l1x, l1y) = groups_2d(level1_count.max(1), 64);
         let (px, py) = groups_2d(stencils.record_count.max(1), 64);
@@ -106,11 +93,9 @@ impl CcStencilBuffers {
         // The first run derives the quadtrees.
         let args = init_buffer(
             device,
-            &wgpu::util::BufferInitDescriptor {
-                label: Some("tessera cc stencil dispatch args"),
-                contents: cast_slice(&dispatch_args),
-                usage: wgpu::BufferUsages::INDIRECT | wgpu::BufferUsages::COPY_DST,
-            },
+            "tessera cc stencil dispatch args",
+            cast_slice(&dispatch_args),
+            wgpu::BufferUsages::INDIRECT | wgpu::BufferUsages::COPY_DST,
         );
         Ok(CcStencilBuffers {
             control: control_buffer,

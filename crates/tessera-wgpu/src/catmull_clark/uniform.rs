@@ -105,70 +105,57 @@ impl CcUniformStage {
         params: &UniformParams,
     ) -> Result<Self> {
         allocating(device, "the stage's model and buffers", || {
-            Self::create(device, queue, kernels, model, params)
-        })
-    }
-
-    fn create(
-        device: &wgpu::Device,
-        queue: &wgpu::Queue,
-        kernels: &Kernels,
-        model: &SurfaceModel,
-        params: &UniformParams,
-    ) -> Result<Self> {
-        kernels.check_device(device)?;
-        let layout = uniform_patches(&model.mesh);
-        let params = layout.params(params.segments)?;
-        // As the adaptive stage: the tables once per topology, the quadtrees derived from
-        // the control points by the first dispatches of a run after they move.
-        let stencils = CcStencils::new(&model.mesh, model.depth);
-        let model_buffers = CcModelBuffers::derived(device, queue, &stencils.structure)?;
-        let stencil_kernels = kernels.cc_stencil(model_buffers.pages);
-        let kernels = kernels.cc_uniform(model_buffers.pages);
-        let stencil = CcStencilBuffers::new(device, &stencils, &model.mesh.control_points_f32())?;
-        let stencil_binds = stencil.bind(device, &stencil_kernels, &model_buffers);
-        // Never empty: a model of holes only binds one zeroed patch it never reads.
-        let zero = [tessera_core::gpu_types::CcUniformPatch::default()];
-        let patches = init_buffer(
-            device,
-            &wgpu::util::BufferInitDescriptor {
-                label: Some("tessera cc uniform patches"),
-                contents: bytemuck::cast_slice(if layout.patches.is_empty() {
+            kernels.check_device(device)?;
+            let layout = uniform_patches(&model.mesh);
+            let params = layout.params(params.segments)?;
+            // As the adaptive stage: the tables once per topology, the quadtrees derived from
+            // the control points by the first dispatches of a run after they move.
+            let stencils = CcStencils::new(&model.mesh, model.depth);
+            let model_buffers = CcModelBuffers::derived(device, queue, &stencils.structure)?;
+            let stencil_kernels = kernels.cc_stencil(model_buffers.pages);
+            let kernels = kernels.cc_uniform(model_buffers.pages);
+            let stencil =
+                CcStencilBuffers::new(device, &stencils, &model.mesh.control_points_f32())?;
+            let stencil_binds = stencil.bind(device, &stencil_kernels, &model_buffers);
+            // Never empty: a model of holes only binds one zeroed patch it never reads.
+            let zero = [tessera_core::gpu_types::CcUniformPatch::default()];
+            let patches = init_buffer(
+                device,
+                "tessera cc uniform patches",
+                bytemuck::cast_slice(if layout.patches.is_empty() {
                     &zero
                 } else {
                     &layout.patches
                 }),
-                usage: wgpu::BufferUsages::STORAGE,
-            },
-        );
-        let params_buffer = init_buffer(
-            device,
-            &wgpu::util::BufferInitDescriptor {
-                label: Some("tessera cc uniform params"),
-                contents: bytemuck::bytes_of(&params),
-                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-            },
-        );
-        let sized = Sized::new(
-            device,
-            &kernels,
-            &model_buffers,
-            &patches,
-            &params_buffer,
-            &params,
-        )?;
-        Ok(CcUniformStage {
-            kernels,
-            stencil_kernels,
-            model: model_buffers,
-            stencil,
-            stencil_binds,
-            patches_cpu: model.mesh.clone(),
-            layout,
-            patches,
-            params,
-            params_buffer,
-            sized,
+                wgpu::BufferUsages::STORAGE,
+            );
+            let params_buffer = init_buffer(
+                device,
+                "tessera cc uniform params",
+                bytemuck::bytes_of(&params),
+                wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            );
+            let sized = Sized::new(
+                device,
+                &kernels,
+                &model_buffers,
+                &patches,
+                &params_buffer,
+                &params,
+            )?;
+            Ok(CcUniformStage {
+                kernels,
+                stencil_kernels,
+                model: model_buffers,
+                stencil,
+                stencil_binds,
+                patches_cpu: model.mesh.clone(),
+                layout,
+                patches,
+                params,
+                params_buffer,
+                sized,
+            })
         })
     }
 
